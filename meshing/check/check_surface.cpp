@@ -1,0 +1,1 @@
+#include "meshing/check/check_surface.hpp"

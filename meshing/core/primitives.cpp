@@ -1,0 +1,116 @@
+#include "meshing/core/primitives.hpp"
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <vector>
+
+namespace curvefem {
+
+SurfaceMesh make_icosphere(int level, double radius, const Eigen::Vector3d& center) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0},
+                                    {0, -1, t}, {0, 1, t},  {0, -1, -t}, {0, 1, -t},
+                                    {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                    {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& p : v) p.normalize();
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<Eigen::Vector3i> g;
+    for (const auto& tri : f) {
+      const int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]),
+                c = midpoint(tri[2], tri[0]);
+      g.push_back({tri[0], a, c});
+      g.push_back({tri[1], b, a});
+      g.push_back({tri[2], c, b});
+      g.push_back({a, b, c});
+    }
+    f.swap(g);
+  }
+  SurfaceMesh m;
+  m.V.resize(v.size(), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(i) = (center + radius * v[i]).transpose();
+  m.F.resize(f.size(), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(i) = f[i].transpose();
+  return m;
+}
+
+SurfaceMesh make_torus(double R, double r, int nu, int nv) {
+  SurfaceMesh m;
+  m.V.resize(nu * nv, 3);
+  const double two_pi = 2.0 * std::numbers::pi;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = two_pi * i / nu, w = two_pi * j / nv;
+      m.V.row(i * nv + j) << (R + r * std::cos(w)) * std::cos(u), (R + r * std::cos(w)) * std::sin(u),
+          r * std::sin(w);
+    }
+  m.F.resize(2 * nu * nv, 3);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const int a = i * nv + j, b = ((i + 1) % nu) * nv + j, c = ((i + 1) % nu) * nv + (j + 1) % nv,
+                d = i * nv + (j + 1) % nv;
+      m.F.row(2 * (i * nv + j)) << a, b, c;
+      m.F.row(2 * (i * nv + j) + 1) << a, c, d;
+    }
+  return m;
+}
+
+SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n) {
+  SurfaceMesh m;
+  std::map<std::array<int, 3>, int> ids;  // lattice point → vertex id
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> f;
+  std::vector<int> tags;
+  auto vertex = [&](std::array<int, 3> g) {
+    auto [it, inserted] = ids.try_emplace(g, static_cast<int>(v.size()));
+    if (inserted) {
+      Eigen::Vector3d p;
+      for (int d = 0; d < 3; ++d) p[d] = lo[d] + (hi[d] - lo[d]) * g[d] / n;
+      v.push_back(p);
+    }
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          std::array<int, 3> g00{}, g10{}, g11{}, g01{};
+          for (auto* g : {&g00, &g10, &g11, &g01}) (*g)[axis] = side * n;
+          g00[u] = i, g00[w] = j;
+          g10[u] = i + 1, g10[w] = j;
+          g11[u] = i + 1, g11[w] = j + 1;
+          g01[u] = i, g01[w] = j + 1;
+          const int a = vertex(g00), b = vertex(g10), c = vertex(g11), d = vertex(g01);
+          // (u, w, axis) is right-handed: a→b→c is counter-clockwise seen from +axis.
+          if (side == 1) {
+            f.push_back({a, b, c});
+            f.push_back({a, c, d});
+          } else {
+            f.push_back({a, c, b});
+            f.push_back({a, d, c});
+          }
+          tags.push_back(1 + 2 * axis + side);
+          tags.push_back(1 + 2 * axis + side);
+        }
+    }
+  m.V.resize(v.size(), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(i) = v[i].transpose();
+  m.F.resize(f.size(), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(i) = f[i].transpose();
+  m.tags = Eigen::Map<Eigen::VectorXi>(tags.data(), static_cast<Eigen::Index>(tags.size()));
+  return m;
+}
+
+}  // namespace curvefem

@@ -1,0 +1,37 @@
+#include "meshing/io/gmsh_session.hpp"
+
+#include <gmsh.h>
+
+#include <mutex>
+
+#include "meshing/core/log.hpp"
+
+namespace curvefem::io {
+namespace {
+std::recursive_mutex g_gmsh_mutex;
+bool g_initialized = false;
+}  // namespace
+
+struct GmshSession::Impl {
+  std::unique_lock<std::recursive_mutex> lock{g_gmsh_mutex};
+};
+
+GmshSession::GmshSession(const std::string& model_name) : m_impl(std::make_unique<Impl>()) {
+  if (!g_initialized) {
+    gmsh::initialize(0, nullptr, false);
+    g_initialized = true;
+  }
+  gmsh::option::setNumber("General.Terminal", log::enabled(log::Level::debug) ? 1 : 0);
+  gmsh::option::setNumber("General.Verbosity", log::enabled(log::Level::debug) ? 5 : 1);
+  gmsh::clear();
+  gmsh::model::add(model_name);
+}
+
+GmshSession::~GmshSession() {
+  try {
+    gmsh::clear();
+  } catch (...) {
+  }
+}
+
+}  // namespace curvefem::io

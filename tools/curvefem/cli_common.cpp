@@ -1,0 +1,40 @@
+#include "tools/curvefem/cli_common.hpp"
+
+#include <cstdio>
+#include <exception>
+#include <new>
+
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+
+namespace curvefem::cli {
+
+void add_global_options(CLI::App& app, GlobalOptions& options) {
+  app.add_flag("-q,--quiet", options.quiet, "print nothing but errors and requested output");
+  app.add_option("--log-level", options.log_level, "trace|debug|info|warn|error|off")
+      ->capture_default_str();
+  app.add_option("--threads", options.threads, "worker threads (0 = all cores)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+std::unique_ptr<TerminalProgress> apply_global_options(const GlobalOptions& options) {
+  log::set_level(options.quiet ? log::Level::warn : log::parse_level(options.log_level));
+  return std::make_unique<TerminalProgress>(TerminalProgress::automatic_mode(options.quiet));
+}
+
+int guarded(const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const Error& e) {
+    std::fprintf(stderr, "curvefem: error: %s\n", e.what());
+    return e.exit_code();
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "curvefem: error: out of memory\n");
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "curvefem: internal error: %s\n", e.what());
+    return 3;
+  }
+}
+
+}  // namespace curvefem::cli

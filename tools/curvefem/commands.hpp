@@ -1,0 +1,26 @@
+// Subcommand registry of the curvefem CLI. Each cmd_*.cpp defines one register_* function that
+// adds its CLI11 subcommand and the closure that runs it.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace curvefem::cli {
+
+/// Records `run` as the action of subcommand `sub`.
+void add_command(CLI::App* sub, std::function<int()> run);
+
+void register_check(CLI::App& app);    // cmd_check.cpp
+void register_convert(CLI::App& app);  // cmd_convert.cpp
+void register_demo(CLI::App& app);     // cmd_demo.cpp
+
+inline void register_commands(CLI::App& app) {
+  register_check(app);
+  register_convert(app);
+  register_demo(app);
+}
+
+/// Runs the action of the parsed subcommand and returns its exit code.
+int run_selected(CLI::App& app);
+
+}  // namespace curvefem::cli
