@@ -1,0 +1,1 @@
+# VTU / MSH volume tests
