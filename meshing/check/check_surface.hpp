@@ -4,8 +4,33 @@
 // vertex-manifold, consistently oriented with positive signed volume (outward), has no degenerate
 // face (repeated vertex index or exactly collinear corners, exact predicates) and no pair of faces
 // that intersect other than in their shared vertices/edge (CGAL PMP, exact predicates).
-// Small angles, unreferenced and coincident vertices are reported but do not by themselves make a
-// surface unacceptable (real CAD tessellations have slivers down to 1e-3 degrees).
+// Small angles, unreferenced and coincident vertices and duplicate faces are reported but do not by
+// themselves make a surface unacceptable (real CAD tessellations have slivers down to 1e-3
+// degrees; a duplicate face also shows up as a non-manifold/misoriented edge or a
+// self-intersection).
+//
+// Definitions (all combinatorial notions use vertex *ids*; coincident unwelded vertices are
+// distinct):
+//   - edge: unordered pair of distinct vertex ids used by a face corner; its "faces" are its face
+//     corners (half-edges), so a face appearing twice on one edge counts twice.
+//   - boundary edge: one half-edge; non-manifold edge: three or more; inconsistently oriented
+//     edge: exactly two half-edges with the same direction.
+//   - non-manifold vertex: the faces around it split into several fans, faces being linked through
+//     the edges at the vertex that have two or more faces (a pinch: two cones touching at the apex,
+//     a bow-tie). Edges with > 2 faces link their faces: the ends of a non-manifold edge are not
+//     counted again unless they are pinched as well.
+//   - component: faces linked through shared edges (not through a lone shared vertex: the
+//     hourglass of two cones touching at one vertex has 2 components).
+//   - orientable: faces can be flipped so that every two-face edge is consistent (parity
+//     propagation through the edges with two faces); faces_to_flip is the minimum number of flips
+//     per edge-connected patch, summed.
+//   - genus: only for a closed, edge- and vertex-manifold, orientable surface (-1 otherwise):
+//     Σ over components of (2 − χ_c)/2 with χ_c = V_c − E_c + F_c over referenced vertices.
+//   - orientation_sign: sign of the signed volume when closed, edge-manifold and consistently
+//     oriented (pinched vertices do not prevent it), else 0.
+//   - self-intersections: see meshing/check/self_intersections.hpp (degenerate faces are excluded
+//     from pairs; PMP on a CGAL::Surface_mesh when the surface is an oriented manifold, the same
+//     rule on the indexed soup otherwise).
 #pragma once
 
 #include <string>
@@ -35,30 +60,35 @@ struct Defect {
 struct CheckReport {
   long long vertices = 0, faces = 0;
   long long referenced_vertices = 0, unreferenced_vertices = 0;
-  long long components = 0;              ///< connected components of faces (by shared vertex)
-  long long boundary_edges = 0;          ///< edges with one incident face
-  long long non_manifold_edges = 0;      ///< edges with more than two incident faces
-  long long non_manifold_vertices = 0;   ///< vertices whose face fan is not one disk/half-disk
-  long long inconsistent_edges = 0;      ///< manifold edges traversed twice in the same direction
+  long long components = 0;             ///< connected components of faces (by shared edge)
+  long long boundary_edges = 0;         ///< edges with one incident face
+  long long non_manifold_edges = 0;     ///< edges with more than two incident faces
+  long long non_manifold_vertices = 0;  ///< vertices whose faces form several fans (pinches)
+  long long inconsistent_edges = 0;     ///< manifold edges traversed twice in the same direction
   bool closed = false, edge_manifold = false, vertex_manifold = false;
   bool consistently_oriented = false;
+  bool orientable = false;      ///< consistent orientation reachable by flipping faces
+  long long faces_to_flip = 0;  ///< minimum flips for consistency (orientable patches)
   double signed_volume = 0.0;
-  int orientation_sign = 0;              ///< +1 outward, -1 inward, 0 undefined (open/inconsistent)
-  long long genus = -1;                  ///< per closed manifold oriented surface: sum over comps
+  int orientation_sign = 0;  ///< +1 outward, -1 inward, 0 undefined (open/inconsistent)
+  long long genus = -1;      ///< closed orientable manifold: sum over components, else -1
   long long euler_characteristic = 0;
-  long long degenerate_faces = 0;        ///< repeated index or exactly collinear
+  long long degenerate_faces = 0;  ///< repeated index or exactly collinear
   double min_angle_deg = 0.0, max_angle_deg = 0.0;
-  long long duplicate_vertices = 0;      ///< referenced vertices at bit-identical positions
-  long long duplicate_faces = 0;         ///< faces with the same vertex set
+  long long duplicate_vertices = 0;  ///< referenced, at the exact (==) position of a lower id
+  long long duplicate_faces = 0;     ///< faces with the vertex set of a lower-id face
   bool self_intersections_checked = false;
+  bool self_intersections_mesh_api = false;  ///< PMP mesh API (true) or soup rule (false)
   long long self_intersecting_pairs = 0;
-  bool volume_bounded = false;           ///< closed, manifold, oriented, no self-intersection
-  bool acceptable = false;
+  bool volume_bounded = false;  ///< closed, manifold, oriented, no self-intersection
+  bool acceptable = false;      ///< non-empty and `defects` is empty
   double bbox_longest_edge = 0.0;
   std::vector<Defect> defects;
   double time_s = 0.0;
 };
 
+/// Checks `mesh` (V #V × 3, F #F × 3). Throws InputError if a face index is out of range.
+/// `progress` receives the stages "check topology" and "check self-intersections".
 CheckReport check_surface(const SurfaceMesh& mesh, const CheckOptions& options = {},
                           const ProgressFn& progress = {});
 

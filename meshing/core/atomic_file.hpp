@@ -27,6 +27,29 @@ class AtomicFile {
   bool m_committed = false;
 };
 
+/// Output directory of a subcommand, all-or-nothing: files are written into a hidden staging
+/// folder inside `dir` and moved into `dir` by commit() (report.json, if staged, moved last). If
+/// the run fails before commit(), the staging folder is removed and `dir` holds no new file.
+class StagedOutputDir {
+ public:
+  explicit StagedOutputDir(std::filesystem::path dir);
+  ~StagedOutputDir();
+  StagedOutputDir(const StagedOutputDir&) = delete;
+  StagedOutputDir& operator=(const StagedOutputDir&) = delete;
+
+  /// Where to write file `name` now (inside the staging folder).
+  std::filesystem::path path(const std::string& name) const { return m_staging / name; }
+  /// Where file `name` will be after commit().
+  std::filesystem::path final_path(const std::string& name) const { return m_dir / name; }
+  const std::filesystem::path& dir() const { return m_dir; }
+  void commit();
+
+ private:
+  std::filesystem::path m_dir;
+  std::filesystem::path m_staging;
+  bool m_committed = false;
+};
+
 /// Writes `text` to `path` atomically (throws IoError).
 void write_text_file_atomic(const std::filesystem::path& path, const std::string& text);
 

@@ -1,5 +1,8 @@
 #include "meshing/core/primitives.hpp"
 
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -9,9 +12,9 @@ namespace curvefem {
 
 SurfaceMesh make_icosphere(int level, double radius, const Eigen::Vector3d& center) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0},
-                                    {0, -1, t}, {0, 1, t},  {0, -1, -t}, {0, 1, -t},
-                                    {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                    {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                    {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
   std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                     {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                                     {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -52,8 +55,8 @@ SurfaceMesh make_torus(double R, double r, int nu, int nv) {
   for (int i = 0; i < nu; ++i)
     for (int j = 0; j < nv; ++j) {
       const double u = two_pi * i / nu, w = two_pi * j / nv;
-      m.V.row(i * nv + j) << (R + r * std::cos(w)) * std::cos(u), (R + r * std::cos(w)) * std::sin(u),
-          r * std::sin(w);
+      m.V.row(i * nv + j) << (R + r * std::cos(w)) * std::cos(u),
+          (R + r * std::cos(w)) * std::sin(u), r * std::sin(w);
     }
   m.F.resize(2 * nu * nv, 3);
   for (int i = 0; i < nu; ++i)
@@ -110,6 +113,70 @@ SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n
   m.F.resize(f.size(), 3);
   for (std::size_t i = 0; i < f.size(); ++i) m.F.row(i) = f[i].transpose();
   m.tags = Eigen::Map<Eigen::VectorXi>(tags.data(), static_cast<Eigen::Index>(tags.size()));
+  return m;
+}
+
+LagrangeMesh make_cube_tets(int n) {
+  LagrangeMesh m;
+  m.order = 1;
+  const int s = n + 1;
+  m.nodes.resize(s * s * s, 3);
+  auto id = [s](int i, int j, int k) { return (k * s + j) * s + i; };
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        m.nodes.row(id(i, j, k)) << double(i) / n, double(j) / n, double(k) / n;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  m.cells.resize(6 * n * n * n, 4);
+  int c = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (const auto& p : perms) {
+          std::array<int, 3> g = {i, j, k};
+          std::array<int, 4> v;
+          v[0] = id(g[0], g[1], g[2]);
+          for (int step = 0; step < 3; ++step) {
+            g[p[step]] += 1;
+            v[step + 1] = id(g[0], g[1], g[2]);
+          }
+          const Eigen::Vector3d a = m.nodes.row(v[1]) - m.nodes.row(v[0]);
+          const Eigen::Vector3d b = m.nodes.row(v[2]) - m.nodes.row(v[0]);
+          const Eigen::Vector3d d = m.nodes.row(v[3]) - m.nodes.row(v[0]);
+          if (a.dot(b.cross(d)) < 0) std::swap(v[1], v[2]);
+          for (int t = 0; t < 4; ++t) m.cells(c, t) = v[t];
+          ++c;
+        }
+  m.cell_tags = Eigen::VectorXi::Ones(m.num_cells());
+  return m;
+}
+
+LagrangeMesh elevate_order(const LagrangeMesh& linear, int k,
+                           const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& deform) {
+  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, k);
+  LagrangeMesh m;
+  m.order = k;
+  m.cell_tags = linear.cell_tags;
+  m.cells.resize(linear.num_cells(), static_cast<Eigen::Index>(lattice.size()));
+  std::map<std::vector<std::pair<int, int>>, int> ids;
+  std::vector<Eigen::Vector3d> nodes;
+  for (int c = 0; c < linear.num_cells(); ++c)
+    for (std::size_t l = 0; l < lattice.size(); ++l) {
+      std::vector<std::pair<int, int>> key;
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int i = 0; i < 4; ++i) {
+        if (lattice[l][i] == 0) continue;
+        key.emplace_back(linear.cells(c, i), lattice[l][i]);
+        x += (double(lattice[l][i]) / k) * linear.nodes.row(linear.cells(c, i)).transpose();
+      }
+      std::sort(key.begin(), key.end());
+      auto [it, inserted] = ids.try_emplace(key, static_cast<int>(nodes.size()));
+      if (inserted) nodes.push_back(deform(x));
+      m.cells(c, static_cast<Eigen::Index>(l)) = it->second;
+    }
+  m.nodes.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    m.nodes.row(static_cast<Eigen::Index>(i)) = nodes[i].transpose();
   return m;
 }
 

@@ -2,6 +2,9 @@
 // All are closed, manifold, oriented outward, free of self-intersections.
 #pragma once
 
+#include <functional>
+
+#include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/surface_mesh.hpp"
 
 namespace curvefem {
@@ -13,5 +16,15 @@ SurfaceMesh make_icosphere(int level, double radius = 1.0,
 SurfaceMesh make_torus(double R, double r, int nu, int nv);
 /// Axis-aligned box [lo, hi] with n × n quads per side, 12·n² faces; tags 1..6 = -x,+x,-y,+y,-z,+z.
 SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n = 1);
+
+/// Unit cube [0,1]³ cut into n³ cubes of 6 positively oriented tetrahedra each (Kuhn split along
+/// the main diagonal; conforming). Order 1, cell_tags 1.
+LagrangeMesh make_cube_tets(int n);
+
+/// Raises an order-1 tet mesh to geometric order k: the order-k lattice points of every cell are
+/// placed at `deform(affine image)`; shared edge/face nodes are shared (keyed by the global vertex
+/// ids and barycentric weights). With deform = identity the mesh is straight-sided.
+LagrangeMesh elevate_order(const LagrangeMesh& linear, int k,
+                           const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& deform);
 
 }  // namespace curvefem

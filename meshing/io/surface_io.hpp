@@ -9,6 +9,15 @@
 // physical/material_index, else the first extra int face property), MSH physical tags. STL vertices
 // are welded when bit-identical. OBJ indices may be negative (relative) as the format allows.
 // Writers are atomic (temp file + rename).
+//
+// Details: a file that cannot be opened throws IoError. A file without any triangle is an
+// InputError (a reader never returns an empty surface). OBJ faces before the first group get tag 0
+// and `g` groups win over `usemtl` when both occur. MSH: faces come in element-id order, only nodes
+// used by triangles are kept (in file order), tag names come from dimension-2 $PhysicalNames.
+// Writers use the shortest decimal text that reads back to the same double, so OBJ/OFF/PLY/MSH
+// round trips are exact; OBJ writes tags as `g` groups (`tag_<t>` when unnamed) and therefore
+// renumbers them by first appearance on reading; binary STL stores floats; PLY writes
+// "comment tag_name <t> <name>" lines that the reader turns back into tag_names.
 #pragma once
 
 #include <filesystem>

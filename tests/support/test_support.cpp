@@ -25,6 +25,8 @@ std::filesystem::path scratch_dir(const std::string& name) {
   return dir;
 }
 
+std::filesystem::path source_dir() { return std::filesystem::path(CURVEFEM_SOURCE_DIR); }
+
 std::filesystem::path curvefem_executable() {
   return std::filesystem::path(CURVEFEM_BINARY_DIR) / "tools" / "curvefem" / "curvefem";
 }

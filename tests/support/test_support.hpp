@@ -16,6 +16,9 @@ inline constexpr const char* k_no_data_message =
 /// A fresh empty directory under the build tree for this test (removed at the start, kept after).
 std::filesystem::path scratch_dir(const std::string& name);
 
+/// The project's source folder (for cases/ and tools/).
+std::filesystem::path source_dir();
+
 /// Path of the built `curvefem` executable.
 std::filesystem::path curvefem_executable();
 

@@ -1,5 +1,7 @@
 #include "tools/curvefem/cli_common.hpp"
 
+#include <tbb/global_control.h>
+
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -19,6 +21,11 @@ void add_global_options(CLI::App& app, GlobalOptions& options) {
 
 std::unique_ptr<TerminalProgress> apply_global_options(const GlobalOptions& options) {
   log::set_level(options.quiet ? log::Level::warn : log::parse_level(options.log_level));
+  // oneTBB (assembly, CGAL's parallel checks) uses at most --threads workers for the whole run.
+  static std::unique_ptr<tbb::global_control> limit;
+  if (options.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  static_cast<std::size_t>(options.threads));
   return std::make_unique<TerminalProgress>(TerminalProgress::automatic_mode(options.quiet));
 }
 

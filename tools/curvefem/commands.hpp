@@ -13,11 +13,13 @@ void add_command(CLI::App* sub, std::function<int()> run);
 void register_check(CLI::App& app);    // cmd_check.cpp
 void register_convert(CLI::App& app);  // cmd_convert.cpp
 void register_demo(CLI::App& app);     // cmd_demo.cpp
+void register_run(CLI::App& app);      // cmd_run.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
   register_convert(app);
   register_demo(app);
+  register_run(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

@@ -1,0 +1,34 @@
+// Compressed sparse row pattern of a FEM matrix from the cells' DOF lists (block size b: DOF d
+// owns unknowns b·d .. b·d+b−1), and deterministic scattering of element matrices into it.
+// Scattering is serial and in cell order, so results do not depend on the thread count that
+// computed the element matrices.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace curvefem::fem {
+
+class SparsePattern {
+ public:
+  SparsePattern(const Eigen::MatrixXi& cell_dofs, int num_dofs, int block_size);
+  int rows() const { return static_cast<int>(m_row_ptr.size()) - 1; }
+  long long nonzeros() const { return static_cast<long long>(m_col.size()); }
+  /// Index into the value array of (row, col); -1 if not in the pattern.
+  long long find(int row, int col) const;
+  /// Adds the (b·n) × (b·n) element matrix of `cell` (local unknown order: node-major,
+  /// component-minor) into `values`.
+  void scatter(int cell, const Eigen::MatrixXd& local, std::vector<double>& values) const;
+  /// Builds a compressed column-major Eigen matrix (the pattern is symmetric, so CSR of A is CSC
+  /// of Aᵀ = A).
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> matrix(const std::vector<double>& values) const;
+
+ private:
+  const Eigen::MatrixXi& m_cell_dofs;
+  int m_block;
+  std::vector<int> m_row_ptr;
+  std::vector<int> m_col;
+};
+
+}  // namespace curvefem::fem

@@ -1,0 +1,50 @@
+// Boundary data of FEM problems, on the boundary faces of the mesh (FunctionSpace::boundary_faces).
+//
+// A condition selects boundary faces with one flag per boundary face (in boundary_faces order);
+// the front end builds the flags from selections ("all", mesh tags, boxes, ...) and, later, from
+// selections painted on the dense input through the bijective map. Dirichlet values are imposed
+// strongly at every DOF of a selected face (nodal interpolation at the DOF's physical point).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <functional>
+#include <vector>
+
+namespace curvefem::fem {
+
+using ScalarField = std::function<double(const Eigen::Vector3d&)>;
+/// Optional point filter inside selected faces: a Dirichlet DOF / Neumann quadrature point is
+/// used only where it returns true (selections by region act point-wise, not face-wise).
+using PointFilter = std::function<bool(const Eigen::Vector3d&)>;
+using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d&)>;
+
+struct ScalarDirichlet {
+  std::vector<char> faces;
+  ScalarField value;
+  PointFilter where;
+};
+
+/// Flux g = κ ∂u/∂n (Poisson), integrated over the selected faces.
+struct ScalarNeumann {
+  std::vector<char> faces;
+  ScalarField flux;
+  PointFilter where;
+};
+
+/// Displacement prescribed on the components whose mask entry is true.
+struct VectorDirichlet {
+  std::vector<char> faces;
+  std::array<bool, 3> components{true, true, true};
+  VectorField value;
+  PointFilter where;
+};
+
+/// Traction t = σ n on the selected faces.
+struct VectorNeumann {
+  std::vector<char> faces;
+  VectorField traction;
+  PointFilter where;
+};
+
+}  // namespace curvefem::fem

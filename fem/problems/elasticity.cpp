@@ -1,0 +1,320 @@
+#include "fem/problems/elasticity.hpp"
+
+#include <Eigen/LU>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "fem/assembly/element_geometry.hpp"
+#include "fem/assembly/face_integration.hpp"
+#include "fem/assembly/parallel_assembly.hpp"
+#include "fem/problems/constraints.hpp"
+#include "fem/quadrature/simplex_quadrature.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+
+namespace curvefem::fem {
+namespace {
+
+struct Setup {
+  const QuadratureRule* rule;
+  GeometryEvaluator geometry;
+  ReferenceTabulation basis;
+  SparsePattern pattern;
+  int n;
+  Setup(const LagrangeMesh& mesh, const FunctionSpace& space, int degree)
+      : rule(&tetrahedron_quadrature(degree)),
+        geometry(mesh, rule->points, rule->weights),
+        basis(tabulate(CellKind::tetrahedron, space.degree, rule->points)),
+        pattern(space.cell_dofs, space.num_dofs, 3),
+        n(static_cast<int>(space.cell_dofs.cols())) {}
+};
+
+int stiffness_degree(const LagrangeMesh& mesh, const FunctionSpace& space,
+                     const ElasticityProblem& problem) {
+  return problem.quadrature_degree >= 0
+             ? problem.quadrature_degree
+             : default_quadrature_degree(space.degree, mesh.order, QuadratureUse::stiffness);
+}
+
+/// External load: body force (volume) and tractions (faces), scaled by s.
+Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& space,
+                              const ElasticityProblem& problem, const Setup& setup) {
+  Eigen::VectorXd F = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(space.num_dofs));
+  const int n = setup.n;
+  if (problem.body_force) {
+    const ElementKernel kernel = [&](int cell, Eigen::MatrixXd&, Eigen::VectorXd& Fe) {
+      CellGeometry g;
+      setup.geometry.evaluate(cell, g);
+      for (int q = 0; q < setup.geometry.num_points(); ++q) {
+        const Eigen::Vector3d f = problem.body_force(g.x.row(q).transpose()) * g.det_w[q];
+        for (int a = 0; a < n; ++a)
+          for (int i = 0; i < 3; ++i) Fe[3 * a + i] += f[i] * setup.basis.values(q, a);
+      }
+    };
+    assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, nullptr, &F);
+  }
+  const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
+  for (const auto& bc : problem.traction)
+    for_each_face_point(mesh, space, bc.faces, face_degree, [&](int, int cell, const FacePoint& pt) {
+      if (bc.where && !bc.where(pt.x)) return;
+      const Eigen::Vector3d t = bc.traction(pt.x) * pt.ds_w;
+      for (int a = 0; a < n; ++a)
+        for (int i = 0; i < 3; ++i) F[3 * space.cell_dofs(cell, a) + i] += t[i] * pt.phi[a];
+    });
+  return F;
+}
+
+/// Fixed unknowns and their (full-load) values.
+Constraints dirichlet_constraints(const FunctionSpace& space, const ElasticityProblem& problem) {
+  Constraints c;
+  c.fixed.assign(3 * static_cast<std::size_t>(space.num_dofs), 0);
+  c.values = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(space.num_dofs));
+  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, space.degree);
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  for (const auto& bc : problem.dirichlet) {
+    CF_VERIFY(bc.faces.size() == space.boundary_faces.size(), "Dirichlet flags do not match");
+    for (std::size_t f = 0; f < bc.faces.size(); ++f) {
+      if (!bc.faces[f]) continue;
+      const auto [cell, j] = space.boundary_faces[f];
+      for (int l = 0; l < n; ++l) {
+        if (lattice[l][j] != 0) continue;
+        const int d = space.cell_dofs(cell, l);
+        if (bc.where && !bc.where(space.dof_points.row(d).transpose())) continue;
+        const Eigen::Vector3d v = bc.value(space.dof_points.row(d).transpose());
+        for (int i = 0; i < 3; ++i)
+          if (bc.components[i]) c.fixed[3 * d + i] = 1, c.values[3 * d + i] = v[i];
+      }
+    }
+  }
+  return c;
+}
+
+void gather(const FunctionSpace& space, const Eigen::VectorXd& u, int cell, Eigen::MatrixXd& U) {
+  for (int a = 0; a < U.rows(); ++a)
+    for (int i = 0; i < 3; ++i) U(a, i) = u[3 * space.cell_dofs(cell, a) + i];
+}
+
+}  // namespace
+
+ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                           const ElasticityProblem& problem,
+                                           const LinearSolverOptions& solver) {
+  ElasticitySolution result;
+  result.dofs = space.num_dofs;
+  const double lambda = problem.material.lambda(), mu = problem.material.mu();
+  Stopwatch watch;
+  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
+  const int n = setup.n;
+  std::vector<double> values(static_cast<std::size_t>(setup.pattern.nonzeros()), 0.0);
+  const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd&) {
+    CellGeometry g;
+    setup.geometry.evaluate(cell, g);
+    Eigen::MatrixXd G(n, 3);
+    for (int q = 0; q < setup.geometry.num_points(); ++q) {
+      G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
+      const double w = g.det_w[q];
+      const Eigen::MatrixXd GG = G * G.transpose();
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b)
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+              Ke(3 * a + i, 3 * b + j) += w * (lambda * G(a, i) * G(b, j) + mu * G(a, j) * G(b, i) +
+                                               (i == j ? mu * GG(a, b) : 0.0));
+    }
+  };
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, &values,
+                 nullptr);
+  const Eigen::VectorXd F = external_load(mesh, space, problem, setup);
+  const SparseMatrix K = setup.pattern.matrix(values);
+  result.timings.add("assembly", watch.seconds());
+  const Constraints constraints = dirichlet_constraints(space, problem);
+  result.free_unknowns = static_cast<int>(F.size()) - constraints.num_fixed();
+  LinearSolverOptions options = solver;
+  options.block_size = 3;
+  {
+    ScopedTimer t(result.timings, "solve");
+    result.u = solve_constrained(K, F, constraints, options, &result.solve);
+  }
+  return result;
+}
+
+namespace {
+
+struct NeoHookeanState {
+  SparseMatrix K;
+  Eigen::VectorXd internal;  ///< ∂(strain energy)/∂u
+  double strain_energy = 0.0;
+  bool valid = true;  ///< false if det F ≤ 0 somewhere
+};
+
+NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mesh,
+                                     const FunctionSpace& space, const ElasticMaterial& material,
+                                     const Eigen::VectorXd& u, bool with_matrix) {
+  const double lambda = material.lambda(), mu = material.mu();
+  const int n = setup.n;
+  NeoHookeanState s;
+  s.internal = Eigen::VectorXd::Zero(u.size());
+  std::vector<double> values(with_matrix ? setup.pattern.nonzeros() : 0, 0.0);
+  std::vector<double> energy(mesh.num_cells(), 0.0);
+  std::atomic<bool> valid{true};
+  const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Re) {
+    CellGeometry g;
+    setup.geometry.evaluate(cell, g);
+    Eigen::MatrixXd U(n, 3), G(n, 3), H(n, 3);
+    gather(space, u, cell, U);
+    double e = 0.0;
+    for (int q = 0; q < setup.geometry.num_points(); ++q) {
+      G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
+      const Eigen::Matrix3d F = Eigen::Matrix3d::Identity() + U.transpose() * G;
+      const double J = F.determinant();
+      if (!(J > 0.0)) {
+        valid = false;
+        return;
+      }
+      const Eigen::Matrix3d Finv = F.inverse();
+      const double lnJ = std::log(J);
+      const double w = g.det_w[q];
+      e += w * (0.5 * mu * ((F.transpose() * F).trace() - 3.0) - mu * lnJ + 0.5 * lambda * lnJ * lnJ);
+      const Eigen::Matrix3d P = mu * (F - Finv.transpose()) + lambda * lnJ * Finv.transpose();
+      const Eigen::MatrixXd GP = G * P.transpose();  // (a, i) = Σ_k P_ik G_ak
+      for (int a = 0; a < n; ++a)
+        for (int i = 0; i < 3; ++i) Re[3 * a + i] += w * GP(a, i);
+      if (!with_matrix) continue;
+      H.noalias() = G * Finv;
+      const Eigen::MatrixXd GG = G * G.transpose();
+      const double c1 = mu - lambda * lnJ;
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b)
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+              Ke(3 * a + i, 3 * b + j) += w * ((i == j ? mu * GG(a, b) : 0.0) +
+                                               c1 * H(b, i) * H(a, j) + lambda * H(a, i) * H(b, j));
+    }
+    energy[cell] = e;
+  };
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3,
+                 with_matrix ? &values : nullptr, &s.internal);
+  s.valid = valid;
+  if (!s.valid) {
+    s.strain_energy = std::numeric_limits<double>::infinity();
+    return s;
+  }
+  for (double e : energy) s.strain_energy += e;
+  if (with_matrix) s.K = setup.pattern.matrix(values);
+  return s;
+}
+
+double free_norm(const Eigen::VectorXd& r, const Constraints& c) {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < r.size(); ++i)
+    if (!c.fixed[i]) sum += r[i] * r[i];
+  return std::sqrt(sum);
+}
+
+}  // namespace
+
+ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                     const ElasticityProblem& problem,
+                                     const LinearSolverOptions& solver,
+                                     const NewtonOptions& newton) {
+  if (newton.load_steps < 1) throw InputError("load_steps must be at least 1");
+  ElasticitySolution result;
+  result.dofs = space.num_dofs;
+  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
+  const Eigen::VectorXd f_ext = external_load(mesh, space, problem, setup);
+  const Constraints full = dirichlet_constraints(space, problem);
+  result.free_unknowns = static_cast<int>(f_ext.size()) - full.num_fixed();
+  LinearSolverOptions options = solver;
+  options.block_size = 3;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(f_ext.size());
+  Stopwatch watch;
+  for (int step = 1; step <= newton.load_steps; ++step) {
+    const double s = static_cast<double>(step) / newton.load_steps;
+    const Eigen::VectorXd f = s * f_ext;
+    double first_residual = -1.0;
+    bool converged = false;
+    for (int it = 0; it < newton.max_iterations; ++it) {
+      NeoHookeanState state = assemble_neo_hookean(setup, mesh, space, problem.material, u, true);
+      if (!state.valid)
+        throw SolverError("Neo-Hookean: inverted deformation (det F <= 0) at load step " +
+                          std::to_string(step) + "; use more load_steps");
+      const Eigen::VectorXd R = state.internal - f;
+      const double rnorm = free_norm(R, full);
+      const double energy = state.strain_energy - f.dot(u);
+      // Increment: fixed unknowns move to their scaled values on the first iteration of a step.
+      Constraints inc = full;
+      for (Eigen::Index i = 0; i < u.size(); ++i) inc.values[i] = full.fixed[i] ? s * full.values[i] - u[i] : 0.0;
+      const bool moves_boundary = (inc.values.array().abs() > 0).any();
+      if (first_residual < 0) first_residual = std::max(rnorm, 1e-300);
+      result.newton.push_back({step, it, rnorm, 1.0, energy});
+      log::debug("Neo-Hookean step ", step, " iteration ", it, ": residual ", rnorm, ", energy ",
+                 energy);
+      const double scale = std::max(f.norm(), first_residual);
+      if (!moves_boundary && (rnorm <= newton.tolerance * scale || rnorm < 1e-13)) {
+        converged = true;
+        break;
+      }
+      const Eigen::VectorXd du = solve_constrained(state.K, -R, inc, options, &result.solve);
+      // Backtracking: stay valid; decrease the energy (Armijo) unless the boundary moved.
+      double alpha = 1.0;
+      const double slope = R.dot(du);
+      for (int k = 0; k < 30; ++k, alpha *= 0.5) {
+        const Eigen::VectorXd trial = u + alpha * du;
+        const NeoHookeanState t = assemble_neo_hookean(setup, mesh, space, problem.material, trial, false);
+        if (!t.valid) continue;
+        const double e = t.strain_energy - f.dot(trial);
+        if (moves_boundary || e <= energy + 1e-4 * alpha * slope) break;
+        // Near the solution the energy decrease drowns in round-off: accept a step that reduces
+        // the residual instead.
+        if (free_norm(t.internal - f, full) <= (1.0 - 1e-4 * alpha) * rnorm) break;
+      }
+      result.newton.back().step_length = alpha;
+      u += alpha * du;
+      if (alpha == 1.0)  // land exactly on the prescribed values (no round-off drift)
+        for (Eigen::Index i = 0; i < u.size(); ++i)
+          if (full.fixed[i]) u[i] = s * full.values[i];
+    }
+    if (!converged) {
+      std::ostringstream msg;
+      msg << "Neo-Hookean Newton did not converge at load step " << step << " in "
+          << newton.max_iterations << " iterations; residuals:";
+      for (const auto& r : result.newton)
+        if (r.load_step == step) msg << ' ' << r.residual;
+      throw SolverError(msg.str());
+    }
+  }
+  result.timings.add("newton", watch.seconds());
+  result.u = u;
+  return result;
+}
+
+Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                  const ElasticMaterial& material, const Eigen::VectorXd& u) {
+  const double lambda = material.lambda(), mu = material.mu();
+  const Eigen::MatrixXd ref = lagrange_reference_nodes(CellKind::tetrahedron, space.degree);
+  const GeometryEvaluator geometry(mesh, ref, Eigen::VectorXd::Ones(ref.rows()));
+  const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, space.degree, ref);
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(space.num_dofs), count = sum;
+  CellGeometry g;
+  Eigen::MatrixXd U(n, 3), G(n, 3);
+  for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+    geometry.evaluate(cell, g);
+    gather(space, u, cell, U);
+    for (int l = 0; l < n; ++l) {
+      G.noalias() = basis.gradients[l] * g.jacobian_inv[l];
+      const Eigen::Matrix3d grad = U.transpose() * G;
+      const Eigen::Matrix3d eps = 0.5 * (grad + grad.transpose());
+      const Eigen::Matrix3d sigma = lambda * eps.trace() * Eigen::Matrix3d::Identity() + 2 * mu * eps;
+      const Eigen::Matrix3d dev = sigma - sigma.trace() / 3.0 * Eigen::Matrix3d::Identity();
+      const int d = space.cell_dofs(cell, l);
+      sum[d] += std::sqrt(1.5 * dev.squaredNorm());
+      count[d] += 1.0;
+    }
+  }
+  return sum.cwiseQuotient(count);
+}
+
+}  // namespace curvefem::fem

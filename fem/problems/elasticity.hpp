@@ -1,0 +1,71 @@
+// Linear elasticity and compressible Neo-Hookean hyperelasticity on curved tetrahedra.
+//
+// Unknowns: displacement u, 3 per DOF (DOF-major: u[3d + i]). Materials: Young's modulus E and
+// Poisson ratio ν (λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν))).
+// Linear: σ = λ tr(ε) I + 2μ ε, −∇·σ = f, Dirichlet (per component) strong, traction weak.
+// Neo-Hookean (compressible): Ψ = μ/2 (tr C − 3) − μ ln J + λ/2 (ln J)², first Piola stress
+// P = μ (F − F^{-T}) + λ ln J F^{-T}; Newton with backtracking line search on the energy and load
+// stepping (body force, tractions and prescribed displacements scaled by s = k/steps).
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "fem/problems/boundary_conditions.hpp"
+#include "fem/solvers/linear_solver.hpp"
+#include "fem/space/function_space.hpp"
+#include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/timer.hpp"
+
+namespace curvefem::fem {
+
+struct ElasticMaterial {
+  double E = 1.0, nu = 0.3;
+  double lambda() const { return E * nu / ((1 + nu) * (1 - 2 * nu)); }
+  double mu() const { return E / (2 * (1 + nu)); }
+};
+
+struct ElasticityProblem {
+  ElasticMaterial material;
+  VectorField body_force;  ///< empty = 0
+  std::vector<VectorDirichlet> dirichlet;
+  std::vector<VectorNeumann> traction;
+  int quadrature_degree = -1;
+};
+
+struct NewtonStep {
+  int load_step = 0, iteration = 0;
+  double residual = 0.0;   ///< ‖R(u)‖ on free unknowns
+  double step_length = 1.0;
+  double energy = 0.0;
+};
+
+struct ElasticitySolution {
+  Eigen::VectorXd u;  ///< 3 per DOF
+  int dofs = 0, free_unknowns = 0;
+  LinearSolveInfo solve;  ///< last linear solve
+  std::vector<NewtonStep> newton;  ///< Neo-Hookean only
+  Timings timings;
+};
+
+struct NewtonOptions {
+  int load_steps = 1;
+  int max_iterations = 30;
+  double tolerance = 1e-9;  ///< on ‖R‖ relative to the first residual of the step, or absolute 1e-12·scale
+};
+
+ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                           const ElasticityProblem& problem,
+                                           const LinearSolverOptions& solver);
+
+ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                     const ElasticityProblem& problem,
+                                     const LinearSolverOptions& solver,
+                                     const NewtonOptions& newton);
+
+/// Nodal von Mises stress of the linear solution at every DOF point (averaged over cells).
+Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                  const ElasticMaterial& material, const Eigen::VectorXd& u);
+
+}  // namespace curvefem::fem

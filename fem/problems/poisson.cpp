@@ -1,0 +1,93 @@
+#include "fem/problems/poisson.hpp"
+
+#include "fem/assembly/element_geometry.hpp"
+#include "fem/assembly/face_integration.hpp"
+#include "fem/assembly/parallel_assembly.hpp"
+#include "fem/problems/constraints.hpp"
+#include "fem/quadrature/simplex_quadrature.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+
+namespace curvefem::fem {
+
+AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                 const PoissonProblem& problem) {
+  const int p = space.degree;
+  const int degree = problem.quadrature_degree >= 0
+                         ? problem.quadrature_degree
+                         : default_quadrature_degree(p, mesh.order, QuadratureUse::stiffness);
+  const QuadratureRule& rule = tetrahedron_quadrature(degree);
+  const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
+  const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  const SparsePattern pattern(space.cell_dofs, space.num_dofs, 1);
+  std::vector<double> values(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
+  AssembledSystem system;
+  system.F = Eigen::VectorXd::Zero(space.num_dofs);
+
+  const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Fe) {
+    CellGeometry g;
+    geometry.evaluate(cell, g);
+    Eigen::MatrixXd G(n, 3);
+    for (int q = 0; q < geometry.num_points(); ++q) {
+      const Eigen::Vector3d x = g.x.row(q).transpose();
+      const double kappa = problem.kappa ? problem.kappa(x) : 1.0;
+      G.noalias() = basis.gradients[q] * g.jacobian_inv[q];  // physical gradients, n × 3
+      Ke.noalias() += (g.det_w[q] * kappa) * (G * G.transpose());
+      if (problem.rhs) Fe.noalias() += (g.det_w[q] * problem.rhs(x)) * basis.values.row(q).transpose();
+    }
+  };
+  assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, &values, &system.F);
+
+  const int face_degree = default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
+  for (const auto& bc : problem.neumann) {
+    for_each_face_point(mesh, space, bc.faces, face_degree,
+                        [&](int, int cell, const FacePoint& pt) {
+                          if (bc.where && !bc.where(pt.x)) return;
+                          const double g = bc.flux(pt.x) * pt.ds_w;
+                          for (int a = 0; a < n; ++a) system.F[space.cell_dofs(cell, a)] += g * pt.phi[a];
+                        });
+  }
+  system.K = pattern.matrix(values);
+  return system;
+}
+
+PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
+                              const PoissonProblem& problem, const LinearSolverOptions& solver) {
+  PoissonSolution result;
+  result.dofs = space.num_dofs;
+  AssembledSystem system;
+  {
+    ScopedTimer t(result.timings, "assembly");
+    system = assemble_poisson(mesh, space, problem);
+  }
+  Constraints constraints;
+  constraints.fixed.assign(space.num_dofs, 0);
+  constraints.values = Eigen::VectorXd::Zero(space.num_dofs);
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, space.degree);
+  for (const auto& bc : problem.dirichlet) {
+    CF_VERIFY(bc.faces.size() == space.boundary_faces.size(), "Dirichlet flags do not match");
+    for (std::size_t f = 0; f < bc.faces.size(); ++f) {
+      if (!bc.faces[f]) continue;
+      const auto [cell, j] = space.boundary_faces[f];
+      for (int l = 0; l < n; ++l) {
+        if (lattice[l][j] != 0) continue;
+        const int d = space.cell_dofs(cell, l);
+        if (bc.where && !bc.where(space.dof_points.row(d).transpose())) continue;
+        constraints.fixed[d] = 1;
+        constraints.values[d] = bc.value(space.dof_points.row(d).transpose());
+      }
+    }
+  }
+  result.free_dofs = space.num_dofs - constraints.num_fixed();
+  if (result.free_dofs == space.num_dofs && problem.dirichlet.empty())
+    log::warn("Poisson problem without Dirichlet condition: the solution is not unique");
+  {
+    ScopedTimer t(result.timings, "solve");
+    result.u = solve_constrained(system.K, system.F, constraints, solver, &result.solve);
+  }
+  return result;
+}
+
+}  // namespace curvefem::fem

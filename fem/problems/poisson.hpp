@@ -1,0 +1,43 @@
+// Poisson problem −∇·(κ ∇u) = f on a curved tetrahedral mesh with strong Dirichlet and weak
+// Neumann data, continuous Lagrange elements of degree p on geometry of order k.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "fem/problems/boundary_conditions.hpp"
+#include "fem/solvers/linear_solver.hpp"
+#include "fem/space/function_space.hpp"
+#include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/timer.hpp"
+
+namespace curvefem::fem {
+
+struct PoissonProblem {
+  ScalarField kappa;  ///< empty = 1
+  ScalarField rhs;    ///< empty = 0
+  std::vector<ScalarDirichlet> dirichlet;
+  std::vector<ScalarNeumann> neumann;
+  int quadrature_degree = -1;  ///< -1: default_quadrature_degree(p, k, stiffness)
+};
+
+struct PoissonSolution {
+  Eigen::VectorXd u;  ///< per DOF
+  int dofs = 0, free_dofs = 0;
+  LinearSolveInfo solve;
+  Timings timings;
+};
+
+/// Assembled stiffness K and load F (before Dirichlet elimination).
+struct AssembledSystem {
+  SparseMatrix K;
+  Eigen::VectorXd F;
+};
+
+AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                 const PoissonProblem& problem);
+
+PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
+                              const PoissonProblem& problem, const LinearSolverOptions& solver);
+
+}  // namespace curvefem::fem

@@ -1,0 +1,13 @@
+# basis and quadrature tests
+curvefem_add_gtest(NAME test_fem_basis LABEL unit
+  SOURCES test_lagrange_basis.cpp test_quadrature.cpp
+  LIBS curvefem_fem)
+
+# The committed generated tables must equal a fresh run of their generator.
+if(EXISTS /usr/bin/python3)
+  add_test(NAME gen_lagrange_basis_check
+    COMMAND /usr/bin/python3 ${PROJECT_SOURCE_DIR}/tools/gen_lagrange_basis.py --check)
+  set_tests_properties(gen_lagrange_basis_check PROPERTIES LABELS unit)
+else()
+  message(STATUS "/usr/bin/python3 not found: gen_lagrange_basis_check is not registered")
+endif()

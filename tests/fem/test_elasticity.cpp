@@ -1,0 +1,150 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fem/problems/elasticity.hpp"
+#include "fem/problems/error_norms.hpp"
+#include "meshing/core/primitives.hpp"
+#include "tests/fem/manufactured.hpp"
+
+using namespace curvefem;
+
+namespace {
+
+fem::ErrorNorms vector_errors(const LagrangeMesh& mesh, const fem::FunctionSpace& space,
+                              const Eigen::VectorXd& u, const test::ExponentialDisplacement& ex) {
+  return fem::compute_errors(
+      mesh, space, u, 3, [&](const Eigen::Vector3d& x, double* v) { Eigen::Map<Eigen::Vector3d> m(v); m = ex.value(x); },
+      [&](const Eigen::Vector3d& x, double* g) {
+        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> m(g);
+        m = ex.gradient(x);
+      });
+}
+
+fem::ElasticityProblem clamped_problem(const fem::FunctionSpace& space, const test::ExponentialDisplacement& ex,
+                                       const fem::ElasticMaterial& m) {
+  fem::ElasticityProblem problem;
+  problem.material = m;
+  problem.body_force = [ex](const Eigen::Vector3d& x) { return ex.body_force(x); };
+  problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), {true, true, true},
+                               [ex](const Eigen::Vector3d& x) { return ex.value(x); }, {}});
+  return problem;
+}
+
+}  // namespace
+
+TEST(LinearElasticity, PatchTestLinearAndQuadraticDisplacements) {
+  const fem::ElasticMaterial m{2.0, 0.3};
+  const LagrangeMesh mesh = make_cube_tets(2);
+  // Linear u, no body force: every p reproduces it.
+  const Eigen::Matrix3d A = (Eigen::Matrix3d() << 0.1, 0.02, -0.03, 0.01, -0.05, 0.04, 0.0, 0.03, 0.07).finished();
+  for (int p = 1; p <= 3; ++p) {
+    const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+    fem::ElasticityProblem problem;
+    problem.material = m;
+    problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), {true, true, true},
+                                 [A](const Eigen::Vector3d& x) { return Eigen::Vector3d(A * x + Eigen::Vector3d(0.1, 0, -0.2)); },
+                                 {}});
+    const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
+    double worst = 0;
+    for (int d = 0; d < space.num_dofs; ++d) {
+      const Eigen::Vector3d x = space.dof_points.row(d).transpose();
+      worst = std::max(worst, (sol.u.segment<3>(3 * d) - (A * x + Eigen::Vector3d(0.1, 0, -0.2))).norm());
+    }
+    EXPECT_LT(worst, 1e-11) << "p=" << p;
+  }
+  // Quadratic u with its constant body force: p ≥ 2 reproduces it.
+  auto uq = [](const Eigen::Vector3d& x) { return Eigen::Vector3d(x[0] * x[0], x[1] * x[2], 0.5 * x[0] * x[1]); };
+  // div σ = (λ+μ) ∇(div u) + μ Δu; div u = 2x + z → ∇div = (2, 0, 1); Δu = (2, 0, 0).
+  const double l = m.lambda(), mu = m.mu();
+  const Eigen::Vector3d f = -((l + mu) * Eigen::Vector3d(2, 0, 1) + mu * Eigen::Vector3d(2, 0, 0));
+  for (int p = 2; p <= 3; ++p) {
+    const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+    fem::ElasticityProblem problem;
+    problem.material = m;
+    problem.body_force = [f](const Eigen::Vector3d&) { return f; };
+    problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), {true, true, true}, uq, {}});
+    const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
+    double worst = 0;
+    for (int d = 0; d < space.num_dofs; ++d)
+      worst = std::max(worst, (sol.u.segment<3>(3 * d) - uq(space.dof_points.row(d).transpose())).norm());
+    EXPECT_LT(worst, 1e-10) << "p=" << p;
+  }
+}
+
+TEST(LinearElasticity, ConvergenceRatesWithSmoothDisplacement) {
+  const fem::ElasticMaterial m{1.0, 0.3};
+  const test::ExponentialDisplacement ex{m.lambda(), m.mu()};
+  const int base[4] = {0, 2, 2, 2};
+  for (int p = 1; p <= 3; ++p) {
+    std::vector<fem::ErrorNorms> e;
+    for (int level = 0; level < 3; ++level) {
+      const LagrangeMesh mesh = make_cube_tets(base[p] << level);
+      const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+      const auto sol = fem::solve_linear_elasticity(mesh, space, clamped_problem(space, ex, m), {});
+      e.push_back(vector_errors(mesh, space, sol.u, ex));
+    }
+    const double r_l2 = test::rate(e[1].l2, e[2].l2), r_h1 = test::rate(e[1].h1_semi, e[2].h1_semi);
+    std::printf("p=%d  L2 %.3e %.3e %.3e (rate %.2f)  H1 %.3e %.3e %.3e (rate %.2f)\n", p, e[0].l2,
+                e[1].l2, e[2].l2, r_l2, e[0].h1_semi, e[1].h1_semi, e[2].h1_semi, r_h1);
+    EXPECT_NEAR(r_l2, p + 1, 0.25) << "p=" << p;
+    EXPECT_NEAR(r_h1, p, 0.25) << "p=" << p;
+  }
+}
+
+namespace {
+// Cantilever 1 × 0.25 × 0.25 (cube scaled), clamped at x = 0, traction on x = 1.
+struct Cantilever {
+  LagrangeMesh mesh;
+  fem::FunctionSpace space;
+  fem::ElasticityProblem problem;
+  Cantilever(double load, int p) {
+    mesh = make_cube_tets(4);
+    for (int i = 0; i < mesh.num_nodes(); ++i) mesh.nodes(i, 1) *= 0.25, mesh.nodes(i, 2) *= 0.25;
+    space = fem::build_function_space(mesh, p);
+    problem.material = {100.0, 0.3};
+    std::vector<char> left(space.boundary_faces.size(), 0), right = left;
+    for (std::size_t f = 0; f < space.boundary_faces.size(); ++f) {
+      const auto [cell, j] = space.boundary_faces[f];
+      double xmin = 1e9, xmax = -1e9;
+      for (int i = 0; i < 4; ++i)
+        if (i != j) xmin = std::min(xmin, mesh.nodes(mesh.cells(cell, i), 0)), xmax = std::max(xmax, mesh.nodes(mesh.cells(cell, i), 0));
+      left[f] = xmax < 1e-12;
+      right[f] = xmin > 1 - 1e-12;
+    }
+    problem.dirichlet.push_back({left, {true, true, true}, [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); }, {}});
+    problem.traction.push_back({right, [load](const Eigen::Vector3d&) { return Eigen::Vector3d(0, 0, -load); }, {}});
+  }
+};
+}  // namespace
+
+TEST(NeoHookean, ReducesToLinearElasticityForTinyLoads) {
+  Cantilever c(1e-8, 2);
+  const auto lin = fem::solve_linear_elasticity(c.mesh, c.space, c.problem, {});
+  const auto nh = fem::solve_neo_hookean(c.mesh, c.space, c.problem, {}, {});
+  EXPECT_GT(lin.u.norm(), 0);
+  EXPECT_LT((nh.u - lin.u).norm() / lin.u.norm(), 1e-6);
+}
+
+TEST(NeoHookean, NewtonConvergesQuadratically) {
+  Cantilever c(2.0, 2);  // tip deflection ~ a third of the length: clearly nonlinear
+  fem::NewtonOptions newton;
+  newton.load_steps = 2;
+  newton.tolerance = 1e-11;
+  const auto sol = fem::solve_neo_hookean(c.mesh, c.space, c.problem, {}, newton);
+  const auto lin = fem::solve_linear_elasticity(c.mesh, c.space, c.problem, {});
+  EXPECT_GT((sol.u - lin.u).norm() / lin.u.norm(), 1e-2);  // the nonlinearity is visible
+  // Residual history of the last load step.
+  std::vector<double> r;
+  for (const auto& s : sol.newton)
+    if (s.load_step == 2) r.push_back(s.residual);
+  for (double v : r) std::printf("%.3e ", v);
+  std::printf("\n");
+  ASSERT_GE(r.size(), 4u);
+  // Estimated order q = log(r_{k+1}/r_k) / log(r_k/r_{k-1}) on the last triple above round-off.
+  double best = 0;
+  for (std::size_t k = 1; k + 1 < r.size(); ++k)
+    if (r[k + 1] > 1e-12 * r[0] && r[k] < 0.5 * r[k - 1])
+      best = std::max(best, std::log(r[k + 1] / r[k]) / std::log(r[k] / r[k - 1]));
+  EXPECT_GT(best, 1.7);
+}

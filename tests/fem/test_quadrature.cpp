@@ -1,0 +1,165 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <thread>
+#include <vector>
+
+#include "fem/quadrature/simplex_quadrature.hpp"
+#include "meshing/core/error.hpp"
+
+using namespace curvefem;
+using namespace curvefem::fem;
+
+namespace {
+
+double factorial(int n) {
+  double f = 1.0;
+  for (int i = 2; i <= n; ++i) f *= i;
+  return f;
+}
+
+// ∫ x^a y^b z^c over the reference tetrahedron (dim 3) or ∫ x^a y^b over the triangle (dim 2).
+double exact_integral(int dim, int a, int b, int c) {
+  return factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + dim);
+}
+
+// Largest relative error of `rule` over every monomial of total degree ≤ max_degree.
+double max_relative_error(const QuadratureRule& rule, int max_degree) {
+  const int dim = rule.dimension();
+  const int nq = rule.size();
+  // powers[q][d][e] = x_{q,d}^e
+  std::vector<double> powers(static_cast<std::size_t>(nq) * 3 * (max_degree + 1), 1.0);
+  auto pw = [&](int q, int d, int e) -> double& {
+    return powers[(static_cast<std::size_t>(q) * 3 + d) * (max_degree + 1) + e];
+  };
+  for (int q = 0; q < nq; ++q)
+    for (int d = 0; d < dim; ++d)
+      for (int e = 1; e <= max_degree; ++e) pw(q, d, e) = pw(q, d, e - 1) * rule.points(q, d);
+  double worst = 0.0;
+  for (int a = 0; a <= max_degree; ++a)
+    for (int b = 0; a + b <= max_degree; ++b)
+      for (int c = 0; c <= (dim == 3 ? max_degree - a - b : 0); ++c) {
+        double sum = 0.0;
+        for (int q = 0; q < nq; ++q)
+          sum += rule.weights[q] * pw(q, 0, a) * pw(q, 1, b) * pw(q, 2, c);
+        const double exact = exact_integral(dim, a, b, c);
+        worst = std::max(worst, std::abs(sum - exact) / exact);
+      }
+  return worst;
+}
+
+int expected_points_per_direction(int degree) { return (degree + 2) / 2; }
+
+}  // namespace
+
+TEST(SimplexQuadrature, TetrahedronExactOnEveryMonomialUpToDegree20) {
+  for (int degree = 0; degree <= 20; ++degree) {
+    const QuadratureRule& rule = tetrahedron_quadrature(degree);
+    EXPECT_EQ(rule.degree, degree);
+    EXPECT_LT(max_relative_error(rule, degree), 1e-13) << "degree " << degree;
+  }
+}
+
+TEST(SimplexQuadrature, TetrahedronExactUpToMaxDegree) {
+  for (int degree = 21; degree <= k_max_quadrature_degree; ++degree)
+    EXPECT_LT(max_relative_error(tetrahedron_quadrature(degree), degree), 1e-13)
+        << "degree " << degree;
+}
+
+TEST(SimplexQuadrature, TriangleExactOnEveryMonomialUpToMaxDegree) {
+  for (int degree = 0; degree <= k_max_quadrature_degree; ++degree) {
+    const QuadratureRule& rule = triangle_quadrature(degree);
+    EXPECT_EQ(rule.degree, degree);
+    EXPECT_LT(max_relative_error(rule, degree), 1e-13) << "degree " << degree;
+  }
+}
+
+TEST(SimplexQuadrature, NotExactBeyondTheConstruction) {
+  // n points per direction integrate u^(2n-1) but not u^(2n): x^(2n) must fail. This proves the
+  // exactness check above can fail (for even degree d, 2n = d + 2).
+  for (int degree : {2, 4, 5, 10, 20}) {
+    const int n = expected_points_per_direction(degree);
+    EXPECT_GT(max_relative_error(tetrahedron_quadrature(degree), 2 * n), 1e-8) << degree;
+    EXPECT_GT(max_relative_error(triangle_quadrature(degree), 2 * n), 1e-8) << degree;
+  }
+}
+
+TEST(SimplexQuadrature, PointCountsWeightsAndInteriorPoints) {
+  for (int degree = 0; degree <= k_max_quadrature_degree; ++degree) {
+    const int n = expected_points_per_direction(degree);
+    const QuadratureRule& tet = tetrahedron_quadrature(degree);
+    const QuadratureRule& tri = triangle_quadrature(degree);
+    ASSERT_EQ(tet.size(), n * n * n);
+    ASSERT_EQ(tri.size(), n * n);
+    ASSERT_EQ(tet.dimension(), 3);
+    ASSERT_EQ(tri.dimension(), 2);
+    EXPECT_NEAR(tet.weights.sum(), 1.0 / 6.0, 1e-15);
+    EXPECT_NEAR(tri.weights.sum(), 0.5, 1e-15);
+    EXPECT_GT(tet.weights.minCoeff(), 0.0);
+    EXPECT_GT(tri.weights.minCoeff(), 0.0);
+    EXPECT_GT(tet.points.minCoeff(), 0.0);
+    EXPECT_GT(tri.points.minCoeff(), 0.0);
+    EXPECT_LT(tet.points.rowwise().sum().maxCoeff(), 1.0);
+    EXPECT_LT(tri.points.rowwise().sum().maxCoeff(), 1.0);
+  }
+}
+
+TEST(SimplexQuadrature, GaussLegendreAndJacobiKnownValues) {
+  Eigen::VectorXd x, w;
+  gauss_jacobi_01(2, 0, x, w);  // Gauss–Legendre on [0, 1]
+  EXPECT_NEAR(x[0], 0.5 - 0.5 / std::sqrt(3.0), 1e-15);
+  EXPECT_NEAR(x[1], 0.5 + 0.5 / std::sqrt(3.0), 1e-15);
+  EXPECT_NEAR(w[0], 0.5, 1e-15);
+  EXPECT_NEAR(w[1], 0.5, 1e-15);
+  gauss_jacobi_01(1, 2, x, w);  // ∫ (1-u)^2 = 1/3, ∫ u (1-u)^2 = 1/12 → node 1/4
+  EXPECT_NEAR(x[0], 0.25, 1e-15);
+  EXPECT_NEAR(w[0], 1.0 / 3.0, 1e-15);
+}
+
+TEST(SimplexQuadrature, RejectsUnsupportedDegrees) {
+  EXPECT_THROW(tetrahedron_quadrature(-1), InputError);
+  EXPECT_THROW(tetrahedron_quadrature(k_max_quadrature_degree + 1), InputError);
+  EXPECT_THROW(triangle_quadrature(-1), InputError);
+  EXPECT_THROW(triangle_quadrature(k_max_quadrature_degree + 1), InputError);
+}
+
+TEST(SimplexQuadrature, CachedAndThreadSafe) {
+  // Two threads race to build rules; both must see the same objects as the main thread.
+  std::vector<const QuadratureRule*> seen[2];
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t)
+    threads.emplace_back([&seen, t] {
+      for (int d = 0; d <= k_max_quadrature_degree; ++d) {
+        seen[t].push_back(&tetrahedron_quadrature(d));
+        seen[t].push_back(&triangle_quadrature(d));
+      }
+    });
+  for (auto& thread : threads) thread.join();
+  ASSERT_EQ(seen[0].size(), seen[1].size());
+  for (std::size_t i = 0; i < seen[0].size(); ++i) EXPECT_EQ(seen[0][i], seen[1][i]);
+  EXPECT_EQ(&tetrahedron_quadrature(7), &tetrahedron_quadrature(7));
+  EXPECT_NE(static_cast<const void*>(&tetrahedron_quadrature(7)),
+            static_cast<const void*>(&triangle_quadrature(7)));
+}
+
+TEST(SimplexQuadrature, DefaultDegrees) {
+  // Affine (k = 1): stiffness 2p, mass 2p (exact), error 2p + 6.
+  EXPECT_EQ(default_quadrature_degree(1, 1, QuadratureUse::stiffness), 2);
+  EXPECT_EQ(default_quadrature_degree(3, 1, QuadratureUse::mass), 6);
+  EXPECT_EQ(default_quadrature_degree(2, 1, QuadratureUse::error), 10);
+  // Curved: stiffness 2p + 2(k-1), mass 2p + 3(k-1), error 2p + 4 + max(2k, 3(k-1)).
+  EXPECT_EQ(default_quadrature_degree(2, 2, QuadratureUse::stiffness), 6);
+  EXPECT_EQ(default_quadrature_degree(2, 3, QuadratureUse::mass), 10);
+  EXPECT_EQ(default_quadrature_degree(3, 2, QuadratureUse::error), 14);
+  EXPECT_EQ(default_quadrature_degree(4, 4, QuadratureUse::error), 21);
+  EXPECT_EQ(default_quadrature_degree(10, 10, QuadratureUse::error), k_max_quadrature_degree);
+  for (int p = 1; p <= 4; ++p)
+    for (int k = 1; k <= 4; ++k) {
+      const int mass = default_quadrature_degree(p, k, QuadratureUse::mass);
+      EXPECT_GE(mass, 2 * p + 3 * (k - 1));  // mass integrand is a polynomial: must be exact
+      EXPECT_GE(default_quadrature_degree(p, k, QuadratureUse::error), mass);
+      EXPECT_GE(default_quadrature_degree(p, k, QuadratureUse::stiffness), 2 * (p - 1));
+    }
+  EXPECT_THROW(default_quadrature_degree(0, 1, QuadratureUse::mass), InputError);
+  EXPECT_THROW(default_quadrature_degree(1, 0, QuadratureUse::mass), InputError);
+}

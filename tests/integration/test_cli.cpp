@@ -1,0 +1,108 @@
+// The curvefem CLI on tiny inputs: exit codes (DESIGN.md §3), error lines, atomic output, and the
+// demo's report.json.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "meshing/core/primitives.hpp"
+#include "meshing/io/surface_io.hpp"
+#include "tests/support/test_support.hpp"
+
+using namespace curvefem;
+
+namespace {
+std::string cli() { return test::curvefem_executable().string(); }
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+}  // namespace
+
+TEST(Cli, HelpAndUsageErrors) {
+  std::string out;
+  EXPECT_EQ(test::run_command(cli() + " --help", &out), 0);
+  EXPECT_NE(out.find("check"), std::string::npos);
+  EXPECT_EQ(test::run_command(cli() + " check --help", &out), 0);
+  EXPECT_NE(out.find("--json"), std::string::npos);
+  EXPECT_EQ(test::run_command(cli() + " no-such-command", &out), 1);
+  EXPECT_EQ(test::run_command(cli(), &out), 1);
+}
+
+TEST(Cli, CheckAcceptsClosedSphereAndRejectsOpenBox) {
+  const auto dir = test::scratch_dir("cli_check");
+  io::write_surface(dir / "sphere.obj", make_icosphere(2), io::SurfaceFormat::obj);
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " check -q --json " + (dir / "sphere.obj").string(), &out), 0)
+      << out;
+  const auto j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["faces"], 320);
+  EXPECT_EQ(j["genus"], 0);
+  EXPECT_EQ(j["acceptable"], true);
+
+  SurfaceMesh box = make_box({0, 0, 0}, {1, 1, 1}, 2);
+  box.F.conservativeResize(box.F.rows() - 1, 3);  // remove one face: 3 boundary edges
+  box.tags.conservativeResize(box.F.rows());
+  io::write_surface(dir / "open.off", box, io::SurfaceFormat::off);
+  EXPECT_EQ(test::run_command(cli() + " check " + (dir / "open.off").string(), &out), 2) << out;
+  EXPECT_NE(out.find("3 boundary edges"), std::string::npos) << out;
+}
+
+TEST(Cli, MalformedInputNamesFileAndLine) {
+  const auto dir = test::scratch_dir("cli_bad");
+  std::ofstream(dir / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n";
+  std::string out;
+  EXPECT_EQ(test::run_command(cli() + " check " + (dir / "bad.obj").string(), &out), 2);
+  EXPECT_NE(out.find("bad.obj:4"), std::string::npos) << out;
+  // A file that cannot be opened is an I/O failure (4), named on the error line.
+  EXPECT_EQ(test::run_command(cli() + " check " + (dir / "missing.obj").string(), &out), 4)
+      << out;
+  EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
+}
+
+TEST(Cli, ConvertRoundTripAndAtomicFailure) {
+  const auto dir = test::scratch_dir("cli_convert");
+  const SurfaceMesh box = make_box({0, 0, 0}, {1, 2, 3}, 2);
+  io::write_surface(dir / "box.obj", box, io::SurfaceFormat::obj);
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " convert -q " + (dir / "box.obj").string() + " " +
+                                  (dir / "box.ply").string(),
+                              &out),
+            0)
+      << out;
+  const SurfaceMesh back = io::read_surface(dir / "box.ply");
+  EXPECT_EQ(back.V, box.V);
+  EXPECT_EQ(back.F, box.F);
+  EXPECT_EQ(back.tags, box.tags);
+  // Writing into a missing directory is an I/O failure (4) and leaves nothing behind.
+  EXPECT_EQ(test::run_command(cli() + " convert -q " + (dir / "box.obj").string() + " " +
+                                  (dir / "nope" / "box.stl").string(),
+                              &out),
+            4)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "nope"));
+}
+
+TEST(Cli, DemoWritesCompleteVerifiedReport) {
+  const auto dir = test::scratch_dir("cli_demo");
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " demo -q --order 2 --dense-size 0.08 --coarse-size 0.4 -o " +
+                                  dir.string(),
+                              &out),
+            0)
+      << out;
+  for (const char* f : {"surface.obj", "surface.vtu", "mesh.vtu", "mesh.msh", "demo.pvd"})
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  const auto r = read_json(dir / "report.json");
+  EXPECT_EQ(r["order"], 2);
+  EXPECT_GT(r["output_tets"].get<int>(), 20);
+  EXPECT_EQ(r["input"]["acceptable"], true);
+  EXPECT_EQ(r["input"]["genus"], 1);  // the plate's through hole
+  EXPECT_EQ(r["jacobian_sampled"]["tets_with_non_positive_sample"], 0);
+  EXPECT_LT(r["roundtrip_vtu_max_error_rel"].get<double>(), 1e-12);
+  EXPECT_LT(r["roundtrip_msh_max_error_rel"].get<double>(), 1e-12);
+  // No staging folder left behind.
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_NE(e.path().filename().string().rfind(".staging", 0), 0u) << e.path();
+}

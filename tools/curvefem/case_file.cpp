@@ -1,0 +1,307 @@
+#include "tools/curvefem/case_file.hpp"
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "meshing/core/error.hpp"
+
+namespace curvefem::cli {
+namespace {
+
+using json = nlohmann::json;
+
+[[noreturn]] void fail(const std::string& path, const std::string& what, const std::string& file) {
+  throw InputError((path.empty() ? std::string("/") : path) + ": " + what, {.file = file});
+}
+
+struct Reader {
+  std::string file;
+
+  void only_keys(const json& j, const std::string& path, std::set<std::string> allowed) const {
+    if (!j.is_object()) fail(path, "expected an object", file);
+    for (const auto& [key, value] : j.items())
+      if (!allowed.count(key)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(path + "/" + key, "unknown key (allowed here: " + list + ")", file);
+      }
+  }
+  const json* get(const json& j, const std::string& key) const {
+    auto it = j.find(key);
+    return it == j.end() ? nullptr : &*it;
+  }
+  std::string string(const json& j, const std::string& path) const {
+    if (!j.is_string()) fail(path, "expected a string", file);
+    return j.get<std::string>();
+  }
+  double number(const json& j, const std::string& path) const {
+    if (!j.is_number()) fail(path, "expected a number", file);
+    return j.get<double>();
+  }
+  int integer(const json& j, const std::string& path, int lo, int hi) const {
+    if (!j.is_number_integer()) fail(path, "expected an integer", file);
+    const long long v = j.get<long long>();
+    if (v < lo || v > hi)
+      fail(path, "must be in " + std::to_string(lo) + ".." + std::to_string(hi), file);
+    return static_cast<int>(v);
+  }
+  /// An expression: a string or a number.
+  Expression expression(const json& j, const std::string& path) const {
+    if (j.is_number()) {
+      std::ostringstream s;
+      s.precision(17);
+      s << j.get<double>();
+      return Expression(s.str(), path);
+    }
+    if (!j.is_string()) fail(path, "expected an expression (string or number)", file);
+    try {
+      return Expression(j.get<std::string>(), path);
+    } catch (const InputError& e) {
+      throw InputError(e.defect(), {.file = file});
+    }
+  }
+  /// One expression (scalar problems) or an array of three (vector problems).
+  std::vector<Expression> expressions(const json& j, const std::string& path,
+                                      int components) const {
+    std::vector<Expression> out;
+    if (components == 1) {
+      if (j.is_array()) fail(path, "expected one expression (scalar problem)", file);
+      out.push_back(expression(j, path));
+      return out;
+    }
+    if (!j.is_array() || j.size() != 3)
+      fail(path, "expected an array of three expressions (vector problem)", file);
+    for (int i = 0; i < 3; ++i) out.push_back(expression(j[i], path + "/" + std::to_string(i)));
+    return out;
+  }
+  Eigen::Vector3d point(const json& j, const std::string& path) const {
+    if (!j.is_array() || j.size() != 3) fail(path, "expected [x, y, z]", file);
+    Eigen::Vector3d p;
+    for (int i = 0; i < 3; ++i) p[i] = number(j[i], path + "/" + std::to_string(i));
+    return p;
+  }
+};
+
+Selection read_selection(const Reader& r, const json& j, const std::string& path) {
+  r.only_keys(j, path, {"all", "tag", "box"});
+  if (j.size() != 1) fail(path, "a selection has exactly one of: all, tag, box", r.file);
+  Selection s;
+  s.where = path;
+  if (const json* v = r.get(j, "all")) {
+    if (!v->is_boolean() || !v->get<bool>()) fail(path + "/all", "expected true", r.file);
+    s.kind = Selection::Kind::all;
+  } else if (const json* v = r.get(j, "tag")) {
+    s.kind = Selection::Kind::tag;
+    s.tag = r.integer(*v, path + "/tag", 0, 1 << 30);
+  } else if (const json* v = r.get(j, "box")) {
+    s.kind = Selection::Kind::box;
+    if (!v->is_array() || v->size() != 2)
+      fail(path + "/box", "expected [[x0,y0,z0],[x1,y1,z1]]", r.file);
+    s.lo = r.point((*v)[0], path + "/box/0");
+    s.hi = r.point((*v)[1], path + "/box/1");
+    if ((s.lo.array() > s.hi.array()).any())
+      fail(path + "/box", "lower corner above upper corner", r.file);
+  }
+  return s;
+}
+
+}  // namespace
+
+CaseSpec read_case(const std::filesystem::path& path, const std::string& output_override) {
+  std::ifstream in(path);
+  if (!in) throw IoError("cannot open case file", {.file = path.string()});
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(std::string("invalid JSON: ") + e.what(), {.file = path.string()});
+  }
+  const Reader r{path.string()};
+  r.only_keys(j, "",
+              {"geometry", "meshing", "physics", "discretization", "rhs", "boundary_conditions",
+               "exact", "solver", "output"});
+  CaseSpec c;
+  c.case_file = path;
+  const auto base = path.parent_path();
+  auto resolve = [&](const std::string& p) {
+    return std::filesystem::path(p).is_absolute() ? std::filesystem::path(p) : base / p;
+  };
+
+  const json* geometry = r.get(j, "geometry");
+  if (!geometry) fail("/geometry", "missing (e.g. {\"mesh\": \"part.msh\"})", r.file);
+  r.only_keys(*geometry, "/geometry", {"mesh", "builtin"});
+  const json* mesh = r.get(*geometry, "mesh");
+  const json* builtin = r.get(*geometry, "builtin");
+  if ((mesh == nullptr) == (builtin == nullptr))
+    fail("/geometry", "give exactly one of \"mesh\" (a .msh/.vtu file) or \"builtin\"", r.file);
+  if (mesh) c.mesh = resolve(r.string(*mesh, "/geometry/mesh"));
+  if (builtin) {
+    r.only_keys(*builtin, "/geometry/builtin", {"shape", "size", "divisions", "order"});
+    const json* shape = r.get(*builtin, "shape");
+    if (!shape) fail("/geometry/builtin/shape", "missing (ball or cube)", r.file);
+    c.builtin = r.string(*shape, "/geometry/builtin/shape");
+    if (c.builtin != "ball" && c.builtin != "cube")
+      fail("/geometry/builtin/shape", "'" + c.builtin + "': expected ball or cube", r.file);
+    if (const json* v = r.get(*builtin, "size")) {
+      if (c.builtin != "ball") fail("/geometry/builtin/size", "only for the ball", r.file);
+      c.builtin_size = r.number(*v, "/geometry/builtin/size");
+      if (!(c.builtin_size >= 0.02 && c.builtin_size <= 2))
+        fail("/geometry/builtin/size", "must be in [0.02, 2]", r.file);
+    }
+    if (const json* v = r.get(*builtin, "divisions")) {
+      if (c.builtin != "cube") fail("/geometry/builtin/divisions", "only for the cube", r.file);
+      c.builtin_divisions = r.integer(*v, "/geometry/builtin/divisions", 1, 100);
+    }
+    if (const json* v = r.get(*builtin, "order"))
+      c.builtin_order = r.integer(*v, "/geometry/builtin/order", 1, 4);
+  }
+
+  if (const json* m = r.get(j, "meshing")) {
+    r.only_keys(*m, "/meshing", {"method"});
+    if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
+  }
+  if (c.method != "given")
+    fail("/meshing/method", "'" + c.method + "' is not available yet (only \"given\")", r.file);
+
+  if (const json* p = r.get(j, "physics")) {
+    r.only_keys(*p, "/physics", {"type", "kappa", "E", "nu", "load_steps"});
+    if (const json* v = r.get(*p, "type")) c.physics = r.string(*v, "/physics/type");
+    if (c.physics != "poisson" && c.physics != "linear_elasticity" && c.physics != "neo_hookean")
+      fail("/physics/type",
+           "'" + c.physics + "': expected poisson, linear_elasticity or neo_hookean", r.file);
+    const bool elastic = c.physics != "poisson";
+    if (const json* v = r.get(*p, "kappa")) {
+      if (elastic) fail("/physics/kappa", "only for poisson", r.file);
+      c.kappa = r.expression(*v, "/physics/kappa");
+    }
+    for (const char* key : {"E", "nu"})
+      if (r.get(*p, key) && !elastic)
+        fail(std::string("/physics/") + key, "only for elasticity", r.file);
+    if (const json* v = r.get(*p, "E")) c.E = r.number(*v, "/physics/E");
+    if (const json* v = r.get(*p, "nu")) c.nu = r.number(*v, "/physics/nu");
+    if (!(c.E > 0)) fail("/physics/E", "must be positive", r.file);
+    if (!(c.nu > -1 && c.nu < 0.5)) fail("/physics/nu", "must be in (-1, 0.5)", r.file);
+    if (const json* v = r.get(*p, "load_steps")) {
+      if (c.physics != "neo_hookean") fail("/physics/load_steps", "only for neo_hookean", r.file);
+      c.load_steps = r.integer(*v, "/physics/load_steps", 1, 10000);
+    }
+  }
+  if (c.kappa.empty() && c.physics == "poisson") c.kappa = Expression("1", "/physics/kappa");
+
+  if (const json* d = r.get(j, "discretization")) {
+    r.only_keys(*d, "/discretization", {"degree", "quadrature"});
+    if (const json* v = r.get(*d, "degree"))
+      c.degree = r.integer(*v, "/discretization/degree", 1, 4);
+    if (const json* v = r.get(*d, "quadrature"))
+      c.quadrature = r.integer(*v, "/discretization/quadrature", 0, 30);
+  }
+  const int comps = c.components();
+  if (const json* v = r.get(j, "rhs")) c.rhs = r.expressions(*v, "/rhs", comps);
+  if (const json* v = r.get(j, "exact")) c.exact = r.expressions(*v, "/exact", comps);
+
+  const json* bcs = r.get(j, "boundary_conditions");
+  if (bcs) {
+    if (!bcs->is_array()) fail("/boundary_conditions", "expected an array", r.file);
+    for (std::size_t i = 0; i < bcs->size(); ++i) {
+      const std::string p = "/boundary_conditions/" + std::to_string(i);
+      const json& b = (*bcs)[i];
+      r.only_keys(b, p, {"type", "select", "value", "components"});
+      BoundaryConditionSpec bc;
+      const json* type = r.get(b, "type");
+      if (!type) fail(p + "/type", "missing (dirichlet or neumann)", r.file);
+      bc.type = r.string(*type, p + "/type");
+      if (bc.type != "dirichlet" && bc.type != "neumann")
+        fail(p + "/type", "'" + bc.type + "': expected dirichlet or neumann", r.file);
+      const json* select = r.get(b, "select");
+      if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
+      bc.select = read_selection(r, *select, p + "/select");
+      const json* value = r.get(b, "value");
+      if (!value) fail(p + "/value", "missing", r.file);
+      bc.value = r.expressions(*value, p + "/value", comps);
+      if (const json* m = r.get(b, "components")) {
+        if (comps == 1 || bc.type != "dirichlet")
+          fail(p + "/components", "only for vector Dirichlet conditions", r.file);
+        if (!m->is_array() || m->size() != 3)
+          fail(p + "/components", "expected [bool, bool, bool]", r.file);
+        for (int k = 0; k < 3; ++k) {
+          if (!(*m)[k].is_boolean())
+            fail(p + "/components/" + std::to_string(k), "expected true/false", r.file);
+          bc.components[k] = (*m)[k].get<bool>();
+        }
+      }
+      c.boundary_conditions.push_back(std::move(bc));
+    }
+  }
+
+  if (const json* s = r.get(j, "solver")) {
+    r.only_keys(*s, "/solver", {"type", "rtol", "max_iterations"});
+    if (const json* v = r.get(*s, "type")) c.solver = r.string(*v, "/solver/type");
+    if (c.solver != "auto" && c.solver != "direct" && c.solver != "cg")
+      fail("/solver/type", "'" + c.solver + "': expected auto, direct or cg", r.file);
+    if (const json* v = r.get(*s, "rtol")) c.solver_rtol = r.number(*v, "/solver/rtol");
+    if (const json* v = r.get(*s, "max_iterations"))
+      c.solver_max_iterations = r.integer(*v, "/solver/max_iterations", 1, 1000000);
+  }
+  std::string out = "out";
+  if (const json* o = r.get(j, "output")) {
+    r.only_keys(*o, "/output", {"dir"});
+    if (const json* v = r.get(*o, "dir")) out = r.string(*v, "/output/dir");
+  }
+  c.output_dir = output_override.empty() ? resolve(out) : std::filesystem::path(output_override);
+
+  // Resolved case: every key with its value as run.
+  auto exprs = [](const std::vector<Expression>& e) {
+    if (e.size() == 1) return json(e[0].text());
+    json a = json::array();
+    for (const auto& x : e) a.push_back(x.text());
+    return a;
+  };
+  json res;
+  if (c.builtin.empty())
+    res["geometry"] = {{"mesh", c.mesh.string()}};
+  else if (c.builtin == "ball")
+    res["geometry"] = {
+        {"builtin", {{"shape", "ball"}, {"size", c.builtin_size}, {"order", c.builtin_order}}}};
+  else
+    res["geometry"] = {
+        {"builtin",
+         {{"shape", "cube"}, {"divisions", c.builtin_divisions}, {"order", c.builtin_order}}}};
+  res["meshing"] = {{"method", c.method}};
+  res["physics"] = {{"type", c.physics}};
+  if (c.physics == "poisson")
+    res["physics"]["kappa"] = c.kappa.text();
+  else
+    res["physics"]["E"] = c.E, res["physics"]["nu"] = c.nu;
+  if (c.physics == "neo_hookean") res["physics"]["load_steps"] = c.load_steps;
+  res["discretization"] = {{"degree", c.degree},
+                           {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)}};
+  res["rhs"] = c.rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(c.rhs);
+  res["boundary_conditions"] = json::array();
+  for (const auto& bc : c.boundary_conditions) {
+    json b = {{"type", bc.type}, {"value", exprs(bc.value)}};
+    switch (bc.select.kind) {
+      case Selection::Kind::all:
+        b["select"] = {{"all", true}};
+        break;
+      case Selection::Kind::tag:
+        b["select"] = {{"tag", bc.select.tag}};
+        break;
+      case Selection::Kind::box:
+        b["select"] = {{"box",
+                        {{bc.select.lo[0], bc.select.lo[1], bc.select.lo[2]},
+                         {bc.select.hi[0], bc.select.hi[1], bc.select.hi[2]}}}};
+        break;
+    }
+    if (comps == 3 && bc.type == "dirichlet") b["components"] = bc.components;
+    res["boundary_conditions"].push_back(b);
+  }
+  if (!c.exact.empty()) res["exact"] = exprs(c.exact);
+  res["solver"] = {
+      {"type", c.solver}, {"rtol", c.solver_rtol}, {"max_iterations", c.solver_max_iterations}};
+  res["output"] = {{"dir", c.output_dir.string()}};
+  c.resolved = res;
+  return c;
+}
+
+}  // namespace curvefem::cli

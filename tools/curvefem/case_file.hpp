@@ -1,0 +1,62 @@
+// Case files of `curvefem run` (schema in cases/README.md). Parsing is strict: an unknown key, a
+// wrong type or a bad expression is an InputError naming the JSON path (e.g.
+// "/boundary_conditions/1/select/box: expected [[x0,y0,z0],[x1,y1,z1]]"). Defaults are injected
+// and the resolved case (every key, with defaults) is available for resolved_case.json. Relative
+// paths resolve against the case file's folder.
+#pragma once
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tools/curvefem/expression.hpp"
+
+namespace curvefem::cli {
+
+struct Selection {
+  enum class Kind { all, tag, box };
+  Kind kind = Kind::all;
+  int tag = 0;
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
+  std::string where;  ///< JSON path, for messages
+};
+
+struct BoundaryConditionSpec {
+  std::string type;  ///< dirichlet | neumann
+  Selection select;
+  std::vector<Expression> value;                     ///< 1 (scalar) or 3 (vector) expressions
+  std::array<bool, 3> components{true, true, true};  ///< vector Dirichlet: which are imposed
+};
+
+struct CaseSpec {
+  std::filesystem::path case_file;
+  std::filesystem::path mesh;  ///< geometry.mesh, resolved (empty for a built-in shape)
+  std::string builtin;         ///< geometry.builtin.shape: "" | ball | cube
+  double builtin_size = 0.3;   ///< ball: target edge length (radius 1)
+  int builtin_divisions = 4;   ///< cube: n³ cubes of 6 tets on [0,1]³
+  int builtin_order = 1;       ///< geometric order k of the built-in mesh
+  std::string method = "given";
+  std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
+  Expression kappa;                 ///< poisson
+  double E = 1.0, nu = 0.3;         ///< elasticity
+  int load_steps = 1;               ///< neo_hookean
+  int degree = 1;
+  int quadrature = -1;          ///< -1 = default
+  std::vector<Expression> rhs;  ///< empty, 1 or 3
+  std::vector<BoundaryConditionSpec> boundary_conditions;
+  std::vector<Expression> exact;  ///< empty, 1 or 3
+  std::string solver = "auto";
+  double solver_rtol = 1e-10;
+  int solver_max_iterations = 5000;
+  std::filesystem::path output_dir;  ///< resolved
+  nlohmann::json resolved;           ///< the case with defaults, as run
+  int components() const { return physics == "poisson" ? 1 : 3; }
+};
+
+/// Reads and validates a case file; `output_override` replaces output.dir when non-empty.
+CaseSpec read_case(const std::filesystem::path& path, const std::string& output_override = {});
+
+}  // namespace curvefem::cli

@@ -1,0 +1,205 @@
+#!/usr/bin/python3
+"""Generate fem/basis/generated/lagrange_tables.inc: monomial coefficients of the equispaced
+Lagrange bases of degree 1..4 on the reference triangle and tetrahedron.
+
+For each (kind, p) the canonical node list is rebuilt with the rule of
+meshing/core/lagrange_nodes.hpp (re-implemented here; the C++ tests cross-check it against
+curvefem::lagrange_lattice / lagrange_reference_nodes):
+  1. group nodes by entity, the set of vertices i with alpha_i > 0;
+  2. entities by dimension (vertices, edges, faces, interior), equal dimension in lexicographic
+     order of their sorted vertex lists;
+  3. inside an entity, descending lexicographic order of the barycentric multi-index alpha.
+Node i sits at (alpha_1, .., alpha_d) / p on the reference simplex v0 = 0, v1 = e_x, v2 = e_y,
+v3 = e_z.
+
+Monomial order (graded, then descending exponent of x, then of y):
+  for d = 0..p: for a = d..0: for b = d-a..0: x^a y^b z^(d-a-b)   (triangles: c = 0 only)
+i.e. 1, x, y, z, x^2, xy, xz, y^2, yz, z^2, ...
+
+The Vandermonde system V[j][m] = monomial_m(node_j) is inverted exactly with fractions.Fraction;
+the coefficient matrix C (size n x n, row i = basis function i) satisfies
+  phi_i(x) = sum_m C[i][m] * monomial_m(x),   C = V^{-T}.
+Coefficients are printed as exact double expressions (`-27.0 / 2.0`): numerators and
+denominators are small integers, so each expression is the correctly rounded double.
+
+Usage:
+  tools/gen_lagrange_basis.py            write the committed file
+  tools/gen_lagrange_basis.py --check    regenerate in memory, compare, exit 1 on difference
+  tools/gen_lagrange_basis.py --output F write to F instead
+"""
+
+import argparse
+import itertools
+import sys
+from fractions import Fraction
+from pathlib import Path
+
+MAX_DEGREE = 4
+KINDS = (("triangle", 2), ("tetrahedron", 3))
+REPO_ROOT = Path(__file__).resolve().parent.parent
+OUTPUT = REPO_ROOT / "fem" / "basis" / "generated" / "lagrange_tables.inc"
+LINE_WIDTH = 100
+
+
+def canonical_lattice(dim, p):
+    """Barycentric multi-indices (4 entries, unused ones 0) in the canonical order of core."""
+    nodes = []
+    for a1 in range(p + 1):
+        for a2 in range(p + 1 - a1):
+            for a3 in range(p + 1 - a1 - a2):
+                if dim == 2 and a3 > 0:
+                    continue
+                nodes.append((p - a1 - a2 - a3, a1, a2, a3))
+
+    def key(alpha):
+        entity = tuple(i for i in range(dim + 1) if alpha[i] > 0)
+        # Descending lexicographic alpha inside an entity: negate every entry.
+        return (len(entity), entity, tuple(-a for a in alpha))
+
+    return sorted(nodes, key=key)
+
+
+def monomial_exponents(dim, p):
+    exps = []
+    for d in range(p + 1):
+        for a in range(d, -1, -1):
+            for b in range(d - a, -1, -1):
+                c = d - a - b
+                if dim == 2 and c > 0:
+                    continue
+                exps.append((a, b, c))
+    return exps
+
+
+def invert(matrix):
+    """Exact inverse of a square matrix of Fractions by Gauss-Jordan elimination."""
+    n = len(matrix)
+    aug = [list(row) + [Fraction(int(i == j)) for j in range(n)] for i, row in enumerate(matrix)]
+    for col in range(n):
+        pivot = next(r for r in range(col, n) if aug[r][col] != 0)
+        aug[col], aug[pivot] = aug[pivot], aug[col]
+        inv = 1 / aug[col][col]
+        aug[col] = [v * inv for v in aug[col]]
+        for r in range(n):
+            if r != col and aug[r][col] != 0:
+                f = aug[r][col]
+                aug[r] = [vr - f * vc for vr, vc in zip(aug[r], aug[col])]
+    return [row[n:] for row in aug]
+
+
+def coefficients(dim, p):
+    lattice = canonical_lattice(dim, p)
+    exps = monomial_exponents(dim, p)
+    assert len(lattice) == len(exps)
+    points = [tuple(Fraction(alpha[d + 1], p) for d in range(3)) for alpha in lattice]
+    vander = [[x**a * y**b * z**c for (a, b, c) in exps] for (x, y, z) in points]
+    vinv = invert(vander)  # V^{-1}; C = V^{-T}
+    n = len(exps)
+    coef = [[vinv[m][i] for m in range(n)] for i in range(n)]
+    # Exact self-check: Kronecker delta at the nodes.
+    for j, (x, y, z) in enumerate(points):
+        mono = [x**a * y**b * z**c for (a, b, c) in exps]
+        for i in range(n):
+            assert sum(ci * mi for ci, mi in zip(coef[i], mono)) == (1 if i == j else 0)
+    return lattice, exps, coef
+
+
+def fraction_literal(q):
+    if q.denominator == 1:
+        return f"{q.numerator}.0"
+    return f"{q.numerator}.0 / {q.denominator}.0"
+
+
+def wrap(items, indent):
+    """Comma-separated items wrapped at LINE_WIDTH columns."""
+    lines, line = [], indent
+    for item in items:
+        piece = item + ","
+        if line != indent and len(line) + 1 + len(piece) > LINE_WIDTH:
+            lines.append(line)
+            line = indent
+        line += ("" if line == indent else " ") + piece
+    if line != indent:
+        lines.append(line)
+    return lines
+
+
+def generate():
+    out = []
+    emit = out.append
+    emit("// generated by tools/gen_lagrange_basis.py — do not edit")
+    emit("//")
+    emit("// Monomial coefficients of the equispaced Lagrange bases of degree 1..4 on the reference")
+    emit("// triangle and tetrahedron, nodes in the canonical order of meshing/core/lagrange_nodes.hpp.")
+    emit("//   phi_i(x) = sum_m coefficients[i * size + m] * x^a_m y^b_m z^c_m")
+    emit("// Monomial order: graded, then descending exponent of x, then of y (1, x, y, z, x^2, xy, ..).")
+    emit("// Included by fem/basis/lagrange_basis.cpp inside namespace curvefem::fem::generated.")
+    emit("")
+    emit("// clang-format off")
+    emit("")
+    emit("struct LagrangeTable {")
+    emit("  int dimension;            // 2 triangle, 3 tetrahedron")
+    emit("  int degree;               // p")
+    emit("  int size;                 // number of nodes = number of monomials")
+    emit("  const int* lattice;       // size x 4 barycentric multi-indices, canonical order")
+    emit("  const int* exponents;     // size x 3 monomial exponents (a, b, c)")
+    emit("  const double* coefficients;  // size x size, row i = basis function i")
+    emit("};")
+    names = []
+    for kind, dim in KINDS:
+        for p in range(1, MAX_DEGREE + 1):
+            lattice, exps, coef = coefficients(dim, p)
+            n = len(exps)
+            name = f"{kind}_p{p}"
+            names.append((dim, p, n, name))
+            emit("")
+            emit(f"// {kind}, p = {p}: {n} nodes")
+            emit(f"inline constexpr int k_{name}_lattice[{n * 4}] = {{")
+            out.extend(wrap(["{}, {}, {}, {}".format(*alpha) for alpha in lattice], "    "))
+            emit("};")
+            emit(f"inline constexpr int k_{name}_exponents[{n * 3}] = {{")
+            out.extend(wrap(["{}, {}, {}".format(*e) for e in exps], "    "))
+            emit("};")
+            emit(f"inline constexpr double k_{name}_coefficients[{n * n}] = {{")
+            for i, row in enumerate(coef):
+                emit("    // phi_{} alpha = ({})".format(i, ", ".join(map(str, lattice[i]))))
+                out.extend(wrap([fraction_literal(q) for q in row], "    "))
+            emit("};")
+    emit("")
+    emit(f"inline constexpr LagrangeTable k_lagrange_tables[{len(names)}] = {{")
+    for dim, p, n, name in names:
+        emit(f"    {{{dim}, {p}, {n}, k_{name}_lattice, k_{name}_exponents, k_{name}_coefficients}},")
+    emit("};")
+    emit("")
+    emit("// clang-format on")
+    return "\n".join(out) + "\n"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true",
+                        help="compare the committed file with a fresh generation; exit 1 if stale")
+    parser.add_argument("--output", type=Path, default=OUTPUT, help="output file")
+    args = parser.parse_args()
+    text = generate()
+    if args.check:
+        try:
+            current = args.output.read_text(encoding="utf-8")
+        except OSError as e:
+            print(f"gen_lagrange_basis: cannot read {args.output}: {e}", file=sys.stderr)
+            return 1
+        if current != text:
+            print(f"gen_lagrange_basis: {args.output} is stale; rerun tools/gen_lagrange_basis.py",
+                  file=sys.stderr)
+            return 1
+        print(f"gen_lagrange_basis: {args.output} is up to date")
+        return 0
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    with open(args.output, "w", encoding="utf-8", newline="\n") as f:
+        f.write(text)
+    print(f"gen_lagrange_basis: wrote {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
