@@ -9,7 +9,9 @@ namespace curvefem::fem {
 
 GeometryEvaluator::GeometryEvaluator(const LagrangeMesh& mesh, const Eigen::MatrixXd& points,
                                      const Eigen::VectorXd& weights)
-    : m_mesh(mesh), m_weights(weights), m_tab(tabulate(CellKind::tetrahedron, mesh.order, points)) {}
+    : m_mesh(mesh),
+      m_weights(weights),
+      m_tab(tabulate(CellKind::tetrahedron, mesh.order, points)) {}
 
 void GeometryEvaluator::evaluate(int cell, CellGeometry& out) const {
   const int nq = num_points();
@@ -24,8 +26,8 @@ void GeometryEvaluator::evaluate(int cell, CellGeometry& out) const {
     const double det = J.determinant();
     if (!(det > 0.0)) {
       std::ostringstream s;
-      s << "curved element has non-positive Jacobian determinant " << det
-        << " at quadrature point " << q << " (inverted or degenerate element)";
+      s << "curved element has non-positive Jacobian determinant " << det << " at quadrature point "
+        << q << " (inverted or degenerate element)";
       throw SolverError(s.str(), {.element = cell});
     }
     out.jacobian_inv[q] = J.inverse();

@@ -11,8 +11,8 @@ namespace curvefem::fem {
 
 struct ReferenceTabulation {
   int degree = 1;
-  Eigen::MatrixXd values;                    ///< n_points × n_basis
-  std::vector<Eigen::MatrixXd> gradients;    ///< per point: n_basis × dim (reference gradients)
+  Eigen::MatrixXd values;                  ///< n_points × n_basis
+  std::vector<Eigen::MatrixXd> gradients;  ///< per point: n_basis × dim (reference gradients)
 };
 
 /// Tabulates the Lagrange basis of `degree` on `kind` at the rows of `points` (n × dim).

@@ -57,12 +57,14 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
   }
   const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
   for (const auto& bc : problem.traction)
-    for_each_face_point(mesh, space, bc.faces, face_degree, [&](int, int cell, const FacePoint& pt) {
-      if (bc.where && !bc.where(pt.x)) return;
-      const Eigen::Vector3d t = bc.traction(pt.x) * pt.ds_w;
-      for (int a = 0; a < n; ++a)
-        for (int i = 0; i < 3; ++i) F[3 * space.cell_dofs(cell, a) + i] += t[i] * pt.phi[a];
-    });
+    for_each_face_point(mesh, space, bc.faces, face_degree,
+                        [&](int, int cell, const FacePoint& pt) {
+                          if (bc.where && !bc.where(pt.x)) return;
+                          const Eigen::Vector3d t = bc.traction(pt.x) * pt.ds_w;
+                          for (int a = 0; a < n; ++a)
+                            for (int i = 0; i < 3; ++i)
+                              F[3 * space.cell_dofs(cell, a) + i] += t[i] * pt.phi[a];
+                        });
   return F;
 }
 
@@ -176,7 +178,8 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
       const Eigen::Matrix3d Finv = F.inverse();
       const double lnJ = std::log(J);
       const double w = g.det_w[q];
-      e += w * (0.5 * mu * ((F.transpose() * F).trace() - 3.0) - mu * lnJ + 0.5 * lambda * lnJ * lnJ);
+      e += w *
+           (0.5 * mu * ((F.transpose() * F).trace() - 3.0) - mu * lnJ + 0.5 * lambda * lnJ * lnJ);
       const Eigen::Matrix3d P = mu * (F - Finv.transpose()) + lambda * lnJ * Finv.transpose();
       const Eigen::MatrixXd GP = G * P.transpose();  // (a, i) = Σ_k P_ik G_ak
       for (int a = 0; a < n; ++a)
@@ -245,7 +248,8 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
       const double energy = state.strain_energy - f.dot(u);
       // Increment: fixed unknowns move to their scaled values on the first iteration of a step.
       Constraints inc = full;
-      for (Eigen::Index i = 0; i < u.size(); ++i) inc.values[i] = full.fixed[i] ? s * full.values[i] - u[i] : 0.0;
+      for (Eigen::Index i = 0; i < u.size(); ++i)
+        inc.values[i] = full.fixed[i] ? s * full.values[i] - u[i] : 0.0;
       const bool moves_boundary = (inc.values.array().abs() > 0).any();
       if (first_residual < 0) first_residual = std::max(rnorm, 1e-300);
       result.newton.push_back({step, it, rnorm, 1.0, energy});
@@ -262,7 +266,8 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
       const double slope = R.dot(du);
       for (int k = 0; k < 30; ++k, alpha *= 0.5) {
         const Eigen::VectorXd trial = u + alpha * du;
-        const NeoHookeanState t = assemble_neo_hookean(setup, mesh, space, problem.material, trial, false);
+        const NeoHookeanState t =
+            assemble_neo_hookean(setup, mesh, space, problem.material, trial, false);
         if (!t.valid) continue;
         const double e = t.strain_energy - f.dot(trial);
         if (moves_boundary || e <= energy + 1e-4 * alpha * slope) break;
@@ -307,7 +312,8 @@ Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace&
       G.noalias() = basis.gradients[l] * g.jacobian_inv[l];
       const Eigen::Matrix3d grad = U.transpose() * G;
       const Eigen::Matrix3d eps = 0.5 * (grad + grad.transpose());
-      const Eigen::Matrix3d sigma = lambda * eps.trace() * Eigen::Matrix3d::Identity() + 2 * mu * eps;
+      const Eigen::Matrix3d sigma =
+          lambda * eps.trace() * Eigen::Matrix3d::Identity() + 2 * mu * eps;
       const Eigen::Matrix3d dev = sigma - sigma.trace() / 3.0 * Eigen::Matrix3d::Identity();
       const int d = space.cell_dofs(cell, l);
       sum[d] += std::sqrt(1.5 * dev.squaredNorm());

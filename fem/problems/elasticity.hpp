@@ -36,7 +36,7 @@ struct ElasticityProblem {
 
 struct NewtonStep {
   int load_step = 0, iteration = 0;
-  double residual = 0.0;   ///< ‖R(u)‖ on free unknowns
+  double residual = 0.0;  ///< ‖R(u)‖ on free unknowns
   double step_length = 1.0;
   double energy = 0.0;
 };
@@ -44,7 +44,7 @@ struct NewtonStep {
 struct ElasticitySolution {
   Eigen::VectorXd u;  ///< 3 per DOF
   int dofs = 0, free_unknowns = 0;
-  LinearSolveInfo solve;  ///< last linear solve
+  LinearSolveInfo solve;           ///< last linear solve
   std::vector<NewtonStep> newton;  ///< Neo-Hookean only
   Timings timings;
 };
@@ -52,7 +52,8 @@ struct ElasticitySolution {
 struct NewtonOptions {
   int load_steps = 1;
   int max_iterations = 30;
-  double tolerance = 1e-9;  ///< on ‖R‖ relative to the first residual of the step, or absolute 1e-12·scale
+  double tolerance =
+      1e-9;  ///< on ‖R‖ relative to the first residual of the step, or absolute 1e-12·scale
 };
 
 ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const FunctionSpace& space,

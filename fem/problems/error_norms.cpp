@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <array>
-
 #include <cmath>
 
 #include "fem/assembly/element_geometry.hpp"
@@ -16,9 +15,9 @@ ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
                           const Eigen::VectorXd& u, int c, const ExactValue& exact,
                           const ExactGradient& exact_gradient, int quadrature_degree) {
   CF_VERIFY(u.size() == static_cast<Eigen::Index>(space.num_dofs) * c, "field size mismatch");
-  const int degree = quadrature_degree >= 0
-                         ? quadrature_degree
-                         : default_quadrature_degree(space.degree, mesh.order, QuadratureUse::error);
+  const int degree = quadrature_degree >= 0 ? quadrature_degree
+                                            : default_quadrature_degree(space.degree, mesh.order,
+                                                                        QuadratureUse::error);
   const QuadratureRule& rule = tetrahedron_quadrature(degree);
   const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, space.degree, rule.points);

@@ -12,8 +12,8 @@
 namespace curvefem::fem {
 
 struct ErrorNorms {
-  double l2 = 0.0;       ///< ‖u_h − u‖_L2
-  double h1_semi = 0.0;  ///< ‖∇(u_h − u)‖_L2
+  double l2 = 0.0;                             ///< ‖u_h − u‖_L2
+  double h1_semi = 0.0;                        ///< ‖∇(u_h − u)‖_L2
   double l2_exact = 0.0, h1_semi_exact = 0.0;  ///< norms of u, for relative errors
 };
 

@@ -9,8 +9,9 @@ Eigen::MatrixXd interpolate_field(const FunctionSpace& from, const Eigen::Vector
                                   const FunctionSpace& to) {
   CF_VERIFY(from.cell_dofs.rows() == to.cell_dofs.rows(), "spaces on different meshes");
   CF_VERIFY(u.size() == static_cast<Eigen::Index>(from.num_dofs) * c, "field size mismatch");
-  const ReferenceTabulation tab = tabulate(CellKind::tetrahedron, from.degree,
-                                           lagrange_reference_nodes(CellKind::tetrahedron, to.degree));
+  const ReferenceTabulation tab =
+      tabulate(CellKind::tetrahedron, from.degree,
+               lagrange_reference_nodes(CellKind::tetrahedron, to.degree));
   const int n = static_cast<int>(from.cell_dofs.cols());
   Eigen::MatrixXd out(to.num_dofs, c), U(n, c);
   for (int cell = 0; cell < from.cell_dofs.rows(); ++cell) {

@@ -34,7 +34,8 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
       const double kappa = problem.kappa ? problem.kappa(x) : 1.0;
       G.noalias() = basis.gradients[q] * g.jacobian_inv[q];  // physical gradients, n × 3
       Ke.noalias() += (g.det_w[q] * kappa) * (G * G.transpose());
-      if (problem.rhs) Fe.noalias() += (g.det_w[q] * problem.rhs(x)) * basis.values.row(q).transpose();
+      if (problem.rhs)
+        Fe.noalias() += (g.det_w[q] * problem.rhs(x)) * basis.values.row(q).transpose();
     }
   };
   assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, &values, &system.F);
@@ -45,7 +46,8 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
                         [&](int, int cell, const FacePoint& pt) {
                           if (bc.where && !bc.where(pt.x)) return;
                           const double g = bc.flux(pt.x) * pt.ds_w;
-                          for (int a = 0; a < n; ++a) system.F[space.cell_dofs(cell, a)] += g * pt.phi[a];
+                          for (int a = 0; a < n; ++a)
+                            system.F[space.cell_dofs(cell, a)] += g * pt.phi[a];
                         });
   }
   system.K = pattern.matrix(values);

@@ -20,12 +20,12 @@ struct LinearSolverOptions {
   double rtol = 1e-10;
   int max_iterations = 5000;
   int auto_direct_max_dofs = 200000;
-  int block_size = 1;         ///< unknowns per node (3 for elasticity): helps AMG
+  int block_size = 1;  ///< unknowns per node (3 for elasticity): helps AMG
 };
 
 struct LinearSolveInfo {
-  std::string method;         ///< "cholmod-supernodal" | "petsc-cg-gamg"
-  int iterations = 0;         ///< 0 for direct
+  std::string method;              ///< "cholmod-supernodal" | "petsc-cg-gamg"
+  int iterations = 0;              ///< 0 for direct
   double relative_residual = 0.0;  ///< ‖b − A x‖ / ‖b‖, measured after the solve
   double setup_s = 0.0, solve_s = 0.0;
   std::vector<double> residual_history;  ///< cg: preconditioned residual norms per iteration
@@ -38,7 +38,8 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
                           const LinearSolverOptions& options, LinearSolveInfo* info = nullptr);
 
 // Engines (linear_solver_cholmod.cpp, linear_solver_petsc.cpp).
-Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b, LinearSolveInfo& info);
+Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
+                              LinearSolveInfo& info);
 Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                                const LinearSolverOptions& options, LinearSolveInfo& info);
 

@@ -15,8 +15,9 @@ Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
   llt.compute(A);
   info.setup_s = watch.seconds();
   if (llt.info() != Eigen::Success)
-    throw SolverError("CHOLMOD factorization failed: the matrix is not positive definite "
-                      "(inverted element, missing Dirichlet condition or a floating part?)");
+    throw SolverError(
+        "CHOLMOD factorization failed: the matrix is not positive definite "
+        "(inverted element, missing Dirichlet condition or a floating part?)");
   watch.reset();
   Eigen::VectorXd x = llt.solve(b);
   info.solve_s = watch.seconds();

@@ -14,8 +14,9 @@ namespace curvefem::fem {
 namespace {
 
 void check(PetscErrorCode code, const char* what) {
-  if (code != 0) throw SolverError(std::string("PETSc error in ") + what + " (code " +
-                                   std::to_string(static_cast<int>(code)) + ")");
+  if (code != 0)
+    throw SolverError(std::string("PETSc error in ") + what + " (code " +
+                      std::to_string(static_cast<int>(code)) + ")");
 }
 
 void ensure_petsc() {
@@ -51,8 +52,9 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
   Vec x, rhs;
   KSP ksp;
   PC pc;
-  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_ptr.data(), col.data(), val.data(), &M),
-        "MatCreateSeqAIJWithArrays");
+  check(
+      MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_ptr.data(), col.data(), val.data(), &M),
+      "MatCreateSeqAIJWithArrays");
   if (options.block_size > 1) check(MatSetBlockSize(M, options.block_size), "MatSetBlockSize");
   check(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
   check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
@@ -94,7 +96,8 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
     s << "CG + GAMG did not converge (PETSc reason " << static_cast<int>(reason) << ") after "
       << its << " iterations; residual history:";
     const auto& h = info.residual_history;
-    for (std::size_t i = 0; i < h.size(); i += std::max<std::size_t>(1, h.size() / 10)) s << ' ' << h[i];
+    for (std::size_t i = 0; i < h.size(); i += std::max<std::size_t>(1, h.size() / 10))
+      s << ' ' << h[i];
     throw SolverError(s.str());
   }
   return result;

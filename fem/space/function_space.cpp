@@ -28,7 +28,8 @@ struct DofKeyHash {
 
 struct FaceKeyHash {
   std::size_t operator()(const std::array<int, 3>& f) const {
-    return (static_cast<std::size_t>(f[0]) * 73856093u) ^ (static_cast<std::size_t>(f[1]) * 19349663u) ^
+    return (static_cast<std::size_t>(f[0]) * 73856093u) ^
+           (static_cast<std::size_t>(f[1]) * 19349663u) ^
            (static_cast<std::size_t>(f[2]) * 83492791u);
   }
 };
@@ -83,7 +84,8 @@ FunctionSpace build_function_space(const LagrangeMesh& mesh, int degree) {
         if (lattice[l][i] > 0) entries[m++] = {mesh.cells(c, i), lattice[l][i]};
       std::sort(entries.begin(), entries.begin() + m);
       DofKey key;
-      for (int i = 0; i < m; ++i) key.vertex[i] = entries[i].first, key.weight[i] = entries[i].second;
+      for (int i = 0; i < m; ++i)
+        key.vertex[i] = entries[i].first, key.weight[i] = entries[i].second;
       auto [it, inserted] = ids.try_emplace(key, static_cast<int>(first_seen.size()));
       if (inserted) first_seen.emplace_back(c, l);
       space.cell_dofs(c, l) = it->second;

@@ -25,9 +25,9 @@ struct BoundaryFace {
 struct FunctionSpace {
   int degree = 1;
   int num_dofs = 0;
-  Eigen::MatrixXi cell_dofs;         ///< #cells × num_lagrange_nodes(tet, degree)
-  Eigen::MatrixXd dof_points;        ///< #dofs × 3, physical positions
-  std::vector<char> on_boundary;     ///< per DOF
+  Eigen::MatrixXi cell_dofs;      ///< #cells × num_lagrange_nodes(tet, degree)
+  Eigen::MatrixXd dof_points;     ///< #dofs × 3, physical positions
+  std::vector<char> on_boundary;  ///< per DOF
   std::vector<BoundaryFace> boundary_faces;
 };
 

@@ -76,8 +76,8 @@ namespace detail {
 }  // namespace curvefem
 
 /// Always-on check; throws curvefem::Error("file:line: check `cond` failed: msg").
-#define CF_VERIFY(cond, msg)                                                        \
-  do {                                                                              \
+#define CF_VERIFY(cond, msg)                                                          \
+  do {                                                                                \
     if (!(cond)) ::curvefem::detail::verify_failed(#cond, (msg), __FILE__, __LINE__); \
   } while (0)
 

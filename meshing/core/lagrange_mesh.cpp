@@ -16,20 +16,19 @@ Eigen::Vector3d LagrangeMesh::map(int cell, const Eigen::Vector3d& xi) const {
 Eigen::MatrixXd LagrangeMesh::jacobian(int cell, const Eigen::Vector3d& xi) const {
   const Eigen::MatrixXd grad = lagrange_shape_gradients(kind, order, xi);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, grad.cols());
-  for (int i = 0; i < grad.rows(); ++i)
-    J += nodes.row(cells(cell, i)).transpose() * grad.row(i);
+  for (int i = 0; i < grad.rows(); ++i) J += nodes.row(cells(cell, i)).transpose() * grad.row(i);
   return J;
 }
 
 void validate_structure(const LagrangeMesh& mesh, const std::string& what) {
   if (mesh.order < 1 || mesh.order > k_max_order)
-    throw InputError(what + ": geometric order " + std::to_string(mesh.order) +
-                     " is not in 1.." + std::to_string(k_max_order));
+    throw InputError(what + ": geometric order " + std::to_string(mesh.order) + " is not in 1.." +
+                     std::to_string(k_max_order));
   if (mesh.nodes.cols() != 3 && mesh.nodes.rows() > 0)
     throw InputError(what + ": nodes must have 3 columns");
   if (mesh.cells.rows() > 0 && mesh.cells.cols() != mesh.nodes_per_cell())
-    throw InputError(what + ": cells have " + std::to_string(mesh.cells.cols()) +
-                     " nodes, order " + std::to_string(mesh.order) + " needs " +
+    throw InputError(what + ": cells have " + std::to_string(mesh.cells.cols()) + " nodes, order " +
+                     std::to_string(mesh.order) + " needs " +
                      std::to_string(mesh.nodes_per_cell()));
   for (int n = 0; n < mesh.num_nodes(); ++n)
     for (int d = 0; d < 3; ++d)

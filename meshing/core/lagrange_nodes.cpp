@@ -45,8 +45,9 @@ void factor(int a, int k, double lambda, double& value, double& derivative) {
 }
 
 void check_order(int order) {
-  if (order < 1 || order > 10) throw InputError("Lagrange order " + std::to_string(order) +
-                                                " is outside the supported range 1..10");
+  if (order < 1 || order > 10)
+    throw InputError("Lagrange order " + std::to_string(order) +
+                     " is outside the supported range 1..10");
 }
 
 }  // namespace

@@ -36,7 +36,8 @@ class Timings {
 /// Adds the time between construction and destruction to `timings[stage]`.
 class ScopedTimer {
  public:
-  ScopedTimer(Timings& timings, std::string stage) : m_timings(timings), m_stage(std::move(stage)) {}
+  ScopedTimer(Timings& timings, std::string stage)
+      : m_timings(timings), m_stage(std::move(stage)) {}
   ~ScopedTimer() { m_timings.add(m_stage, m_watch.seconds()); }
   ScopedTimer(const ScopedTimer&) = delete;
   ScopedTimer& operator=(const ScopedTimer&) = delete;

@@ -14,7 +14,9 @@ using namespace curvefem;
 namespace {
 
 // u = (1 − r²) cos(x + 2y + 3z);  −Δu = 6 cos(s) + 4 (x + 2y + 3z)·(−sin s)·(−1)... computed below.
-double u_exact(const Eigen::Vector3d& x) { return (1 - x.squaredNorm()) * std::cos(x[0] + 2 * x[1] + 3 * x[2]); }
+double u_exact(const Eigen::Vector3d& x) {
+  return (1 - x.squaredNorm()) * std::cos(x[0] + 2 * x[1] + 3 * x[2]);
+}
 Eigen::Vector3d grad_exact(const Eigen::Vector3d& x) {
   const double s = x[0] + 2 * x[1] + 3 * x[2], w = 1 - x.squaredNorm();
   return -2 * x * std::cos(s) - w * std::sin(s) * Eigen::Vector3d(1, 2, 3);
@@ -40,7 +42,8 @@ Level solve_ball(double h, int p, int k) {
   problem.rhs = minus_laplacian;
   // Data of the true domain: u = 0 on the sphere, imposed on the mesh boundary.
   problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1),
-                               [](const Eigen::Vector3d&) { return 0.0; }, {}});
+                               [](const Eigen::Vector3d&) { return 0.0; },
+                               {}});
   const auto sol = fem::solve_poisson(mesh, space, problem, {});
   const auto e = fem::compute_errors(
       mesh, space, sol.u, 1, [](const Eigen::Vector3d& x, double* v) { *v = u_exact(x); },
@@ -61,7 +64,8 @@ double l2_rate(const Level& a, const Level& b) {
 TEST(CurvedDomain, StraightGeometryCapsRateIsoparametricKeepsIt) {
   for (int p = 2; p <= 3; ++p) {
     double finest_straight = 0;
-    const std::vector<double> hs = p == 2 ? std::vector<double>{0.2, 0.1} : std::vector<double>{0.3, 0.15};
+    const std::vector<double> hs =
+        p == 2 ? std::vector<double>{0.2, 0.1} : std::vector<double>{0.3, 0.15};
     for (int k : {1, p}) {
       std::vector<Level> L;
       for (double h : hs) L.push_back(solve_ball(h, p, k));

@@ -14,20 +14,27 @@ namespace {
 fem::ErrorNorms vector_errors(const LagrangeMesh& mesh, const fem::FunctionSpace& space,
                               const Eigen::VectorXd& u, const test::ExponentialDisplacement& ex) {
   return fem::compute_errors(
-      mesh, space, u, 3, [&](const Eigen::Vector3d& x, double* v) { Eigen::Map<Eigen::Vector3d> m(v); m = ex.value(x); },
+      mesh, space, u, 3,
+      [&](const Eigen::Vector3d& x, double* v) {
+        Eigen::Map<Eigen::Vector3d> m(v);
+        m = ex.value(x);
+      },
       [&](const Eigen::Vector3d& x, double* g) {
         Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> m(g);
         m = ex.gradient(x);
       });
 }
 
-fem::ElasticityProblem clamped_problem(const fem::FunctionSpace& space, const test::ExponentialDisplacement& ex,
+fem::ElasticityProblem clamped_problem(const fem::FunctionSpace& space,
+                                       const test::ExponentialDisplacement& ex,
                                        const fem::ElasticMaterial& m) {
   fem::ElasticityProblem problem;
   problem.material = m;
   problem.body_force = [ex](const Eigen::Vector3d& x) { return ex.body_force(x); };
-  problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), {true, true, true},
-                               [ex](const Eigen::Vector3d& x) { return ex.value(x); }, {}});
+  problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1),
+                               {true, true, true},
+                               [ex](const Eigen::Vector3d& x) { return ex.value(x); },
+                               {}});
   return problem;
 }
 
@@ -37,24 +44,31 @@ TEST(LinearElasticity, PatchTestLinearAndQuadraticDisplacements) {
   const fem::ElasticMaterial m{2.0, 0.3};
   const LagrangeMesh mesh = make_cube_tets(2);
   // Linear u, no body force: every p reproduces it.
-  const Eigen::Matrix3d A = (Eigen::Matrix3d() << 0.1, 0.02, -0.03, 0.01, -0.05, 0.04, 0.0, 0.03, 0.07).finished();
+  const Eigen::Matrix3d A =
+      (Eigen::Matrix3d() << 0.1, 0.02, -0.03, 0.01, -0.05, 0.04, 0.0, 0.03, 0.07).finished();
   for (int p = 1; p <= 3; ++p) {
     const fem::FunctionSpace space = fem::build_function_space(mesh, p);
     fem::ElasticityProblem problem;
     problem.material = m;
-    problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), {true, true, true},
-                                 [A](const Eigen::Vector3d& x) { return Eigen::Vector3d(A * x + Eigen::Vector3d(0.1, 0, -0.2)); },
+    problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1),
+                                 {true, true, true},
+                                 [A](const Eigen::Vector3d& x) {
+                                   return Eigen::Vector3d(A * x + Eigen::Vector3d(0.1, 0, -0.2));
+                                 },
                                  {}});
     const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
     double worst = 0;
     for (int d = 0; d < space.num_dofs; ++d) {
       const Eigen::Vector3d x = space.dof_points.row(d).transpose();
-      worst = std::max(worst, (sol.u.segment<3>(3 * d) - (A * x + Eigen::Vector3d(0.1, 0, -0.2))).norm());
+      worst = std::max(worst,
+                       (sol.u.segment<3>(3 * d) - (A * x + Eigen::Vector3d(0.1, 0, -0.2))).norm());
     }
     EXPECT_LT(worst, 1e-11) << "p=" << p;
   }
   // Quadratic u with its constant body force: p ≥ 2 reproduces it.
-  auto uq = [](const Eigen::Vector3d& x) { return Eigen::Vector3d(x[0] * x[0], x[1] * x[2], 0.5 * x[0] * x[1]); };
+  auto uq = [](const Eigen::Vector3d& x) {
+    return Eigen::Vector3d(x[0] * x[0], x[1] * x[2], 0.5 * x[0] * x[1]);
+  };
   // div σ = (λ+μ) ∇(div u) + μ Δu; div u = 2x + z → ∇div = (2, 0, 1); Δu = (2, 0, 0).
   const double l = m.lambda(), mu = m.mu();
   const Eigen::Vector3d f = -((l + mu) * Eigen::Vector3d(2, 0, 1) + mu * Eigen::Vector3d(2, 0, 0));
@@ -63,11 +77,13 @@ TEST(LinearElasticity, PatchTestLinearAndQuadraticDisplacements) {
     fem::ElasticityProblem problem;
     problem.material = m;
     problem.body_force = [f](const Eigen::Vector3d&) { return f; };
-    problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), {true, true, true}, uq, {}});
+    problem.dirichlet.push_back(
+        {std::vector<char>(space.boundary_faces.size(), 1), {true, true, true}, uq, {}});
     const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
     double worst = 0;
     for (int d = 0; d < space.num_dofs; ++d)
-      worst = std::max(worst, (sol.u.segment<3>(3 * d) - uq(space.dof_points.row(d).transpose())).norm());
+      worst = std::max(worst,
+                       (sol.u.segment<3>(3 * d) - uq(space.dof_points.row(d).transpose())).norm());
     EXPECT_LT(worst, 1e-10) << "p=" << p;
   }
 }
@@ -108,12 +124,18 @@ struct Cantilever {
       const auto [cell, j] = space.boundary_faces[f];
       double xmin = 1e9, xmax = -1e9;
       for (int i = 0; i < 4; ++i)
-        if (i != j) xmin = std::min(xmin, mesh.nodes(mesh.cells(cell, i), 0)), xmax = std::max(xmax, mesh.nodes(mesh.cells(cell, i), 0));
+        if (i != j)
+          xmin = std::min(xmin, mesh.nodes(mesh.cells(cell, i), 0)),
+          xmax = std::max(xmax, mesh.nodes(mesh.cells(cell, i), 0));
       left[f] = xmax < 1e-12;
       right[f] = xmin > 1 - 1e-12;
     }
-    problem.dirichlet.push_back({left, {true, true, true}, [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); }, {}});
-    problem.traction.push_back({right, [load](const Eigen::Vector3d&) { return Eigen::Vector3d(0, 0, -load); }, {}});
+    problem.dirichlet.push_back({left,
+                                 {true, true, true},
+                                 [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); },
+                                 {}});
+    problem.traction.push_back(
+        {right, [load](const Eigen::Vector3d&) { return Eigen::Vector3d(0, 0, -load); }, {}});
   }
 };
 }  // namespace

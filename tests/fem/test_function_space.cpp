@@ -12,7 +12,8 @@ using namespace curvefem;
 
 namespace {
 Eigen::Vector3d wobble(const Eigen::Vector3d& x) {
-  return x + 0.04 * Eigen::Vector3d(std::sin(3 * x[1]), std::sin(2 * x[2] + x[0]), std::cos(2 * x[0]));
+  return x +
+         0.04 * Eigen::Vector3d(std::sin(3 * x[1]), std::sin(2 * x[2] + x[0]), std::cos(2 * x[0]));
 }
 }  // namespace
 
@@ -22,7 +23,8 @@ TEST(FunctionSpace, DofCountsOnStructuredCube) {
     const fem::FunctionSpace s = fem::build_function_space(cube, p);
     const int m = 2 * p + 1;
     EXPECT_EQ(s.num_dofs, m * m * m) << "p=" << p;
-    const int boundary = static_cast<int>(std::count(s.on_boundary.begin(), s.on_boundary.end(), 1));
+    const int boundary =
+        static_cast<int>(std::count(s.on_boundary.begin(), s.on_boundary.end(), 1));
     EXPECT_EQ(boundary, m * m * m - (m - 2) * (m - 2) * (m - 2)) << "p=" << p;
     EXPECT_EQ(s.boundary_faces.size(), 6u * 2 * 2 * 2);
   }
@@ -67,7 +69,8 @@ TEST(FunctionSpace, FieldIsContinuousAcrossEveryInteriorFace) {
                 if (mesh.cells(c, i) == f[v]) xi += bary[v] * ref.row(i).transpose();
             const auto tab = fem::tabulate(CellKind::tetrahedron, p, xi.transpose());
             val[side] = 0;
-            for (int a = 0; a < tab.values.cols(); ++a) val[side] += tab.values(0, a) * values[s.cell_dofs(c, a)];
+            for (int a = 0; a < tab.values.cols(); ++a)
+              val[side] += tab.values(0, a) * values[s.cell_dofs(c, a)];
           }
           worst = std::max(worst, std::abs(val[0] - val[1]));
         }

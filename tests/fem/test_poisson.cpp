@@ -12,10 +12,10 @@ using namespace curvefem;
 
 namespace {
 
-fem::ErrorNorms solve_and_measure(const LagrangeMesh& mesh, int p, const fem::ScalarField& exact,
-                                  const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& grad,
-                                  const fem::ScalarField& f, const std::string& solver = "direct",
-                                  int* dofs = nullptr) {
+fem::ErrorNorms solve_and_measure(
+    const LagrangeMesh& mesh, int p, const fem::ScalarField& exact,
+    const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& grad, const fem::ScalarField& f,
+    const std::string& solver = "direct", int* dofs = nullptr) {
   const fem::FunctionSpace space = fem::build_function_space(mesh, p);
   fem::PoissonProblem problem;
   problem.rhs = f;
@@ -26,7 +26,10 @@ fem::ErrorNorms solve_and_measure(const LagrangeMesh& mesh, int p, const fem::Sc
   if (dofs) *dofs = space.num_dofs;
   return fem::compute_errors(
       mesh, space, sol.u, 1, [&](const Eigen::Vector3d& x, double* v) { *v = exact(x); },
-      [&](const Eigen::Vector3d& x, double* g) { Eigen::Map<Eigen::Vector3d> m(g); m = grad(x); });
+      [&](const Eigen::Vector3d& x, double* g) {
+        Eigen::Map<Eigen::Vector3d> m(g);
+        m = grad(x);
+      });
 }
 
 }  // namespace
@@ -40,7 +43,9 @@ TEST(Poisson, PatchTestReproducesPolynomialsOfDegreeP) {
     auto grad = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
       return Eigen::Vector3d(0.3, 0.5, -0.2) * (p * std::pow(s(x), p - 1));
     };
-    auto f = [&](const Eigen::Vector3d& x) { return p > 1 ? -p * (p - 1) * c2 * std::pow(s(x), p - 2) : 0.0; };
+    auto f = [&](const Eigen::Vector3d& x) {
+      return p > 1 ? -p * (p - 1) * c2 * std::pow(s(x), p - 2) : 0.0;
+    };
     const auto e = solve_and_measure(mesh, p, u, grad, f);
     EXPECT_LT(e.l2, 1e-11) << "p=" << p;
     EXPECT_LT(e.h1_semi, 1e-10) << "p=" << p;
@@ -49,7 +54,8 @@ TEST(Poisson, PatchTestReproducesPolynomialsOfDegreeP) {
 
 TEST(Poisson, CurvedIsoparametricMeshReproducesLinearFunctions) {
   auto deform = [](const Eigen::Vector3d& x) {
-    return Eigen::Vector3d(x + 0.05 * Eigen::Vector3d(std::sin(3 * x[1]), x[0] * x[2], std::cos(2 * x[0])));
+    return Eigen::Vector3d(
+        x + 0.05 * Eigen::Vector3d(std::sin(3 * x[1]), x[0] * x[2], std::cos(2 * x[0])));
   };
   for (int k = 2; k <= 3; ++k) {
     const LagrangeMesh mesh = elevate_order(make_cube_tets(2), k, deform);
@@ -70,9 +76,9 @@ std::vector<fem::ErrorNorms> franke_levels(int p, const std::vector<int>& levels
     const LagrangeMesh mesh = make_cube_tets(n);
     // Large systems through CG + AMG: same answer (see IterativeSolverMatchesDirect), faster.
     const std::string solver = n * p > 30 ? "cg" : "direct";
-    e.push_back(solve_and_measure(mesh, p, test::Franke::value, test::Franke::gradient,
-                                  [](const Eigen::Vector3d& x) { return -test::Franke::laplacian(x); },
-                                  solver));
+    e.push_back(solve_and_measure(
+        mesh, p, test::Franke::value, test::Franke::gradient,
+        [](const Eigen::Vector3d& x) { return -test::Franke::laplacian(x); }, solver));
   }
   std::printf("p=%d  L2 %.3e %.3e %.3e (rate %.2f)  H1 %.3e %.3e %.3e (rate %.2f)\n", p, e[0].l2,
               e[1].l2, e[2].l2, test::rate(e[1].l2, e[2].l2), e[0].h1_semi, e[1].h1_semi,
@@ -105,9 +111,12 @@ TEST(Poisson, ConvergenceRatesOnCubeWithFrankeSolution) {
 
 TEST(Poisson, ConvergenceRatesOnCubeWithSmoothSolution) {
   // u = exp(x/2) sin(y + z/2): −Δu = −(1/4 − 1 − 1/4) u = u.
-  auto u = [](const Eigen::Vector3d& x) { return std::exp(0.5 * x[0]) * std::sin(x[1] + 0.5 * x[2]); };
+  auto u = [](const Eigen::Vector3d& x) {
+    return std::exp(0.5 * x[0]) * std::sin(x[1] + 0.5 * x[2]);
+  };
   auto grad = [](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-    const double e = std::exp(0.5 * x[0]), s = std::sin(x[1] + 0.5 * x[2]), c = std::cos(x[1] + 0.5 * x[2]);
+    const double e = std::exp(0.5 * x[0]), s = std::sin(x[1] + 0.5 * x[2]),
+                 c = std::cos(x[1] + 0.5 * x[2]);
     return Eigen::Vector3d(0.5 * e * s, e * c, 0.5 * e * c);
   };
   for (int p = 1; p <= 4; ++p) {
@@ -125,7 +134,8 @@ TEST(Poisson, IterativeSolverMatchesDirect) {
   const LagrangeMesh mesh = make_cube_tets(4);
   int dofs = 0;
   auto f = [](const Eigen::Vector3d& x) { return -test::Franke::laplacian(x); };
-  const auto direct = solve_and_measure(mesh, 2, test::Franke::value, test::Franke::gradient, f, "direct", &dofs);
+  const auto direct =
+      solve_and_measure(mesh, 2, test::Franke::value, test::Franke::gradient, f, "direct", &dofs);
   const auto cg = solve_and_measure(mesh, 2, test::Franke::value, test::Franke::gradient, f, "cg");
   EXPECT_GT(dofs, 500);
   EXPECT_NEAR(cg.l2, direct.l2, 1e-6 * direct.l2);
@@ -137,7 +147,8 @@ TEST(Poisson, InvertedElementIsASolverErrorNamingIt) {
   const fem::FunctionSpace space = fem::build_function_space(mesh, 1);
   fem::PoissonProblem problem;
   problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1),
-                               [](const Eigen::Vector3d&) { return 0.0; }, {}});
+                               [](const Eigen::Vector3d&) { return 0.0; },
+                               {}});
   try {
     fem::solve_poisson(mesh, space, problem, {});
     FAIL() << "expected SolverError";

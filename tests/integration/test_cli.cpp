@@ -56,8 +56,7 @@ TEST(Cli, MalformedInputNamesFileAndLine) {
   EXPECT_EQ(test::run_command(cli() + " check " + (dir / "bad.obj").string(), &out), 2);
   EXPECT_NE(out.find("bad.obj:4"), std::string::npos) << out;
   // A file that cannot be opened is an I/O failure (4), named on the error line.
-  EXPECT_EQ(test::run_command(cli() + " check " + (dir / "missing.obj").string(), &out), 4)
-      << out;
+  EXPECT_EQ(test::run_command(cli() + " check " + (dir / "missing.obj").string(), &out), 4) << out;
   EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
 }
 
@@ -87,9 +86,9 @@ TEST(Cli, ConvertRoundTripAndAtomicFailure) {
 TEST(Cli, DemoWritesCompleteVerifiedReport) {
   const auto dir = test::scratch_dir("cli_demo");
   std::string out;
-  ASSERT_EQ(test::run_command(cli() + " demo -q --order 2 --dense-size 0.08 --coarse-size 0.4 -o " +
-                                  dir.string(),
-                              &out),
+  ASSERT_EQ(test::run_command(
+                cli() + " demo -q --order 2 --dense-size 0.08 --coarse-size 0.4 -o " + dir.string(),
+                &out),
             0)
       << out;
   for (const char* f : {"surface.obj", "surface.vtu", "mesh.vtu", "mesh.msh", "demo.pvd"})

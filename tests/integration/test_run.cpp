@@ -12,7 +12,8 @@ using namespace curvefem;
 namespace {
 std::string cli() { return test::curvefem_executable().string(); }
 
-int run_case(const std::filesystem::path& file, const std::filesystem::path& out, std::string* log) {
+int run_case(const std::filesystem::path& file, const std::filesystem::path& out,
+             std::string* log) {
   return test::run_command(cli() + " run -q " + file.string() + " -o " + out.string(), log);
 }
 
@@ -62,7 +63,8 @@ TEST(Run, CubeElasticityWritesDisplacementAndVonMises) {
   const auto& d = vtu.fields.point_data[0].values;
   for (int n = 0; n < vtu.mesh.num_nodes(); ++n) {
     if (vtu.mesh.nodes(n, 0) < 1e-12)
-      max_clamped = std::max(max_clamped, std::abs(d[3 * n]) + std::abs(d[3 * n + 1]) + std::abs(d[3 * n + 2]));
+      max_clamped = std::max(max_clamped,
+                             std::abs(d[3 * n]) + std::abs(d[3 * n + 1]) + std::abs(d[3 * n + 2]));
     min_z = std::min(min_z, d[3 * n + 2]);
   }
   EXPECT_EQ(max_clamped, 0.0);
@@ -80,7 +82,8 @@ TEST(Run, BrokenCasesNameTheJsonPath) {
       {R"("boundary_conditions": [{"type": "dirichlet", "select": {"tag": 9}, "value": 0}])",
        "/boundary_conditions/0/select: selects no boundary face"},
       {R"("discretization": {"degree": 7})", "/discretization/degree: must be in 1..4"},
-      {R"("physics": {"type": "linear_elasticity"}, "rhs": "1")", "/rhs: expected an array of three"},
+      {R"("physics": {"type": "linear_elasticity"}, "rhs": "1")",
+       "/rhs: expected an array of three"},
   };
   for (const auto& c : cases) {
     const auto file = write_case(dir, "{" + base_geometry + ", " + c.body + "}");

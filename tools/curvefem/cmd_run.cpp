@@ -36,8 +36,7 @@ struct RunOptions {
 };
 
 LagrangeMesh load_mesh(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path))
-    throw IoError("mesh file not found", {.file = path.string()});
+  if (!std::filesystem::exists(path)) throw IoError("mesh file not found", {.file = path.string()});
   const std::string ext = path.extension().string();
   LagrangeMesh mesh;
   if (ext == ".vtu")

@@ -34,9 +34,7 @@ TEST(Error, VerifyThrowsWithLocation) {
 TEST(AtomicFile, NoPartialOutputOnFailure) {
   const auto dir = test::scratch_dir("atomic");
   const auto target = dir / "out.txt";
-  {
-    std::ofstream(target) << "old";
-  }
+  { std::ofstream(target) << "old"; }
   try {
     AtomicFile f(target);
     std::ofstream(f.temp_path()) << "half-written";

@@ -1,0 +1,85 @@
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+#include "fem/problems/poisson.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
+
+using namespace curvefem;
+
+namespace {
+LagrangeMesh wobbly_cube(int n, int k) {
+  return elevate_order(make_cube_tets(n), k, [](const Eigen::Vector3d& x) {
+    return Eigen::Vector3d(
+        x + 0.03 * Eigen::Vector3d(std::sin(4 * x[1]), std::cos(3 * x[2]), x[0] * x[1]));
+  });
+}
+
+fem::AssembledSystem assemble_with_threads(const LagrangeMesh& mesh,
+                                           const fem::FunctionSpace& space, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  fem::PoissonProblem problem;
+  problem.kappa = [](const Eigen::Vector3d& x) { return 1 + x.squaredNorm(); };
+  problem.rhs = [](const Eigen::Vector3d& x) { return std::sin(x[0] + x[2]); };
+  return fem::assemble_poisson(mesh, space, problem);
+}
+}  // namespace
+
+TEST(Assembly, IdenticalWithOneAndTwoThreads) {
+  const LagrangeMesh mesh = wobbly_cube(4, 2);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 3);
+  const auto a = assemble_with_threads(mesh, space, 1);
+  const auto b = assemble_with_threads(mesh, space, 2);
+  ASSERT_EQ(a.K.nonZeros(), b.K.nonZeros());
+  // Bit-identical: element matrices do not depend on the thread, scatter is serial in cell order.
+  for (Eigen::Index i = 0; i < a.K.nonZeros(); ++i) ASSERT_EQ(a.K.valuePtr()[i], b.K.valuePtr()[i]);
+  EXPECT_EQ(a.F, b.F);
+}
+
+TEST(Assembly, StiffnessIsSymmetricAndKillsConstants) {
+  const LagrangeMesh mesh = wobbly_cube(2, 3);
+  for (int p = 1; p <= 4; ++p) {
+    const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+    const auto s = assemble_with_threads(mesh, space, 2);
+    const fem::SparseMatrix asym = s.K - fem::SparseMatrix(s.K.transpose());
+    EXPECT_LT(asym.norm(), 1e-12 * s.K.norm()) << "p=" << p;
+    // Constants are in the kernel of the stiffness: K·1 = 0.
+    const Eigen::VectorXd k1 = s.K * Eigen::VectorXd::Ones(space.num_dofs);
+    EXPECT_LT(k1.cwiseAbs().maxCoeff(), 1e-11 * s.K.norm()) << "p=" << p;
+  }
+}
+
+TEST(Solvers, NonPositiveDefiniteSystemIsASolverError) {
+  const LagrangeMesh mesh = make_cube_tets(2);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 1);
+  fem::PoissonProblem problem;
+  problem.kappa = [](const Eigen::Vector3d&) { return -1.0; };  // negative definite
+  problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1),
+                               [](const Eigen::Vector3d&) { return 1.0; },
+                               {}});
+  fem::LinearSolverOptions direct;
+  direct.type = "direct";
+  EXPECT_THROW(fem::solve_poisson(mesh, space, problem, direct), SolverError);
+}
+
+TEST(Solvers, CgNonConvergenceReportsResidualHistory) {
+  const LagrangeMesh mesh = make_cube_tets(4);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  fem::PoissonProblem problem;
+  problem.rhs = [](const Eigen::Vector3d&) { return 1.0; };
+  problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1),
+                               [](const Eigen::Vector3d&) { return 0.0; },
+                               {}});
+  fem::LinearSolverOptions cg;
+  cg.type = "cg";
+  cg.max_iterations = 2;
+  cg.rtol = 1e-14;
+  try {
+    fem::solve_poisson(mesh, space, problem, cg);
+    FAIL() << "expected SolverError";
+  } catch (const SolverError& e) {
+    EXPECT_NE(std::string(e.what()).find("residual history"), std::string::npos) << e.what();
+  }
+}
