@@ -82,7 +82,9 @@ FunctionSpace build_function_space(const LagrangeMesh& mesh, int degree) {
       int m = 0;
       for (int i = 0; i < 4; ++i)
         if (lattice[l][i] > 0) entries[m++] = {mesh.cells(c, i), lattice[l][i]};
-      std::sort(entries.begin(), entries.begin() + m);
+      for (int a = 1; a < m; ++a)  // insertion sort of at most 4 entries
+        for (int b = a; b > 0 && entries[b] < entries[b - 1]; --b)
+          std::swap(entries[b], entries[b - 1]);
       DofKey key;
       for (int i = 0; i < m; ++i)
         key.vertex[i] = entries[i].first, key.weight[i] = entries[i].second;

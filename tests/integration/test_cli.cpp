@@ -91,7 +91,8 @@ TEST(Cli, DemoWritesCompleteVerifiedReport) {
                 &out),
             0)
       << out;
-  for (const char* f : {"surface.obj", "surface.vtu", "mesh.vtu", "mesh.msh", "demo.pvd"})
+  for (const char* f :
+       {"surface.obj", "surface.vtu", "mesh.vtu", "mesh.msh", "volume.vtu", "demo.pvd"})
     EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
   const auto r = read_json(dir / "report.json");
   EXPECT_EQ(r["order"], 2);
@@ -99,6 +100,9 @@ TEST(Cli, DemoWritesCompleteVerifiedReport) {
   EXPECT_EQ(r["input"]["acceptable"], true);
   EXPECT_EQ(r["input"]["genus"], 1);  // the plate's through hole
   EXPECT_EQ(r["jacobian_sampled"]["tets_with_non_positive_sample"], 0);
+  // Isoparametric P2 on the curved order-2 mesh, smooth solution: measured 2.0e-4 relative.
+  EXPECT_LT(r["fem"]["l2_error_rel"].get<double>(), 1e-3);
+  EXPECT_LT(r["fem"]["relative_residual"].get<double>(), 1e-10);
   EXPECT_LT(r["roundtrip_vtu_max_error_rel"].get<double>(), 1e-12);
   EXPECT_LT(r["roundtrip_msh_max_error_rel"].get<double>(), 1e-12);
   // No staging folder left behind.

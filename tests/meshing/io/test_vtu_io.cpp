@@ -18,6 +18,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <numeric>
@@ -330,6 +331,115 @@ TEST(VtuIo, RejectsMissingGarbageAndTruncatedFiles) {
   for (std::size_t i = start + 40; i < corrupted.size() - 40; i += 7) corrupted[i] ^= 0x5a;
   spit(dir / "corrupted.vtu", corrupted);
   expect_input_error(dir / "corrupted.vtu", "corrupted appended data");
+}
+
+namespace {
+
+/// Byte position of the first appended-data byte (after "_").
+std::size_t appended_start(const std::string& file) {
+  return file.find('_', file.find("<AppendedData")) + 1;
+}
+
+/// Appended offset of the data array called `name`.
+std::size_t array_offset(const std::string& file, const std::string& name) {
+  const std::size_t tag = file.find("Name=\"" + name + "\"");
+  const std::size_t at = file.find("offset=\"", tag) + 8;
+  return std::stoul(file.substr(at, file.find('"', at) - at));
+}
+
+void put_word(std::string& file, std::size_t at, std::uint64_t value, int bytes) {
+  for (int b = 0; b < bytes; ++b) file[at + b] = static_cast<char>((value >> (8 * b)) & 0xff);
+}
+
+void expect_rejected(const std::filesystem::path& path, const std::string& bytes,
+                     const std::string& what) {
+  spit(path, bytes);
+  try {
+    io::read_vtu(path);
+    ADD_FAILURE() << what << ": accepted";
+  } catch (const InputError& e) {
+    std::printf("[vtu] %s -> InputError: %s\n", what.c_str(), e.defect().c_str());
+  }
+}
+
+}  // namespace
+
+// Single-value corruptions that crash VTK 9.1's reader itself (SIGFPE, SIGSEGV, heap overflow,
+// found by byte-flipping fuzzing) are caught by the pre-flight check (vtu_binary_check.hpp).
+TEST(VtuIo, RejectsCorruptionsThatWouldCrashVtk) {
+  const auto dir = test::scratch_dir("vtu_crashers");
+  const LagrangeMesh mesh = test::curved_patch(CellKind::tetrahedron, 2);
+  io::write_vtu(dir / "ours.vtu", mesh, sample_fields(mesh));
+  const std::string ours = slurp(dir / "ours.vtu");  // raw appended, zlib, UInt64 headers
+  const std::size_t u = appended_start(ours) + array_offset(ours, "u");
+
+  std::string bad = ours;
+  put_word(bad, u + 8, 0, 8);  // block size 0: VTK divides by it
+  expect_rejected(dir / "block_size_0.vtu", bad, "block size 0");
+
+  bad = ours;
+  put_word(bad, u, 0, 8);  // no blocks, partial last block: VTK reads block 0 of 0
+  expect_rejected(dir / "no_blocks.vtu", bad, "no blocks but a partial last block");
+
+  bad = ours;
+  put_word(bad, u + 24, std::uint64_t{1} << 55, 8);  // compressed size: VTK allocates it
+  expect_rejected(dir / "huge_block.vtu", bad, "huge compressed block");
+
+  bad = ours;
+  put_word(bad, u, std::uint64_t{1} << 40, 8);  // block count
+  expect_rejected(dir / "huge_count.vtu", bad, "huge block count");
+
+  bad = ours;
+  const std::string points = "NumberOfPoints=\"" + std::to_string(mesh.num_nodes()) + "\"";
+  bad.replace(bad.find(points), points.size(), "NumberOfPoints=\"1000000000\"");
+  expect_rejected(dir / "huge_points.vtu", bad, "huge NumberOfPoints");
+
+  // Uncompressed raw appended file (as other tools write): a huge last cell offset makes VTK
+  // allocate an overflowing connectivity array and write past it.
+  {
+    auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    reader->SetFileName((dir / "ours.vtu").c_str());
+    reader->Update();
+    auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+    writer->SetInputData(reader->GetOutput());
+    writer->SetFileName((dir / "raw.vtu").c_str());
+    writer->SetDataModeToAppended();
+    writer->EncodeAppendedDataOff();
+    writer->SetCompressorTypeToNone();
+    writer->SetHeaderTypeToUInt64();
+    ASSERT_EQ(writer->Write(), 1);
+  }
+  const std::string raw = slurp(dir / "raw.vtu");
+  EXPECT_NO_THROW(io::read_vtu(dir / "raw.vtu"));
+  bad = raw;
+  const std::size_t offsets = appended_start(raw) + array_offset(raw, "offsets");
+  put_word(bad, offsets + 8 + 8 * (mesh.num_cells() - 1), 0x4000000000000078ull, 8);
+  expect_rejected(dir / "huge_offset.vtu", bad, "huge last cell offset (uncompressed)");
+
+  // The same inside a valid zlib stream (a buggy writer, not random corruption, which zlib's
+  // checksum catches): the offsets array is decompressed to check its last value.
+  {
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    for (int i = 0; i < 4; ++i) points->InsertNextPoint(i == 1, i == 2, i == 3);
+    auto offsets_array = vtkSmartPointer<vtkIdTypeArray>::New();
+    auto connectivity = vtkSmartPointer<vtkIdTypeArray>::New();
+    for (vtkIdType v : {0, 1 << 30}) offsets_array->InsertNextValue(v);  // cell 0 "ends" at 2^30
+    for (vtkIdType v : {0, 1, 2, 3}) connectivity->InsertNextValue(v);
+    auto cells = vtkSmartPointer<vtkCellArray>::New();
+    cells->SetData(offsets_array, connectivity);
+    auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    grid->SetPoints(points);
+    auto types = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    types->InsertNextValue(VTK_TETRA);
+    grid->SetCells(types, cells);
+    auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+    writer->SetInputData(grid);
+    writer->SetFileName((dir / "zlib_offset.vtu").c_str());
+    writer->SetCompressorTypeToZLib();
+    ASSERT_EQ(writer->Write(), 1);
+    expect_rejected(dir / "zlib_offset.vtu", slurp(dir / "zlib_offset.vtu"),
+                    "last cell offset beyond the connectivity (zlib, base64 appended)");
+  }
 }
 
 TEST(VtuIo, RejectsMixedCellTypesNamingTheCell) {
