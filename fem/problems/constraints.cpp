@@ -10,6 +10,23 @@ int Constraints::num_fixed() const {
   return static_cast<int>(std::count(fixed.begin(), fixed.end(), 1));
 }
 
+void for_each_boundary_dof(const FunctionSpace& space, const std::vector<char>& faces,
+                           const PointFilter& where, const std::function<void(int)>& visit) {
+  CF_VERIFY(faces.size() == space.boundary_faces.size(), "boundary face flags do not match");
+  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, space.degree);
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    if (!faces[f]) continue;
+    const auto [cell, j] = space.boundary_faces[f];
+    for (int l = 0; l < n; ++l) {
+      if (lattice[l][j] != 0) continue;  // not on the face opposite vertex j
+      const int d = space.cell_dofs(cell, l);
+      if (where && !where(space.dof_points.row(d).transpose())) continue;
+      visit(d);
+    }
+  }
+}
+
 Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,
                                   const Constraints& c, const LinearSolverOptions& options,
                                   LinearSolveInfo* info) {

@@ -3,9 +3,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
+#include "fem/problems/boundary_conditions.hpp"
 #include "fem/solvers/linear_solver.hpp"
+#include "fem/space/function_space.hpp"
 
 namespace curvefem::fem {
 
@@ -14,6 +17,11 @@ struct Constraints {
   Eigen::VectorXd values;   ///< per unknown (used where fixed)
   int num_fixed() const;
 };
+
+/// Calls visit(dof) once per DOF lying on a flagged boundary face (a DOF shared by several faces
+/// is visited once per face) whose point passes `where` (if set).
+void for_each_boundary_dof(const FunctionSpace& space, const std::vector<char>& faces,
+                           const PointFilter& where, const std::function<void(int dof)>& visit);
 
 /// Full solution vector (fixed entries = prescribed values).
 Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,

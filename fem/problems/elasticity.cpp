@@ -73,23 +73,12 @@ Constraints dirichlet_constraints(const FunctionSpace& space, const ElasticityPr
   Constraints c;
   c.fixed.assign(3 * static_cast<std::size_t>(space.num_dofs), 0);
   c.values = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(space.num_dofs));
-  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, space.degree);
-  const int n = static_cast<int>(space.cell_dofs.cols());
-  for (const auto& bc : problem.dirichlet) {
-    CF_VERIFY(bc.faces.size() == space.boundary_faces.size(), "Dirichlet flags do not match");
-    for (std::size_t f = 0; f < bc.faces.size(); ++f) {
-      if (!bc.faces[f]) continue;
-      const auto [cell, j] = space.boundary_faces[f];
-      for (int l = 0; l < n; ++l) {
-        if (lattice[l][j] != 0) continue;
-        const int d = space.cell_dofs(cell, l);
-        if (bc.where && !bc.where(space.dof_points.row(d).transpose())) continue;
-        const Eigen::Vector3d v = bc.value(space.dof_points.row(d).transpose());
-        for (int i = 0; i < 3; ++i)
-          if (bc.components[i]) c.fixed[3 * d + i] = 1, c.values[3 * d + i] = v[i];
-      }
-    }
-  }
+  for (const auto& bc : problem.dirichlet)
+    for_each_boundary_dof(space, bc.faces, bc.where, [&](int d) {
+      const Eigen::Vector3d v = bc.value(space.dof_points.row(d).transpose());
+      for (int i = 0; i < 3; ++i)
+        if (bc.components[i]) c.fixed[3 * d + i] = 1, c.values[3 * d + i] = v[i];
+    });
   return c;
 }
 

@@ -66,22 +66,11 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
   Constraints constraints;
   constraints.fixed.assign(space.num_dofs, 0);
   constraints.values = Eigen::VectorXd::Zero(space.num_dofs);
-  const int n = static_cast<int>(space.cell_dofs.cols());
-  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, space.degree);
-  for (const auto& bc : problem.dirichlet) {
-    CF_VERIFY(bc.faces.size() == space.boundary_faces.size(), "Dirichlet flags do not match");
-    for (std::size_t f = 0; f < bc.faces.size(); ++f) {
-      if (!bc.faces[f]) continue;
-      const auto [cell, j] = space.boundary_faces[f];
-      for (int l = 0; l < n; ++l) {
-        if (lattice[l][j] != 0) continue;
-        const int d = space.cell_dofs(cell, l);
-        if (bc.where && !bc.where(space.dof_points.row(d).transpose())) continue;
-        constraints.fixed[d] = 1;
-        constraints.values[d] = bc.value(space.dof_points.row(d).transpose());
-      }
-    }
-  }
+  for (const auto& bc : problem.dirichlet)
+    for_each_boundary_dof(space, bc.faces, bc.where, [&](int d) {
+      constraints.fixed[d] = 1;
+      constraints.values[d] = bc.value(space.dof_points.row(d).transpose());
+    });
   result.free_dofs = space.num_dofs - constraints.num_fixed();
   if (result.free_dofs == space.num_dofs && problem.dirichlet.empty())
     log::warn("Poisson problem without Dirichlet condition: the solution is not unique");

@@ -30,6 +30,16 @@ void split_cube_faces(const LagrangeMesh& mesh, const fem::FunctionSpace& space,
     (xmax < 1e-12 ? left : others)[f] = 1;
   }
 }
+/// Outward unit normal of the unit cube at a point inside one of the faces other than x = 0.
+Eigen::Vector3d cube_normal(const Eigen::Vector3d& x) {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (int d = 0; d < 3; ++d)
+    if (x[d] > 1 - 1e-12)
+      n[d] = 1;
+    else if (x[d] < 1e-12 && d > 0)
+      n[d] = -1;
+  return n.normalized();
+}
 }  // namespace
 
 TEST(BoundaryTerms, PoissonNeumannReproducesQuadratic) {
@@ -45,17 +55,8 @@ TEST(BoundaryTerms, PoissonNeumannReproducesQuadratic) {
   problem.rhs = [](const Eigen::Vector3d&) { return -2.0; };
   problem.dirichlet.push_back({left, u, {}});
   // Flux g = ∇u · n with the outward normal of each cube side (from the face quadrature point).
-  problem.neumann.push_back({others,
-                             [&](const Eigen::Vector3d& x) {
-                               Eigen::Vector3d n = Eigen::Vector3d::Zero();
-                               for (int d = 0; d < 3; ++d)
-                                 if (x[d] > 1 - 1e-12)
-                                   n[d] = 1;
-                                 else if (x[d] < 1e-12 && d > 0)
-                                   n[d] = -1;
-                               return grad(x).dot(n.normalized());
-                             },
-                             {}});
+  problem.neumann.push_back(
+      {others, [&](const Eigen::Vector3d& x) { return grad(x).dot(cube_normal(x)); }, {}});
   const auto sol = fem::solve_poisson(mesh, space, problem, {});
   double worst = 0;
   for (int d = 0; d < space.num_dofs; ++d)
@@ -80,17 +81,10 @@ TEST(BoundaryTerms, ElasticityTractionReproducesLinearDisplacement) {
                                {true, true, true},
                                [A](const Eigen::Vector3d& x) { return Eigen::Vector3d(A * x); },
                                {}});
-  problem.traction.push_back({others,
-                              [sigma](const Eigen::Vector3d& x) {
-                                Eigen::Vector3d n = Eigen::Vector3d::Zero();
-                                for (int d = 0; d < 3; ++d)
-                                  if (x[d] > 1 - 1e-12)
-                                    n[d] = 1;
-                                  else if (x[d] < 1e-12 && d > 0)
-                                    n[d] = -1;
-                                return Eigen::Vector3d(sigma * n.normalized());
-                              },
-                              {}});
+  problem.traction.push_back(
+      {others,
+       [sigma](const Eigen::Vector3d& x) { return Eigen::Vector3d(sigma * cube_normal(x)); },
+       {}});
   const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
   double worst = 0;
   for (int d = 0; d < space.num_dofs; ++d)
