@@ -12,7 +12,11 @@ namespace curvefem::io {
 
 class GmshSession {
  public:
-  explicit GmshSession(const std::string& model_name = "curvefem");
+  /// new_model: start from an empty model named model_name, cleared again on destruction.
+  /// keep_model: only lock and initialize, leaving any current model alone (for queries such as
+  /// element properties made while an outer session builds a model on the same thread).
+  enum class Mode { new_model, keep_model };
+  explicit GmshSession(const std::string& model_name = "curvefem", Mode mode = Mode::new_model);
   ~GmshSession();
   GmshSession(const GmshSession&) = delete;
   GmshSession& operator=(const GmshSession&) = delete;

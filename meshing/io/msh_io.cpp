@@ -5,14 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
-#include <limits>
-#include <map>
+#include <memory>
 #include <mutex>
-#include <numeric>
+#include <type_traits>
 
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/io/gmsh_session.hpp"
 #include "meshing/io/msh_parser.hpp"
 #include "meshing/io/node_permutation.hpp"
 
@@ -41,6 +41,8 @@ struct GmshElement {
 class GmshTables {
  public:
   static const GmshTables& instance() {
+    // Lock order gmsh → tables everywhere; keep_model leaves an outer session's model alone.
+    const GmshSession session("tables", GmshSession::Mode::keep_model);
     static std::mutex mutex;
     static std::unique_ptr<GmshTables> tables;
     std::lock_guard lock(mutex);
@@ -62,9 +64,7 @@ class GmshTables {
   }
 
  private:
-  GmshTables() {
-    gmsh::initialize(0, nullptr, false);
-    gmsh::option::setNumber("General.Terminal", log::enabled(log::Level::debug) ? 1 : 0);
+  GmshTables() {  // called with the gmsh lock held (instance())
     for (CellKind kind : {CellKind::triangle, CellKind::tetrahedron})
       for (int order = 1; order <= k_max_order; ++order) {
         const int dim = cell_dimension(kind);
@@ -232,10 +232,9 @@ void write_msh(const std::filesystem::path& path, const LagrangeMesh& mesh) {
 LagrangeMesh read_msh(const std::filesystem::path& path) {
   const std::string file = path.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path,
-                                        ec))  // same as read_vtu: a missing input is bad input
-    throw InputError(std::filesystem::exists(path, ec) ? "not a regular file" : "file not found",
-                     {.file = file});
+  if (!std::filesystem::is_regular_file(path, ec))  // as every reader: cannot open = I/O failure
+    throw IoError(std::filesystem::exists(path, ec) ? "not a regular file" : "file not found",
+                  {.file = file});
   const GmshTables& tables = GmshTables::instance();
   const detail::MshData data = detail::parse_msh(path);
 

@@ -2,6 +2,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -124,6 +125,7 @@ struct Payload {
 
 enum class Compressor { none, zlib, other };
 enum class Section { other, points, cells, point_data, cell_data, field_data };
+enum class Storage { appended, binary, ascii };
 
 struct Array {
   std::string_view tag;          ///< the start tag
@@ -156,9 +158,13 @@ class Checker {
     if (root_end == npos) return;
     const std::string_view tag = m_all.substr(root, root_end - root);
     const auto compressor = attribute(tag, "compressor");
-    m_compressor = !compressor || compressor->empty()       ? Compressor::none
+    // Like vtkXMLReader::SetupCompressor: an unknown name is an error VTK reports but reads on,
+    // without a compressor.
+    m_compressor = !compressor                              ? Compressor::none
                    : *compressor == "vtkZLibDataCompressor" ? Compressor::zlib
-                                                            : Compressor::other;
+                   : *compressor == "vtkLZ4DataCompressor" || *compressor == "vtkLZMADataCompressor"
+                       ? Compressor::other
+                       : Compressor::none;
     const auto header_type = attribute(tag, "header_type");
     if (header_type && *header_type == "UInt64")
       m_header_size = 8;
@@ -247,19 +253,31 @@ class Checker {
     return *v;
   }
 
-  /// Validates the binary header of `a` and describes its payload; nullopt if not binary.
+  /// As vtkXMLReader decides: appended iff the element has an "offset" attribute (whatever its
+  /// format says), else inline binary iff format="binary", else ascii.
+  static Storage storage(const Array& a) {
+    if (attribute(a.tag, "offset")) return Storage::appended;
+    return attribute(a.tag, "format").value_or("") == "binary" ? Storage::binary : Storage::ascii;
+  }
+
+  /// Validates the binary header of `a` and describes its payload; nullopt for ascii arrays.
   std::optional<Payload> payload(const Array& a) const {
-    const std::string format = attribute(a.tag, "format").value_or("ascii");
+    const Storage kind = storage(a);
     Stream s;
     std::size_t at = a.position;  // for messages
-    if (format == "appended") {
+    if (kind == Storage::appended) {
       if (!m_appended_start) return std::nullopt;  // VTK reports the missing section
-      const auto offset = parse_count(attribute(a.tag, "offset").value_or(""));
-      if (!offset || *offset > m_all.size() - *m_appended_start)
+      // VTK parses the offset with operator>>: blanks, a sign, digits; no digits reads as 0.
+      const std::string text = attribute(a.tag, "offset").value_or("");
+      std::size_t p = 0;
+      while (p < text.size() && is_space(text[p])) ++p;
+      if (p < text.size() && text[p] == '-') fail(a.position, "negative appended data offset");
+      const u64 offset = parse_count(text).value_or(0);
+      if (offset > m_all.size() - *m_appended_start)
         fail(a.position, "appended data offset outside the file");
-      at = *m_appended_start + *offset;
+      at = *m_appended_start + offset;
       s = Stream{m_all.substr(at), m_appended_base64};
-    } else if (format == "binary") {
+    } else if (kind == Storage::binary) {
       std::size_t skip = 0;
       while (skip < a.inline_text.size() && is_space(a.inline_text[skip])) ++skip;
       s = Stream{a.inline_text.substr(skip), true};
@@ -357,6 +375,7 @@ class Checker {
     const int size = word_size(type);
     if (size == 0 || type.rfind("Float", 0) == 0) return std::nullopt;
     if (!p) {  // ascii: the index-th token
+      if (storage(a) != Storage::ascii) return std::nullopt;
       u64 n = 0;
       bool in_token = false;
       for (std::size_t i = 0; i < a.inline_text.size(); ++i) {
@@ -365,8 +384,16 @@ class Checker {
         } else if (!in_token) {
           in_token = true;
           if (n++ == index) {
-            const auto v = parse_count(a.inline_text.substr(i));
-            return v ? std::optional<long long>(static_cast<long long>(*v)) : std::nullopt;
+            std::string_view token = a.inline_text.substr(i);
+            if (!token.empty() && token[0] == '-') return -1;
+            if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+            u64 value = 0;
+            std::size_t digits = 0;
+            for (; digits < token.size() && token[digits] >= '0' && token[digits] <= '9'; ++digits)
+              value = std::min<u64>(value * 10 + static_cast<u64>(token[digits] - '0'),
+                                    k_max_count + 1);  // saturates: huge stays huge
+            if (digits == 0) return std::nullopt;
+            return static_cast<long long>(value);
           }
         }
       }
@@ -392,7 +419,9 @@ class Checker {
         if (cells && *cells > 0) {
           const auto last = integer_value(a, p, *cells - 1);
           if (last && (*last < 0 || static_cast<u64>(*last) > k_max_count))
-            fail(a.position, "last cell offset " + std::to_string(*last));
+            fail(a.position,
+                 "last cell offset " +
+                     (*last < 0 ? std::to_string(*last) : "beyond " + std::to_string(k_max_count)));
           if (last) connectivity = static_cast<u64>(*last);
         } else if (cells) {
           connectivity = 0;
@@ -433,7 +462,6 @@ class Checker {
   void check_length(const Array& a, const std::optional<Payload>& p,
                     std::optional<u64> tuples) const {
     if (!tuples) return;
-    const std::string format = attribute(a.tag, "format").value_or("ascii");
     u64 components = 1;
     if (const auto c = attribute(a.tag, "NumberOfComponents"))
       components = count_or_fail(*c, a.position);
@@ -443,7 +471,7 @@ class Checker {
       const int size = word_size(attribute(a.tag, "type").value_or(""));
       if (size == 0) return;
       held = p->size / size;
-    } else if (format == "ascii") {
+    } else if (storage(a) == Storage::ascii) {
       held = ascii_values(a.inline_text);
     } else {
       return;  // appended without an AppendedData section: VTK reports it

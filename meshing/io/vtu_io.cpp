@@ -356,9 +356,9 @@ void write_vtu(const std::filesystem::path& path, const LagrangeMesh& mesh,
 VtuContent read_vtu(const std::filesystem::path& path) {
   const std::string file = path.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw InputError(std::filesystem::exists(path, ec) ? "not a regular file" : "file not found",
-                     {.file = file});
+  if (!std::filesystem::is_regular_file(path, ec))  // as every reader: cannot open = I/O failure
+    throw IoError(std::filesystem::exists(path, ec) ? "not a regular file" : "file not found",
+                  {.file = file});
 
   const QuietVtkLogger quiet;
   auto capture = vtkSmartPointer<MessageCapture>::New();

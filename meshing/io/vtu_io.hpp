@@ -22,7 +22,10 @@
 // disk) and IoError when VTK cannot write. read_vtu throws InputError naming the file for a
 // missing, empty, garbage, truncated or corrupted file (VTK's error messages are captured into the
 // exception and kept off stderr), for a file without cells, and naming the cell for an unsupported
-// or mixed cell type or an out-of-range point id.
+// or mixed cell type or an out-of-range point id. Before VTK sees the file, a pre-flight check
+// (vtu_binary_check.hpp) bounds every size the file declares by what it contains: VTK 9.1's reader
+// trusts them and dies (SIGFPE/SIGSEGV/heap corruption) on single corrupted bytes. The file is
+// therefore read into memory once before VTK reads it.
 #pragma once
 
 #include <filesystem>

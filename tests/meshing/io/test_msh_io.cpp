@@ -258,7 +258,7 @@ TEST(MshIo, RejectsBadFiles) {
   try {
     io::read_msh(dir / "missing.msh");
     ADD_FAILURE() << "missing file accepted";
-  } catch (const InputError& e) {
+  } catch (const IoError& e) {  // cannot open: I/O failure (exit 4), as every reader
     EXPECT_EQ(e.context().file, (dir / "missing.msh").string());
   }
   spit(dir / "garbage.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1\nxx");
@@ -275,4 +275,40 @@ TEST(MshIo, RejectsBadFiles) {
   const std::string good{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   spit(dir / "truncated.msh", good.substr(0, good.size() * 2 / 3));
   EXPECT_THROW(io::read_msh(dir / "truncated.msh"), InputError);
+}
+
+// Deterministic byte-level fuzzing of read_msh on our own output: read or InputError, nothing else.
+TEST(MshIo, SurvivesByteFlipFuzzing) {
+  const auto dir = test::scratch_dir("msh_fuzz");
+  const LagrangeMesh mesh = test::curved_patch(CellKind::tetrahedron, 3);
+  io::write_msh(dir / "good.msh", mesh);
+  std::ifstream in(dir / "good.msh", std::ios::binary);
+  const std::string good{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::mt19937 rng(4243);
+  int read = 0, rejected = 0;
+  for (int t = 0; t < 300; ++t) {
+    std::string bytes = good;
+    switch (t % 3) {
+      case 0:
+        for (int j = 0; j < 1 + t % 4; ++j) bytes[rng() % bytes.size()] ^= 1 << (rng() % 8);
+        break;
+      case 1:
+        bytes.resize(rng() % bytes.size());
+        break;
+      default:
+        bytes.insert(rng() % bytes.size(), std::string(1 + rng() % 20, static_cast<char>(rng())));
+    }
+    spit(dir / "mutated.msh", bytes);
+    try {
+      io::read_msh(dir / "mutated.msh");
+      ++read;
+    } catch (const InputError&) {
+      ++rejected;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "mutation " << t << ": " << e.what();
+    }
+  }
+  std::printf("[msh] fuzzing: %d mutated files read, %d rejected with InputError\n", read,
+              rejected);
+  EXPECT_EQ(read + rejected, 300);
 }

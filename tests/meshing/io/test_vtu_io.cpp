@@ -301,7 +301,7 @@ TEST(VtuIo, RejectsMissingGarbageAndTruncatedFiles) {
       ADD_FAILURE() << what << ": wrong exception " << e.what();
     }
   };
-  expect_input_error(dir / "missing.vtu", "missing file");
+  EXPECT_THROW(io::read_vtu(dir / "missing.vtu"), IoError);  // cannot open: I/O failure (exit 4)
   spit(dir / "empty.vtu", "");
   expect_input_error(dir / "empty.vtu", "empty file");
   spit(dir / "garbage.vtu", std::string("\x01\x02garbage\xff\xfe not xml at all", 27));
@@ -311,13 +311,9 @@ TEST(VtuIo, RejectsMissingGarbageAndTruncatedFiles) {
   io::write_vtu(dir / "good.vtu", mesh, sample_fields(mesh));
   const std::string good = slurp(dir / "good.vtu");
   ASSERT_GT(good.size(), 400u);
-  // A cut inside the last (cell types) array makes VTK 9.1's reader itself leak 420 bytes
-  // (reproduced with a bare vtkXMLUnstructuredGridReader); skipped under AddressSanitizer.
-#ifdef __SANITIZE_ADDRESS__
-  const std::vector<double> fractions = {0.1, 0.5, 0.9};
-#else
+  // (A cut inside the last array used to make VTK 9.1's reader leak; the pre-flight check now
+  // rejects it before VTK reads.)
   const std::vector<double> fractions = {0.1, 0.5, 0.9, 0.99};
-#endif
   for (double fraction : fractions) {
     const auto cut = static_cast<std::size_t>(good.size() * fraction);
     const auto path = dir / ("truncated_" + std::to_string(cut) + ".vtu");
@@ -416,6 +412,25 @@ TEST(VtuIo, RejectsCorruptionsThatWouldCrashVtk) {
   put_word(bad, offsets + 8 + 8 * (mesh.num_cells() - 1), 0x4000000000000078ull, 8);
   expect_rejected(dir / "huge_offset.vtu", bad, "huge last cell offset (uncompressed)");
 
+  // Ascii file: a huge last offset (found by fuzzing) is parsed and rejected as well.
+  {
+    auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    reader->SetFileName((dir / "ours.vtu").c_str());
+    reader->Update();
+    auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+    writer->SetInputData(reader->GetOutput());
+    writer->SetFileName((dir / "ascii.vtu").c_str());
+    writer->SetDataModeToAscii();
+    ASSERT_EQ(writer->Write(), 1);
+  }
+  bad = slurp(dir / "ascii.vtu");
+  EXPECT_NO_THROW(io::read_vtu(dir / "ascii.vtu"));
+  const std::size_t end = bad.find("</DataArray>", bad.find("Name=\"offsets\""));
+  std::size_t last = bad.find_last_not_of(" \n", end - 1);
+  const std::size_t first = bad.find_last_of(" \n", last) + 1;
+  bad.replace(first, last + 1 - first, "155555555555555520");
+  expect_rejected(dir / "ascii_offset.vtu", bad, "huge last cell offset (ascii)");
+
   // The same inside a valid zlib stream (a buggy writer, not random corruption, which zlib's
   // checksum catches): the offsets array is decompressed to check its last value.
   {
@@ -486,4 +501,57 @@ TEST(VtuIo, WriteRejectsBadFieldsAndLeavesNoFileOnFailure) {
   // VTK cannot create files in /proc: Write() fails → IoError, nothing left behind.
   EXPECT_THROW(io::write_vtu("/proc/self/curvefem_test.vtu", mesh), IoError);
   EXPECT_FALSE(std::filesystem::exists("/proc/self/curvefem_test.vtu"));
+}
+
+// Deterministic byte-level fuzzing over the encodings VTK writes: every mutated file is either
+// read or rejected with an InputError — never a crash, never another exception. (A 900k-file
+// campaign under AddressSanitizer found the cases of RejectsCorruptionsThatWouldCrashVtk.)
+TEST(VtuIo, SurvivesByteFlipFuzzing) {
+  const auto dir = test::scratch_dir("vtu_fuzz");
+  const LagrangeMesh mesh = test::curved_patch(CellKind::tetrahedron, 2);
+  io::write_vtu(dir / "ours.vtu", mesh, sample_fields(mesh));
+  std::vector<std::string> variants = {slurp(dir / "ours.vtu")};
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName((dir / "ours.vtu").c_str());
+  reader->Update();
+  for (int mode = 0; mode < 3; ++mode) {
+    auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+    writer->SetInputData(reader->GetOutput());
+    writer->SetFileName((dir / "variant.vtu").c_str());
+    if (mode == 0) writer->SetCompressorTypeToZLib();  // base64 appended, UInt32 headers
+    if (mode == 1) {                                   // raw appended, uncompressed
+      writer->EncodeAppendedDataOff();
+      writer->SetCompressorTypeToNone();
+    }
+    if (mode == 2) writer->SetDataModeToAscii();
+    ASSERT_EQ(writer->Write(), 1);
+    variants.push_back(slurp(dir / "variant.vtu"));
+  }
+  std::mt19937 rng(4242);
+  int read = 0, rejected = 0;
+  for (int t = 0; t < 400; ++t) {
+    std::string bytes = variants[t % variants.size()];
+    switch ((t / variants.size()) % 3) {
+      case 0:
+        for (int j = 0; j < 1 + t % 4; ++j) bytes[rng() % bytes.size()] ^= 1 << (rng() % 8);
+        break;
+      case 1:
+        bytes.resize(rng() % bytes.size());
+        break;
+      default:
+        bytes.insert(rng() % bytes.size(), std::string(1 + rng() % 20, static_cast<char>(rng())));
+    }
+    spit(dir / "mutated.vtu", bytes);
+    try {
+      io::read_vtu(dir / "mutated.vtu");
+      ++read;
+    } catch (const InputError&) {
+      ++rejected;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "mutation " << t << ": " << e.what();
+    }
+  }
+  std::printf("[vtu] fuzzing: %d mutated files read, %d rejected with InputError\n", read,
+              rejected);
+  EXPECT_EQ(read + rejected, 400);
 }
