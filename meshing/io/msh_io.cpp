@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <type_traits>
+#include <unordered_map>
 
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
@@ -227,6 +228,47 @@ void write_msh(const std::filesystem::path& path, const LagrangeMesh& mesh) {
   write_text_file_atomic(path, out.text());
   log::debug("wrote ", path.string(), ": ", mesh.num_cells(), " ", kind_name(mesh.kind),
              "s of order ", mesh.order, " (Gmsh type ", element.type, "), ", num_nodes, " nodes");
+}
+
+SurfaceMesh read_msh_boundary_triangles(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw IoError(std::filesystem::exists(path, ec) ? "not a regular file" : "file not found",
+                  {.file = file});
+  const GmshTables& tables = GmshTables::instance();
+  const detail::MshData data = detail::parse_msh(path);
+  std::vector<std::array<int, 3>> faces;
+  std::vector<int> tags;
+  std::unordered_map<int, int> vertex;  // row of data.nodes → vertex id
+  std::vector<int> rows;
+  for (const auto& block : data.blocks) {
+    const auto [kind, order] = tables.find(block.gmsh_type);
+    if (order < 0 || kind != CellKind::triangle) continue;
+    for (std::size_t e = 0; e < block.element_ids.size(); ++e) {
+      std::array<int, 3> f;
+      for (int c = 0; c < 3; ++c) {  // the first three nodes are the corners in every order
+        const int row = data.node_index.at(block.node_ids[e * block.nodes_per_element + c]);
+        auto [it, inserted] = vertex.try_emplace(row, static_cast<int>(rows.size()));
+        if (inserted) rows.push_back(row);
+        f[c] = it->second;
+      }
+      faces.push_back(f);
+      tags.push_back(block.physical_tags.empty() ? 0 : block.physical_tags[e]);
+    }
+  }
+  if (faces.empty()) throw InputError("no triangle elements", {.file = file});
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(rows.size()), 3);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    m.V.row(static_cast<Eigen::Index>(i)) = data.nodes.row(rows[i]);
+  m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  m.tags.resize(static_cast<Eigen::Index>(faces.size()));
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    for (int c = 0; c < 3; ++c) m.F(static_cast<Eigen::Index>(i), c) = faces[i][c];
+    m.tags[static_cast<Eigen::Index>(i)] = tags[i];
+  }
+  return m;
 }
 
 LagrangeMesh read_msh(const std::filesystem::path& path) {

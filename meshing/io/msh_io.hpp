@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/surface_mesh.hpp"
 
 namespace curvefem::io {
 
@@ -37,6 +38,11 @@ void write_msh(const std::filesystem::path& path, const LagrangeMesh& mesh);
 
 /// Reads the highest-dimensional simplices (tets if any, else triangles) of a MSH 2.2/4.1 file.
 LagrangeMesh read_msh(const std::filesystem::path& path);
+
+/// Corner triangles of every triangle element (orders 1..4) of a MSH 2.2/4.1 file with their
+/// physical tags (0 = none): the tagged boundary of a volume mesh, for boundary selections.
+/// Vertices are the files' nodes at the triangles' corners. InputError if there is no triangle.
+SurfaceMesh read_msh_boundary_triangles(const std::filesystem::path& path);
 
 /// perm such that Gmsh local node i is canonical local node perm[i]. Throws InputError for an
 /// order outside 1..4.

@@ -72,7 +72,7 @@ std::vector<int> boundary_face_tags(const std::filesystem::path& path, const Lag
   if (path.extension() != ".msh") return tags;
   SurfaceMesh triangles;
   try {
-    triangles = io::read_surface(path);
+    triangles = io::read_msh_boundary_triangles(path);  // any order; corners + physical tags
   } catch (const InputError&) {
     return tags;  // no triangles in the file
   }
