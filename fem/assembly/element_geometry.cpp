@@ -16,9 +16,10 @@ GeometryEvaluator::GeometryEvaluator(const LagrangeMesh& mesh, const Eigen::Matr
 void GeometryEvaluator::evaluate(int cell, CellGeometry& out) const {
   const int nq = num_points();
   const int nk = static_cast<int>(m_tab.values.cols());
-  Eigen::Matrix<double, Eigen::Dynamic, 3> X(nk, 3);
+  // Nodes of an order ≤ 4 tet fit on the stack (35 × 3).
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, 35, 3> X(nk, 3);
   for (int i = 0; i < nk; ++i) X.row(i) = m_mesh.nodes.row(m_mesh.cells(cell, i));
-  out.x = m_tab.values * X;
+  out.x.noalias() = m_tab.values * X;
   out.jacobian_inv.resize(nq);
   out.det_w.resize(nq);
   for (int q = 0; q < nq; ++q) {

@@ -25,18 +25,23 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   AssembledSystem system;
   system.F = Eigen::VectorXd::Zero(space.num_dofs);
 
+  const int nq = geometry.num_points();
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Fe) {
-    CellGeometry g;
+    // Per-thread scratch: no allocation per cell after the first.
+    thread_local CellGeometry g;
+    thread_local Eigen::MatrixXd G, Gw;  // n × 3·nq physical gradients, and weighted by κ det J w
+    G.resize(n, 3 * nq);
+    Gw.resize(n, 3 * nq);
     geometry.evaluate(cell, g);
-    Eigen::MatrixXd G(n, 3);
-    for (int q = 0; q < geometry.num_points(); ++q) {
+    for (int q = 0; q < nq; ++q) {
       const Eigen::Vector3d x = g.x.row(q).transpose();
       const double kappa = problem.kappa ? problem.kappa(x) : 1.0;
-      G.noalias() = basis.gradients[q] * g.jacobian_inv[q];  // physical gradients, n × 3
-      Ke.noalias() += (g.det_w[q] * kappa) * (G * G.transpose());
+      G.middleCols<3>(3 * q).noalias() = basis.gradients[q] * g.jacobian_inv[q];
+      Gw.middleCols<3>(3 * q) = (g.det_w[q] * kappa) * G.middleCols<3>(3 * q);
       if (problem.rhs)
         Fe.noalias() += (g.det_w[q] * problem.rhs(x)) * basis.values.row(q).transpose();
     }
+    Ke.noalias() = Gw * G.transpose();  // Σ_q κ det J w ∇φ ∇φᵀ as one matrix product
   };
   assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, &values, &system.F);
 
