@@ -72,7 +72,6 @@ void StagedOutputDir::commit() {
       throw IoError("cannot move into place: " + ec.message(),
                     {.file = (m_dir / f.filename()).string()});
   }
-  m_committed = true;
 }
 
 void write_text_file_atomic(const std::filesystem::path& path, const std::string& text) {

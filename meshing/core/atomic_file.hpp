@@ -47,7 +47,6 @@ class StagedOutputDir {
  private:
   std::filesystem::path m_dir;
   std::filesystem::path m_staging;
-  bool m_committed = false;
 };
 
 /// Writes `text` to `path` atomically (throws IoError).

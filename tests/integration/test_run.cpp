@@ -83,6 +83,8 @@ TEST(Run, BrokenCasesNameTheJsonPath) {
       {R"("rhs": "sin(x", "boundary_conditions": [])", "/rhs: bad expression"},
       {R"("boundary_conditions": [{"type": "dirichlet", "select": {"tag": 9}, "value": 0}])",
        "/boundary_conditions/0/select: selects no boundary face"},
+      {R"("boundary_conditions": [{"type": "dirichlet", "select": {"box": [[5,5,5],[6,6,6]]}, "value": 0}])",
+       "/boundary_conditions/0/select: selects no boundary face (no boundary node inside the box)"},
       {R"("discretization": {"degree": 7})", "/discretization/degree: must be in 1..4"},
       {R"("physics": {"type": "linear_elasticity"}, "rhs": "1")",
        "/rhs: expected an array of three"},

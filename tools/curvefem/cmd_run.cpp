@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <unordered_map>
 
+#include "fem/problems/constraints.hpp"
 #include "fem/problems/elasticity.hpp"
 #include "fem/problems/error_norms.hpp"
 #include "fem/problems/interpolation.hpp"
@@ -133,7 +134,7 @@ struct Selected {
 };
 
 Selected select_faces(const Selection& s, const std::vector<int>& face_tags,
-                      const std::string& file) {
+                      const fem::FunctionSpace& space, const std::string& file) {
   Selected out;
   out.faces.assign(face_tags.size(), 0);
   long long count = 0;
@@ -147,13 +148,19 @@ Selected select_faces(const Selection& s, const std::vector<int>& face_tags,
     out.where = [lo, hi](const Eigen::Vector3d& x) {
       return (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
     };
+    // A box acts point-wise: it selects something only if a boundary DOF lies inside it.
+    count = 0;
+    fem::for_each_boundary_dof(space, out.faces, out.where, [&](int) { ++count; });
   }
   if (count == 0)
-    throw InputError(s.where + ": selects no boundary face" +
-                         (s.kind == Selection::Kind::tag
-                              ? " (no boundary triangle has tag " + std::to_string(s.tag) + ")"
-                              : ""),
-                     {.file = file});
+    throw InputError(
+        s.where + ": selects no boundary face" +
+            (s.kind == Selection::Kind::box ? std::string(" (no boundary node inside the box)")
+                                            : std::string()) +
+            (s.kind == Selection::Kind::tag
+                 ? " (no boundary triangle has tag " + std::to_string(s.tag) + ")"
+                 : ""),
+        {.file = file});
   return out;
 }
 
@@ -207,7 +214,7 @@ int run_case(const RunOptions& o) {
     }
     problem.quadrature_degree = spec.quadrature;
     for (const auto& bc : spec.boundary_conditions) {
-      Selected sel = select_faces(bc.select, face_tags, case_name);
+      Selected sel = select_faces(bc.select, face_tags, space, case_name);
       const Expression v = bc.value[0];
       auto value = [v](const Eigen::Vector3d& x) { return v(x); };
       if (bc.type == "dirichlet")
@@ -229,7 +236,7 @@ int run_case(const RunOptions& o) {
     };
     if (!spec.rhs.empty()) problem.body_force = vector_field(spec.rhs);
     for (const auto& bc : spec.boundary_conditions) {
-      Selected sel = select_faces(bc.select, face_tags, case_name);
+      Selected sel = select_faces(bc.select, face_tags, space, case_name);
       if (bc.type == "dirichlet")
         problem.dirichlet.push_back({sel.faces, bc.components, vector_field(bc.value), sel.where});
       else
@@ -274,8 +281,7 @@ int run_case(const RunOptions& o) {
             const Eigen::Vector3d gi = exact[i].gradient(x);
             for (int d = 0; d < 3; ++d) g[3 * i + d] = gi[d];
           }
-        },
-        spec.quadrature >= 0 ? -1 : -1);
+        });
     report["l2_error"] = e.l2;
     report["h1_semi_error"] = e.h1_semi;
     report["h1_error"] = std::sqrt(e.l2 * e.l2 + e.h1_semi * e.h1_semi);
