@@ -1,0 +1,243 @@
+#include "meshing/editing/scheduler.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <mutex>
+#include <numeric>
+#include <queue>
+#include <unordered_map>
+
+#include "meshing/core/error.hpp"
+
+namespace curvefem::meshing::editing {
+
+std::string PassStats::summary() const {
+  char buf[320];
+  std::snprintf(buf, sizeof(buf),
+                "%zu attempted, %zu succeeded, %zu rejected (before %zu, topology %zu, after %zu, "
+                "invariant %zu), "
+                "%zu stale, %zu lock failures, %zu serial tail, %.3f s on %d thread(s)",
+                attempted, succeeded, rejected(), rejected_before, rejected_topology,
+                rejected_after, rejected_invariant, stale_tuple + stale_priority, lock_failures,
+                serial_tail, seconds, threads);
+  return buf;
+}
+
+namespace {
+
+std::uint64_t spread_bits(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+void add(PassStats& into, const PassStats& s) {
+  into.attempted += s.attempted;
+  into.succeeded += s.succeeded;
+  into.rejected_before += s.rejected_before;
+  into.rejected_topology += s.rejected_topology;
+  into.rejected_after += s.rejected_after;
+  into.rejected_invariant += s.rejected_invariant;
+  into.stale_tuple += s.stale_tuple;
+  into.stale_priority += s.stale_priority;
+  into.lock_failures += s.lock_failures;
+  into.serial_tail += s.serial_tail;
+}
+
+}  // namespace
+
+std::vector<int> morton_partition(std::size_t n, const std::function<Eigen::Vector3d(Id)>& position,
+                                  int parts) {
+  std::vector<int> part(n, 0);
+  if (n == 0 || parts <= 1) return part;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  std::vector<Eigen::Vector3d> p(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    p[v] = position(Id(v));
+    lo = lo.cwiseMin(p[v]);
+    hi = hi.cwiseMax(p[v]);
+  }
+  const double extent = std::max((hi - lo).maxCoeff(), 1e-300);
+  std::vector<std::uint64_t> code(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const Eigen::Vector3d q = (p[v] - lo) / extent * double((1 << 21) - 1);
+    code[v] = spread_bits(std::uint64_t(q.x())) | spread_bits(std::uint64_t(q.y())) << 1 |
+              spread_bits(std::uint64_t(q.z())) << 2;
+  }
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return code[a] < code[b]; });
+  for (std::size_t r = 0; r < n; ++r) part[order[r]] = int(r * std::size_t(parts) / n);
+  return part;
+}
+
+template <class Mesh>
+PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
+  const auto t0 = std::chrono::steady_clock::now();
+  struct Entry {
+    double priority;
+    int op;
+    Tuple t;
+    int retries;
+    bool operator<(const Entry& o) const { return priority < o.priority; }
+  };
+  using Queue = std::priority_queue<Entry>;
+
+  std::vector<std::string> names;
+  std::vector<const std::function<std::optional<Tuple>(Mesh&, const Tuple&)>*> fns;
+  std::unordered_map<std::string, int> index;
+  for (const auto& [name, fn] : operations) {
+    index[name] = int(names.size());
+    names.push_back(name);
+    fns.push_back(&fn);
+  }
+  auto op_index = [&](const std::string& name) {
+    auto it = index.find(name);
+    CF_VERIFY(it != index.end(), "ExecutePass: unknown operation '" + name + "'");
+    return it->second;
+  };
+  auto prio = [&](int op, const Tuple& t) { return priority ? priority(mesh, names[op], t) : 0.0; };
+
+  const int threads = std::clamp(num_threads, 1, k_max_threads);
+  std::vector<Queue> queues(threads);
+  std::vector<int> part;
+  if (threads > 1) {
+    if (position) {
+      part = morton_partition(mesh.vertex_capacity(), position, threads);
+    } else {
+      part.resize(mesh.vertex_capacity());
+      for (std::size_t v = 0; v < part.size(); ++v) part[v] = int(v * threads / part.size());
+    }
+  }
+  for (const auto& [name, t] : work) {
+    const int op = op_index(name);
+    const int p = threads > 1 && t.vid < part.size() ? part[t.vid] : 0;
+    queues[p].push(Entry{prio(op, t), op, t, 0});
+  }
+
+  std::atomic<bool> stop{false};
+  std::mutex tail_mutex;
+  std::vector<Entry> tail;
+  auto default_lock = [&](const Tuple& t) {
+    const auto seeds = mesh.lock_seeds(t);
+    return mesh.try_lock_region(std::span<const Id>(seeds.data(), seeds.size()), lock_rings);
+  };
+
+  auto process = [&](Queue& q, PassStats& st, bool locking) {
+    std::vector<Entry> deferred;
+    while (!stop.load(std::memory_order_relaxed)) {
+      if (q.empty()) {
+        if (deferred.empty()) break;
+        for (Entry& e : deferred) {
+          if (++e.retries >= max_retry_limit) {
+            std::lock_guard<std::mutex> guard(tail_mutex);
+            tail.push_back(e);
+            ++st.serial_tail;
+          } else {
+            q.push(e);
+          }
+        }
+        deferred.clear();
+        continue;
+      }
+      const Entry e = q.top();
+      q.pop();
+      if (!mesh.is_valid(e.t)) {
+        ++st.stale_tuple;
+        continue;
+      }
+      const Work w{names[e.op], e.t};
+      if (locking) {
+        const bool ok = lock_vertices ? lock_vertices(mesh, w) : default_lock(e.t);
+        if (!ok) {
+          mesh.release_vertex_locks();
+          ++st.lock_failures;
+          deferred.push_back(e);
+          continue;
+        }
+        if (!mesh.is_valid(e.t)) {  // changed between the first check and the locks
+          mesh.release_vertex_locks();
+          ++st.stale_tuple;
+          continue;
+        }
+      }
+      if (should_process && !should_process(mesh, w, e.priority)) {
+        if (locking) mesh.release_vertex_locks();
+        ++st.stale_priority;
+        continue;
+      }
+      ++st.attempted;
+      const std::optional<Tuple> result = (*fns[e.op])(mesh, e.t);
+      if (result) {
+        ++st.succeeded;
+        if (renew_neighbor_tuples)
+          for (const auto& [name, t] : renew_neighbor_tuples(mesh, names[e.op], *result)) {
+            const int op = op_index(name);
+            q.push(Entry{prio(op, t), op, t, 0});
+          }
+        if (stopping_criterion && stopping_criterion(mesh)) stop.store(true);
+      } else {
+        switch (mesh.last_rejection()) {
+          case Rejection::before:
+            ++st.rejected_before;
+            break;
+          case Rejection::topology:
+            ++st.rejected_topology;
+            break;
+          case Rejection::after:
+            ++st.rejected_after;
+            break;
+          case Rejection::invariant:
+            ++st.rejected_invariant;
+            break;
+          default:
+            ++st.stale_tuple;
+            break;
+        }
+      }
+      if (locking) mesh.release_vertex_locks();
+    }
+  };
+
+  PassStats total;
+  total.threads = threads;
+  if (threads == 1) {
+    ThreadSlotScope slot(0);
+    process(queues[0], total, false);
+  } else {
+    std::vector<PassStats> per(threads);
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(0, threads, [&](int p) {
+        tbb::this_task_arena::isolate([&] {
+          ThreadSlotScope slot(p);
+          process(queues[p], per[p], true);
+        });
+      });
+    });
+    for (const PassStats& s : per) add(total, s);
+    if (!stop.load() && !tail.empty()) {
+      Queue q;
+      for (const Entry& e : tail) q.push(Entry{e.priority, e.op, e.t, 0});
+      ThreadSlotScope slot(0);
+      process(q, total, false);
+    }
+  }
+  total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return total;
+}
+
+template class ExecutePass<TriMesh>;
+template class ExecutePass<TetMesh>;
+
+}  // namespace curvefem::meshing::editing

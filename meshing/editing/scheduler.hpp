@@ -1,0 +1,82 @@
+#pragma once
+// The scheduler of local operations (thesis §6.2; reference-notes §8.3), for TriMesh and TetMesh.
+//
+// A pass is configured declaratively: named operations, a priority (max first), the work to
+// renew after a success, a stale-priority filter, how to lock, when to stop. It seeds one
+// priority queue per partition (Morton order of the vertices), runs one oneTBB task per queue,
+// and takes vertex try-locks (never blocking) around every operation. An operation whose locks
+// cannot be taken is deferred and retried up to max_retry_limit times, then handed to a serial
+// tail after the parallel phase. An operation rejected by its hooks or invariants is NOT retried:
+// it comes back only if a neighbouring success renews it (retrying every failure every round does
+// not converge on large meshes).
+
+#include <Eigen/Core>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "meshing/editing/tet_mesh.hpp"
+#include "meshing/editing/tri_mesh.hpp"
+
+namespace curvefem::meshing::editing {
+
+struct PassStats {
+  std::size_t attempted = 0;  // operations run (after locking and filtering)
+  std::size_t succeeded = 0;
+  std::size_t rejected_before = 0;     // user `before` hook said no
+  std::size_t rejected_topology = 0;   // link condition, boundary, existing edge/face
+  std::size_t rejected_after = 0;      // user `after` hook said no
+  std::size_t rejected_invariant = 0;  // user invariants said no
+  std::size_t stale_tuple = 0;         // tuple invalid when popped (its cell changed)
+  std::size_t stale_priority = 0;      // should_process said no
+  std::size_t lock_failures = 0;       // try-lock attempts that failed
+  std::size_t serial_tail = 0;         // operations handed to the serial tail
+  double seconds = 0;
+  int threads = 1;
+
+  std::size_t rejected() const {
+    return rejected_before + rejected_topology + rejected_after + rejected_invariant;
+  }
+  std::string summary() const;
+};
+
+template <class Mesh>
+class ExecutePass {
+ public:
+  using Tuple = typename Mesh::Tuple;
+  using Work = std::pair<std::string, Tuple>;
+
+  // name -> operation; returns the resulting tuple on success.
+  std::map<std::string, std::function<std::optional<Tuple>(Mesh&, const Tuple&)>> operations;
+  // Larger runs first. Called with the mesh locked around the tuple (or serially).
+  std::function<double(const Mesh&, const std::string&, const Tuple&)> priority;
+  // New work after a success (called while the operation's locks are still held).
+  std::function<std::vector<Work>(const Mesh&, const std::string&, const Tuple&)>
+      renew_neighbor_tuples;
+  // Filters stale queue entries, e.g. when the recomputed priority differs from the queued one.
+  std::function<bool(const Mesh&, const Work&, double queued_priority)> should_process;
+  // Locks what the operation will touch (default: both edge endpoints and their one-rings;
+  // lock_rings = 2 for the two-ring). Must only try-lock.
+  std::function<bool(Mesh&, const Work&)> lock_vertices;
+  int lock_rings = 1;
+  // Checked after every success; must be thread-safe (read atomics such as num_cells()).
+  std::function<bool(const Mesh&)> stopping_criterion;
+  // Vertex positions for the Morton partition (optional; by vertex id otherwise).
+  std::function<Eigen::Vector3d(Id)> position;
+
+  int num_threads = 1;
+  int max_retry_limit = 10;
+
+  PassStats run(Mesh& mesh, const std::vector<Work>& work);
+};
+
+// Partition of the vertices into `parts` blocks of consecutive Morton codes (reference-notes §8.3).
+std::vector<int> morton_partition(std::size_t num_vertices,
+                                  const std::function<Eigen::Vector3d(Id)>& position, int parts);
+
+extern template class ExecutePass<TriMesh>;
+extern template class ExecutePass<TetMesh>;
+
+}  // namespace curvefem::meshing::editing
