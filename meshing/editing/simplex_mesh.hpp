@@ -35,6 +35,10 @@ struct OperationRecord {
   std::array<Id, 2> new_edge{k_no_id, k_no_id};  // swap (triangles, 2-3 and 4-4 on tets)
   std::vector<Id> old_cells;                     // removed (still readable, marked removed)
   std::vector<Id> new_cells;                     // created (for smoothing: the star of v0)
+  // Every live cell whose shape the `after` hook can change by moving the operation's vertices:
+  // the new cells, plus for a collapse the rest of the kept vertex's star. Invariants on
+  // geometry (orientation, envelope, quality) must look at all of them.
+  std::vector<Id> affected_cells;
 };
 
 class SimplexMeshBase {

@@ -283,6 +283,7 @@ std::optional<TetMesh::Tuple> TetMesh::split_edge(const Tuple& t) {
   Id c = k_no_id;
   for (Id v : cell(t0))
     if (v != a && v != m) c = v;
+  rec.affected_cells = rec.new_cells;
   return finish(rec, split_edge_after(rec), tuple_on(t0, m, a, c));
 }
 
@@ -302,6 +303,7 @@ std::optional<TetMesh::Tuple> TetMesh::collapse_edge(const Tuple& t) {
   begin_operation();
   OperationRecord& rec = m_records[current_thread_slot()];
   rec = OperationRecord{.v0 = a, .v1 = b, .old_cells = star, .new_cells = replace(r)};
+  rec.affected_cells = vertex_cells(b);
   const Id t0 = rec.new_cells.front();
   const int lb = local_vertex(t0, b);
   const int lo = (lb + 1) % 4, lt = (lb + 2) % 4;
@@ -335,6 +337,7 @@ std::optional<TetMesh::Tuple> TetMesh::swap_face_23(const Tuple& t) {
   Id c = k_no_id;
   for (Id v : cell(t0))
     if (v != d && v != e) c = v;
+  rec.affected_cells = rec.new_cells;
   return finish(rec, swap_face_after(rec), tuple_on(t0, d, e, c));
 }
 
@@ -360,6 +363,7 @@ std::optional<TetMesh::Tuple> TetMesh::swap_edge_32(const Tuple& t) {
   begin_operation();
   OperationRecord& rec = m_records[current_thread_slot()];
   rec = OperationRecord{.v0 = a, .v1 = b, .old_cells = tets, .new_cells = replace(r)};
+  rec.affected_cells = rec.new_cells;
   return finish(rec, swap_edge_after(rec),
                 tuple_on(rec.new_cells.front(), ring[0], ring[1], ring[2]));
 }
@@ -396,6 +400,7 @@ std::optional<TetMesh::Tuple> TetMesh::swap_edge_44(const Tuple& t) {
   OperationRecord& rec = m_records[current_thread_slot()];
   rec = OperationRecord{
       .v0 = a, .v1 = b, .new_edge = {ring[0], ring[2]}, .old_cells = tets, .new_cells = replace(r)};
+  rec.affected_cells = rec.new_cells;
   return finish(rec, swap_edge_after(rec), tuple_on(rec.new_cells.front(), ring[0], ring[2], a));
 }
 
@@ -405,6 +410,7 @@ std::optional<TetMesh::Tuple> TetMesh::smooth_vertex(const Tuple& t) {
   begin_operation();
   OperationRecord& rec = m_records[current_thread_slot()];
   rec = OperationRecord{.v0 = t.vid, .new_cells = vertex_cells(t.vid)};
+  rec.affected_cells = rec.new_cells;
   return finish(rec, smooth_after(rec), t);
 }
 

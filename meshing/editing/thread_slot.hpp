@@ -26,6 +26,7 @@ template <class T>
 class PerThread {
  public:
   T& local() { return m_values[current_thread_slot()]; }
+  const T& local() const { return m_values[current_thread_slot()]; }
 
  private:
   T m_values[k_max_threads]{};

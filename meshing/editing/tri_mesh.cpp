@@ -177,6 +177,7 @@ std::optional<TriMesh::Tuple> TriMesh::split_edge(const Tuple& t) {
       .v0 = a, .v1 = b, .new_vertex = m, .old_cells = faces, .new_cells = replace(r)};
   const Id f0 = rec.new_cells.front();
   const Tuple result = tuple(f0, local_vertex(f0, m), local_edge_of(f0, m, a));
+  rec.affected_cells = rec.new_cells;
   return finish(rec, split_edge_after(rec), result);
 }
 
@@ -199,6 +200,7 @@ std::optional<TriMesh::Tuple> TriMesh::collapse_edge(const Tuple& t) {
   }
   OperationRecord& rec = m_records[current_thread_slot()];
   rec = OperationRecord{.v0 = a, .v1 = b, .old_cells = star, .new_cells = replace(r)};
+  rec.affected_cells = vertex_cells(b);
   const Id f0 = rec.new_cells.front();
   const int lb = local_vertex(f0, b);
   const Tuple result = tuple(f0, lb, (lb + 1) % 3);
@@ -232,6 +234,7 @@ std::optional<TriMesh::Tuple> TriMesh::swap_edge(const Tuple& t) {
       .v0 = a, .v1 = b, .new_edge = {c, d}, .old_cells = faces, .new_cells = replace(r)};
   const Id g = rec.new_cells.front();
   const Tuple result = tuple(g, local_vertex(g, c), local_edge_of(g, c, d));
+  rec.affected_cells = rec.new_cells;
   return finish(rec, swap_edge_after(rec), result);
 }
 
@@ -241,6 +244,7 @@ std::optional<TriMesh::Tuple> TriMesh::smooth_vertex(const Tuple& t) {
   begin_operation();
   OperationRecord& rec = m_records[current_thread_slot()];
   rec = OperationRecord{.v0 = t.vid, .new_cells = vertex_cells(t.vid)};
+  rec.affected_cells = rec.new_cells;
   return finish(rec, smooth_after(rec), t);
 }
 

@@ -14,12 +14,14 @@ void register_check(CLI::App& app);    // cmd_check.cpp
 void register_convert(CLI::App& app);  // cmd_convert.cpp
 void register_demo(CLI::App& app);     // cmd_demo.cpp
 void register_run(CLI::App& app);      // cmd_run.cpp
+void register_remesh(CLI::App& app);   // cmd_remesh.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
   register_convert(app);
   register_demo(app);
   register_run(app);
+  register_remesh(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

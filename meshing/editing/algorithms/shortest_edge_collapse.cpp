@@ -1,0 +1,42 @@
+// Shortest-edge collapse [Hoppe 1996]: repeatedly collapse the shortest edge to its midpoint
+// until the face budget is met. The only operation is the collapse; its priority is the negated
+// squared length; after a collapse the edges around the kept vertex are re-queued with their new
+// lengths, and queue entries whose length changed since they were queued are skipped.
+
+#include <memory>
+
+#include "meshing/editing/algorithms/surface_passes.hpp"
+
+namespace curvefem::meshing::editing {
+
+std::unique_ptr<SurfaceEditMesh> make_shortest_collapse_mesh() {
+  return std::make_unique<SurfaceEditMesh>();
+}
+
+void shortest_edge_collapse(SurfaceEditMesh& m, std::size_t target_faces, int threads,
+                            PassLog& log) {
+  SurfacePass pass = make_surface_pass(m, threads);
+  pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
+    return m.collapse_edge(t);
+  };
+  pass.priority = [&m](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
+    return -m.edge_length2(t);
+  };
+  pass.should_process = [&m](const TriMesh&, const SurfacePass::Work& w, double queued) {
+    return -m.edge_length2(w.second) == queued;
+  };
+  pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
+                                    const TriMesh::Tuple& kept) {
+    std::vector<SurfacePass::Work> work;
+    for (const auto& e : m.vertex_edges(kept.vid)) work.emplace_back("collapse", e);
+    return work;
+  };
+  pass.stopping_criterion = [&m, target_faces](const TriMesh&) {
+    return m.num_cells() <= target_faces;
+  };
+  std::vector<SurfacePass::Work> work;
+  for (const auto& e : m.get_edges()) work.emplace_back("collapse", e);
+  log.emplace_back("collapse", pass.run(m, work));
+}
+
+}  // namespace curvefem::meshing::editing
