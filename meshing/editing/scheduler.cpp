@@ -7,9 +7,9 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <mutex>
 #include <numeric>
-#include <queue>
 #include <unordered_map>
 
 #include "meshing/core/error.hpp"
@@ -91,7 +91,21 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
     int retries;
     bool operator<(const Entry& o) const { return priority < o.priority; }
   };
-  using Queue = std::priority_queue<Entry>;
+  // A binary max-heap whose storage can be sampled (for the epoch thresholds).
+  struct Queue {
+    std::vector<Entry> heap;
+    bool empty() const { return heap.empty(); }
+    std::size_t size() const { return heap.size(); }
+    const Entry& top() const { return heap.front(); }
+    void push(const Entry& e) {
+      heap.push_back(e);
+      std::push_heap(heap.begin(), heap.end());
+    }
+    void pop() {
+      std::pop_heap(heap.begin(), heap.end());
+      heap.pop_back();
+    }
+  };
 
   std::vector<std::string> names;
   std::vector<const std::function<std::optional<Tuple>(Mesh&, const Tuple&)>*> fns;
@@ -132,11 +146,13 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
     const auto seeds = mesh.lock_seeds(t);
     return mesh.try_lock_region(std::span<const Id>(seeds.data(), seeds.size()), lock_rings);
   };
+  constexpr double k_all = -std::numeric_limits<double>::infinity();
 
-  auto process = [&](Queue& q, PassStats& st, bool locking) {
+  // Runs the entries of q whose priority is at least `threshold`.
+  auto process = [&](Queue& q, PassStats& st, bool locking, double threshold) {
     std::vector<Entry> deferred;
     while (!stop.load(std::memory_order_relaxed)) {
-      if (q.empty()) {
+      if (q.empty() || q.top().priority < threshold) {
         if (deferred.empty()) break;
         for (Entry& e : deferred) {
           if (++e.retries >= max_retry_limit) {
@@ -209,29 +225,61 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
     }
   };
 
+  // Epoch threshold: the priority above which about `epoch_fraction` of all queued entries lie,
+  // estimated from an evenly strided sample of every queue.
+  auto epoch_threshold = [&]() {
+    std::size_t total = 0;
+    for (const Queue& q : queues) total += q.size();
+    if (epoch_fraction <= 0 || total < 64) return k_all;
+    std::vector<double> sample;
+    for (const Queue& q : queues) {
+      const std::size_t n = std::min<std::size_t>(q.size(), 1024);
+      for (std::size_t i = 0; i < n; ++i) sample.push_back(q.heap[i * q.size() / n].priority);
+    }
+    const std::size_t k =
+        std::min(sample.size() - 1, std::size_t(epoch_fraction * double(sample.size())));
+    std::nth_element(sample.begin(), sample.begin() + std::ptrdiff_t(k), sample.end(),
+                     std::greater<double>());
+    return sample[k];
+  };
+
   PassStats total;
   total.threads = threads;
   if (threads == 1) {
     ThreadSlotScope slot(0);
-    process(queues[0], total, false);
+    process(queues[0], total, false, k_all);
   } else {
     std::vector<PassStats> per(threads);
     tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_for(0, threads, [&](int p) {
-        tbb::this_task_arena::isolate([&] {
-          ThreadSlotScope slot(p);
-          process(queues[p], per[p], true);
+    for (;;) {
+      bool any = false;
+      for (const Queue& q : queues) any = any || !q.empty();
+      if (!any || stop.load()) break;
+      const double threshold = epoch_threshold();
+      ++total.epochs;
+      arena.execute([&] {
+        tbb::parallel_for(0, threads, [&](int p) {
+          tbb::this_task_arena::isolate([&] {
+            ThreadSlotScope slot(p);
+            process(queues[p], per[p], true, threshold);
+          });
         });
       });
-    });
-    for (const PassStats& s : per) add(total, s);
-    if (!stop.load() && !tail.empty()) {
-      Queue q;
-      for (const Entry& e : tail) q.push(Entry{e.priority, e.op, e.t, 0});
-      ThreadSlotScope slot(0);
-      process(q, total, false);
+      if (!stop.load() && !tail.empty()) {
+        // The serial tail of this epoch: same threshold; what it renews below the threshold
+        // goes back to the partition queues for the next epochs.
+        Queue q;
+        for (const Entry& e : tail) q.push(Entry{e.priority, e.op, e.t, 0});
+        tail.clear();
+        ThreadSlotScope slot(0);
+        process(q, total, false, threshold);
+        for (const Entry& e : q.heap) {
+          const std::size_t p = e.t.vid < part.size() ? std::size_t(part[e.t.vid]) : 0;
+          queues[p].push(e);
+        }
+      }
     }
+    for (const PassStats& s : per) add(total, s);
   }
   total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return total;

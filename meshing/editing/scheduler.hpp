@@ -33,6 +33,7 @@ struct PassStats {
   std::size_t stale_priority = 0;      // should_process said no
   std::size_t lock_failures = 0;       // try-lock attempts that failed
   std::size_t serial_tail = 0;         // operations handed to the serial tail
+  std::size_t epochs = 0;              // parallel epochs (see ExecutePass::epoch_fraction)
   double seconds = 0;
   int threads = 1;
 
@@ -68,6 +69,13 @@ class ExecutePass {
 
   int num_threads = 1;
   int max_retry_limit = 10;
+  // Approximate global order with parallel tasks: the pass runs in epochs; each epoch first
+  // estimates the priority above which `epoch_fraction` of all queued work lies, then every task
+  // runs only its entries at or above it (renewed ones included). Without this, one partition
+  // can run far down its queue while another still holds better work — e.g. QSlim spending the
+  // face budget on costly collapses in one half while zero-cost ones wait in the other.
+  // 0 disables (one epoch). Serial runs are always in exact priority order.
+  double epoch_fraction = 0.05;
 
   PassStats run(Mesh& mesh, const std::vector<Work>& work);
 };

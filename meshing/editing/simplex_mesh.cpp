@@ -470,12 +470,23 @@ void SimplexMesh<N>::reject(Rejection why) {
 
 template <int N>
 bool SimplexMesh<N>::link_condition(Id a, Id b) const {
-  auto facet_is_boundary = [&](const Id* f) {
-    return is_boundary_facet(std::span<const Id>(f, N - 1));
+  // A facet through v lies in no cell outside v's star, so counting within the star decides
+  // whether it is on the boundary (and is far cheaper than a global lookup).
+  auto facet_is_boundary = [&](const Id* f, const std::vector<Id>& star) {
+    int count = 0;
+    for (Id c : star) {
+      const Cell& cv = cell(c);
+      bool all = true;
+      for (int i = 0; i < N - 1 && all; ++i)
+        all = std::find(cv.begin(), cv.end(), f[i]) != cv.end();
+      if (all && ++count > 1) return false;
+    }
+    return count == 1;
   };
   auto vertex_link = [&](Id v) {
     std::vector<Key> link;
-    for (Id c : vertex_cells(v)) {
+    const std::vector<Id>& star = vertex_cells(v);
+    for (Id c : star) {
       const Cell& cv = cell(c);
       Id rest[N];
       int m = 0;
@@ -489,7 +500,7 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
         int k = 0;
         for (int i = 0; i < N; ++i)
           if (i != skip) f[k++] = cv[i];
-        if (!facet_is_boundary(f)) continue;
+        if (!facet_is_boundary(f, star)) continue;
         Id g[N - 1];
         int q = 0;
         for (int i = 0; i < N - 1; ++i)
@@ -503,7 +514,8 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
   };
   std::vector<Key> la = vertex_link(a), lb = vertex_link(b), lab;
   const Id edge[2] = {a, b};
-  for (Id c : cells_containing(std::span<const Id>(edge, 2))) {
+  const std::vector<Id> edge_star = cells_containing(std::span<const Id>(edge, 2));
+  for (Id c : edge_star) {
     const Cell& cv = cell(c);
     Id rest[N];
     int m = 0;
@@ -516,7 +528,7 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
       int k = 0;
       for (int i = 0; i < N; ++i)
         if (i != skip) f[k++] = cv[i];
-      if (!facet_is_boundary(f)) continue;
+      if (!facet_is_boundary(f, edge_star)) continue;
       Id g[N - 1];
       int q = 0;
       for (int i = 0; i < N - 1; ++i)

@@ -134,6 +134,12 @@ bool SurfaceEditMesh::smooth_after(const OperationRecord& r) {
   return true;
 }
 
+bool SurfaceEditMesh::close_normals(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+  // cos(angle) > min_normal_cos without normalizing: a·b > c |a||b| (and a·b > 0).
+  const double d = a.dot(b);
+  return d > 0 && d * d > min_normal_cos * min_normal_cos * a.squaredNorm() * b.squaredNorm();
+}
+
 bool SurfaceEditMesh::no_fold(const OperationRecord& r) const {
   const Scratch& s = m_scratch.local();
   switch (s.kind) {
@@ -148,23 +154,23 @@ bool SurfaceEditMesh::no_fold(const OperationRecord& r) const {
       for (Id f : r.old_cells) {
         const Cell& c = cell(f);
         if (c[0] == r.v1 || c[1] == r.v1 || c[2] == r.v1) continue;
-        if (face_normal(r.new_cells[i++]).dot(face_normal(f)) <= 0) return false;
+        if (!close_normals(face_normal(r.new_cells[i++]), face_normal(f))) return false;
       }
       for (std::size_t k = 0; k < r.affected_cells.size(); ++k) {
         const Id f = r.affected_cells[k];
         if (std::binary_search(r.new_cells.begin(), r.new_cells.end(), f)) continue;
-        if (face_normal(f).dot(s.old_normals[k]) <= 0) return false;
+        if (!close_normals(face_normal(f), s.old_normals[k])) return false;
       }
       return true;
     }
     case Kind::swap:
       for (Id g : r.new_cells)
         for (Id f : r.old_cells)
-          if (face_normal(g).dot(face_normal(f)) <= 0) return false;
+          if (!close_normals(face_normal(g), face_normal(f))) return false;
       return true;
     case Kind::smooth:
       for (std::size_t i = 0; i < r.new_cells.size(); ++i)
-        if (face_normal(r.new_cells[i]).dot(s.old_normals[i]) <= 0) return false;
+        if (!close_normals(face_normal(r.new_cells[i]), s.old_normals[i])) return false;
       return true;
   }
   return true;

@@ -18,6 +18,10 @@ class SurfaceEditMesh : public TriMesh {
   Attribute<char> frozen{*this, 0, 0};
 
   // Optional envelope: every new or moved face must stay within envelope_eps of it.
+  // A face may turn by at most acos(min_normal_cos) in one operation (compared with the face it
+  // came from); 90 degrees alone lets a sequence of operations fold a face over.
+  double min_normal_cos = 0.5;
+
   const SurfaceDistance* envelope = nullptr;
   double envelope_eps = 0;
 
@@ -62,6 +66,7 @@ class SurfaceEditMesh : public TriMesh {
     std::vector<Eigen::Vector3d> old_normals;
   };
   bool no_fold(const OperationRecord& r) const;
+  bool close_normals(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
   PerThread<Scratch> m_scratch;
 };
 

@@ -20,7 +20,7 @@ namespace {
 // operations late (in `after` or in `invariants`), after attributes were written.
 class RandomTriMesh : public ed::TriMesh {
  public:
-  ed::Attribute<Eigen::Vector3d> position{*this, 0};
+  ed::Attribute<Eigen::Vector3d> position{*this, 0, Eigen::Vector3d::Zero()};
   ed::Attribute<int> edge_tag{*this, 1, -1};
   ed::Attribute<double> face_value{*this, 2, 0.0};
   std::mt19937 rng{7};
@@ -232,7 +232,7 @@ double orient(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::V
 
 class RandomTetMesh : public ed::TetMesh {
  public:
-  ed::Attribute<Eigen::Vector3d> position{*this, 0};
+  ed::Attribute<Eigen::Vector3d> position{*this, 0, Eigen::Vector3d::Zero()};
   ed::Attribute<int> face_tag{*this, 2, 0};
   ed::Attribute<int> tet_region{*this, 3, 0};
   std::mt19937 rng{5};
@@ -343,7 +343,7 @@ TEST(EditingTet, RandomOperationsKeepValidityPositivityAndRollBackExactly) {
 TEST(EditingTet, SwapsRoundTrip) {
   // Two tets sharing face 012 (bipyramid): 2-3 then 3-2 returns to two tets.
   ed::TetMesh m;
-  ed::Attribute<Eigen::Vector3d> p(m, 0);
+  ed::Attribute<Eigen::Vector3d> p(m, 0, Eigen::Vector3d::Zero());
   m.initialize(5, {{0, 1, 2, 3}, {0, 2, 1, 4}});
   ASSERT_EQ(m.check_connectivity(), "");
   const auto f = m.face_tuple(0, 1, 2);
