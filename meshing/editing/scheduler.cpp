@@ -14,6 +14,19 @@
 
 #include "meshing/core/error.hpp"
 
+// oneTBB's library is not built with ThreadSanitizer, so TSan cannot see that the tasks of a
+// parallel_for start after the code before it and finish before arena.execute returns. These
+// annotations state exactly those two happens-before edges (and nothing else).
+#if defined(__SANITIZE_THREAD__)
+extern "C" void __tsan_acquire(void* addr);
+extern "C" void __tsan_release(void* addr);
+#define CF_TSAN_ACQUIRE(addr) __tsan_acquire(addr)
+#define CF_TSAN_RELEASE(addr) __tsan_release(addr)
+#else
+#define CF_TSAN_ACQUIRE(addr) ((void)(addr))
+#define CF_TSAN_RELEASE(addr) ((void)(addr))
+#endif
+
 namespace curvefem::meshing::editing {
 
 std::string PassStats::summary() const {
@@ -257,14 +270,19 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
       if (!any || stop.load()) break;
       const double threshold = epoch_threshold();
       ++total.epochs;
+      int fork = 0, join = 0;
+      CF_TSAN_RELEASE(&fork);
       arena.execute([&] {
         tbb::parallel_for(0, threads, [&](int p) {
+          CF_TSAN_ACQUIRE(&fork);
           tbb::this_task_arena::isolate([&] {
             ThreadSlotScope slot(p);
             process(queues[p], per[p], true, threshold);
           });
+          CF_TSAN_RELEASE(&join);
         });
       });
+      CF_TSAN_ACQUIRE(&join);
       if (!stop.load() && !tail.empty()) {
         // The serial tail of this epoch: same threshold; what it renews below the threshold
         // goes back to the partition queues for the next epochs.

@@ -72,7 +72,12 @@ INSTANTIATE_TEST_SUITE_P(
     Editing, CollapseThreads,
     ::testing::Combine(::testing::Values(ed::RemeshAlgorithm::shortest_collapse,
                                          ed::RemeshAlgorithm::qslim),
-                       ::testing::Values(1, 2)));
+                       ::testing::Values(1, 2)),
+    [](const auto& info) {
+      const bool q = std::get<0>(info.param) == ed::RemeshAlgorithm::qslim;
+      return std::string(q ? "qslim" : "shortest") + "_threads" +
+             std::to_string(std::get<1>(info.param));
+    });
 
 TEST(EditingAlgorithms, QSlimSimplifiesABoxExactly) {
   // Planar faces have zero quadric error: QSlim must reach a tiny budget without moving the

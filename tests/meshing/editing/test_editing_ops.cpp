@@ -8,6 +8,7 @@
 #include <random>
 
 #include "meshing/core/primitives.hpp"
+#include "meshing/editing/scheduler.hpp"
 #include "meshing/editing/tet_mesh.hpp"
 #include "meshing/editing/tri_mesh.hpp"
 
@@ -366,4 +367,160 @@ TEST(EditingTet, SwapsRoundTrip) {
   ASSERT_TRUE(other.has_value());
   EXPECT_EQ(m.switch_tetrahedron(*other)->tid, h.tid);
   EXPECT_FALSE(m.switch_tetrahedron(*m.face_tuple(0, 1, 3)).has_value());
+}
+
+namespace {
+
+// A tet mesh whose only invariant is positive orientation of every affected tet.
+class PositiveTetMesh : public ed::TetMesh {
+ public:
+  ed::Attribute<Eigen::Vector3d> position{*this, 0, Eigen::Vector3d::Zero()};
+  ed::Attribute<int> face_tag{*this, 2, 0};
+  double volume(Id t) const {
+    const auto& c = cell(t);
+    return orient(position[c[0]], position[c[1]], position[c[2]], position[c[3]]);
+  }
+  double length2(const Tuple& t) const {
+    return (position[t.vid] - position[other_vertex(t)]).squaredNorm();
+  }
+  // Boundary vertices stay put (collapses and smoothing of them would change the domain); a
+  // split boundary edge gives a boundary vertex.
+  ed::Attribute<char> boundary{*this, 0, 0};
+  bool split_edge_after(const ed::OperationRecord& r) override {
+    position.set(r.new_vertex, 0.5 * (position[r.v0] + position[r.v1]));
+    const Id e[2] = {r.new_vertex, r.v0};
+    bool on_boundary = false;
+    for (Id t : cells_containing(std::span<const Id>(e, 2)))
+      for (const auto& f : faces_of_tets({t}))
+        on_boundary = on_boundary || (is_boundary_face(f) && (face_vertices(f)[0] == r.new_vertex ||
+                                                              face_vertices(f)[1] == r.new_vertex ||
+                                                              face_vertices(f)[2] == r.new_vertex));
+    boundary.set(r.new_vertex, on_boundary ? 1 : 0);
+    return true;
+  }
+  bool collapse_edge_after(const ed::OperationRecord& r) override {
+    position.set(r.v1, 0.5 * (position[r.v0] + position[r.v1]));
+    return true;
+  }
+  bool smooth_after(const ed::OperationRecord& r) override {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    const auto ring = one_ring(r.v0);
+    for (Id u : ring) c += position[u];
+    position.set(r.v0, c / double(ring.size()));
+    return true;
+  }
+  bool collapse_edge_before(const Tuple& t) override {
+    return !boundary[t.vid] && !boundary[other_vertex(t)];
+  }
+  bool smooth_before(const Tuple& t) override { return !boundary[t.vid]; }
+  bool invariants(const ed::OperationRecord& r) override {
+    for (Id t : r.affected_cells)
+      if (volume(t) <= 0) return false;
+    return true;
+  }
+};
+
+void load_cube(PositiveTetMesh& m, int n) {
+  const auto cube = curvefem::make_cube_tets(n);
+  std::vector<ed::TetMesh::Cell> cells;
+  for (int t = 0; t < cube.cells.rows(); ++t)
+    cells.push_back(
+        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
+  m.initialize(cube.nodes.rows(), cells);
+  for (int v = 0; v < cube.nodes.rows(); ++v) {
+    m.position.set(v, cube.nodes.row(v).transpose());
+    for (int d = 0; d < 3; ++d)
+      if (cube.nodes(v, d) == 0.0 || cube.nodes(v, d) == 1.0) m.boundary.set(v, 1);
+  }
+  for (const auto& f : m.get_faces())
+    if (m.is_boundary_face(f)) m.set_face(m.face_tag, f, 7);
+}
+
+}  // namespace
+
+// The scheduler with 1 and 2 threads: refine, coarsen, flip and smooth a tet mesh; the user
+// invariant (positive tets) holds everywhere afterwards, the mesh is valid, boundary tags
+// survive, and the volume is exactly the cube's. This is the test to run under CURVEFEM_TSAN.
+TEST(EditingScheduler, ParallelPassesKeepTheUserInvariant) {
+  for (int threads : {1, 2}) {
+    PositiveTetMesh m;
+    load_cube(m, 4);
+    using Pass = ed::ExecutePass<ed::TetMesh>;
+    using Work = Pass::Work;
+    auto configure = [&](Pass& pass) {
+      pass.num_threads = threads;
+      pass.position = [&m](Id v) { return m.position[v]; };
+    };
+    const double target2 = 0.12 * 0.12;
+    {
+      Pass split;
+      configure(split);
+      split.operations["split"] = [&m](ed::TetMesh&, const ed::TetMesh::Tuple& t) {
+        return m.split_edge(t);
+      };
+      split.priority = [&m](const ed::TetMesh&, const std::string&, const ed::TetMesh::Tuple& t) {
+        return m.length2(t);
+      };
+      split.should_process = [&m](const ed::TetMesh&, const Work& w, double p) {
+        return m.length2(w.second) == p;
+      };
+      split.renew_neighbor_tuples = [&m, target2](const ed::TetMesh&, const std::string&,
+                                                  const ed::TetMesh::Tuple&) {
+        std::vector<Work> out;
+        for (const auto& e : m.edges_of_tets(m.operation_record().new_cells))
+          if (m.length2(e) > target2) out.emplace_back("split", e);
+        return out;
+      };
+      std::vector<Work> work;
+      for (const auto& e : m.get_edges())
+        if (m.length2(e) > target2) work.emplace_back("split", e);
+      const ed::PassStats s = split.run(m, work);
+      EXPECT_GT(s.succeeded, 1000u) << threads;
+      EXPECT_EQ(s.attempted, s.succeeded + s.rejected());
+    }
+    const std::size_t refined = m.num_cells();
+    {
+      Pass mixed;
+      configure(mixed);
+      mixed.operations["collapse"] = [&m](ed::TetMesh&, const ed::TetMesh::Tuple& t) {
+        return m.collapse_edge(t);
+      };
+      mixed.operations["swap32"] = [&m](ed::TetMesh&, const ed::TetMesh::Tuple& t) {
+        return m.swap_edge_32(t);
+      };
+      mixed.operations["swap44"] = [&m](ed::TetMesh&, const ed::TetMesh::Tuple& t) {
+        return m.swap_edge_44(t);
+      };
+      mixed.operations["swap23"] = [&m](ed::TetMesh&, const ed::TetMesh::Tuple& t) {
+        return m.swap_face_23(t);
+      };
+      mixed.operations["smooth"] = [&m](ed::TetMesh&, const ed::TetMesh::Tuple& t) {
+        return m.smooth_vertex(t);
+      };
+      mixed.priority = [&m](const ed::TetMesh&, const std::string& op,
+                            const ed::TetMesh::Tuple& t) {
+        return op == "collapse" ? -m.length2(t) : -1.0;
+      };
+      std::vector<Work> work;
+      for (const auto& e : m.get_edges()) {
+        work.emplace_back("collapse", e);
+        work.emplace_back("swap32", e);
+        work.emplace_back("swap44", e);
+      }
+      for (const auto& f : m.get_faces()) work.emplace_back("swap23", f);
+      for (const auto& v : m.get_vertices()) work.emplace_back("smooth", v);
+      const ed::PassStats s = mixed.run(m, work);
+      EXPECT_GT(s.succeeded, 500u) << threads;
+    }
+    EXPECT_LT(m.num_cells(), refined);
+    ASSERT_EQ(m.check_connectivity(), "") << threads;
+    double total = 0;
+    for (Id t : m.live_cells()) {
+      ASSERT_GT(m.volume(t), 0) << threads;
+      total += m.volume(t) / 6.0;
+    }
+    EXPECT_NEAR(total, 1.0, 1e-12) << threads;
+    for (const auto& f : m.get_faces())
+      EXPECT_EQ(m.get_face(m.face_tag, f), m.is_boundary_face(f) ? 7 : 0);
+  }
 }
