@@ -109,3 +109,52 @@ TEST(Cli, DemoWritesCompleteVerifiedReport) {
   for (const auto& e : std::filesystem::directory_iterator(dir))
     EXPECT_NE(e.path().filename().string().rfind(".staging", 0), 0u) << e.path();
 }
+
+TEST(Cli, RemeshWritesSurfaceAndReport) {
+  const auto dir = test::scratch_dir("cli_remesh");
+  io::write_surface(dir / "sphere.obj", make_icosphere(3), io::SurfaceFormat::obj);  // 1280 faces
+  std::string out;
+  const std::string in = (dir / "sphere.obj").string();
+  ASSERT_EQ(test::run_command(cli() + " remesh -q " + in + " -o " + (dir / "q.obj").string() +
+                                  " --algorithm qslim --target-faces 300 --threads 2",
+                              &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("1280 -> 300 faces"), std::string::npos) << out;
+  const auto j = read_json(dir / "q.json");
+  EXPECT_EQ(j["input_faces"], 1280);
+  EXPECT_EQ(j["quality"]["faces"], 300);
+  EXPECT_EQ(j["threads"], 2);
+  EXPECT_LT(j["quality"]["max_deviation_rel"].get<double>(), 0.05);
+  EXPECT_GT(j["passes"][0]["succeeded"].get<int>(), 400);
+  EXPECT_EQ(io::read_surface(dir / "q.obj").num_faces(), 300);
+  // Isotropic with an envelope.
+  ASSERT_EQ(test::run_command(cli() + " remesh -q " + in + " -o " + (dir / "i.obj").string() +
+                                  " --algorithm isotropic --target-edge 0.2 --envelope 0.02",
+                              &out),
+            0)
+      << out;
+  const auto k = read_json(dir / "i.json");
+  EXPECT_LE(k["quality"]["max_deviation"].get<double>(), 0.02);
+  EXPECT_EQ(k["passes"].size(), 20u);  // 5 rounds of split, collapse, swap, smooth
+  // Usage errors: missing target, wrong algorithm, non-manifold input; nothing written.
+  EXPECT_EQ(test::run_command(cli() + " remesh -q " + in + " -o " + (dir / "x.obj").string() +
+                                  " --algorithm qslim",
+                              &out),
+            2);
+  EXPECT_NE(out.find("--target-faces"), std::string::npos) << out;
+  EXPECT_NE(test::run_command(cli() + " remesh -q " + in + " -o " + (dir / "x.obj").string() +
+                                  " --algorithm magic --target-faces 10",
+                              &out),
+            0);
+  SurfaceMesh bad = make_icosphere(1);
+  std::swap(bad.F(3, 1), bad.F(3, 2));
+  io::write_surface(dir / "bad.obj", bad, io::SurfaceFormat::obj);
+  EXPECT_EQ(test::run_command(cli() + " remesh -q " + (dir / "bad.obj").string() + " -o " +
+                                  (dir / "x.obj").string() + " --algorithm qslim --target-faces 10",
+                              &out),
+            2);
+  EXPECT_NE(out.find("inconsistently oriented"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.obj"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.json"));
+}
