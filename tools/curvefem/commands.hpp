@@ -15,6 +15,7 @@ void register_convert(CLI::App& app);  // cmd_convert.cpp
 void register_demo(CLI::App& app);     // cmd_demo.cpp
 void register_run(CLI::App& app);      // cmd_run.cpp
 void register_remesh(CLI::App& app);   // cmd_remesh.cpp
+void register_shell(CLI::App& app);    // cmd_shell.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
@@ -22,6 +23,7 @@ inline void register_commands(CLI::App& app) {
   register_demo(app);
   register_run(app);
   register_remesh(app);
+  register_shell(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

@@ -1,0 +1,193 @@
+#include "meshing/shell/projection.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "meshing/shell/shell_geometry.hpp"
+#include "meshing/shell/shell_intersection.hpp"
+
+namespace curvefem::meshing::shell {
+
+namespace {
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+K::Point_3 pt(const Eigen::Vector3d& p) { return K::Point_3(p.x(), p.y(), p.z()); }
+// (u, v) of local corner i mod 3 of the rotated face.
+constexpr double k_xy[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+}  // namespace
+
+struct ShellProjection::Impl {
+  const Shell& shell;
+  InputSurfaceIndex input;
+  double cell = 1;
+  Eigen::Vector3d origin;
+  std::unordered_map<std::int64_t, std::vector<int>> grid;
+
+  Impl(const Shell& s, const SurfaceMesh& in) : shell(s), input(in.V, in.F) {}
+
+  // Corner c (0..5) of half `half` (0: base→mid, 1: mid→top) of face f, rotated order.
+  Eigen::Vector3d corner(int f, int half, int c) const {
+    const Eigen::Vector3i F = shell.F.row(f);
+    const int r = min_rotation(F);
+    const int v = F[(r + c % 3) % 3];
+    const Eigen::MatrixXd& lower = half == 0 ? shell.base : shell.mid;
+    const Eigen::MatrixXd& upper = half == 0 ? shell.mid : shell.top;
+    return c < 3 ? Eigen::Vector3d(lower.row(v)) : Eigen::Vector3d(upper.row(v));
+  }
+  std::int64_t key(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d q = (p - origin) / cell;
+    const std::int64_t i = std::int64_t(std::floor(q.x())), j = std::int64_t(std::floor(q.y())),
+                       k = std::int64_t(std::floor(q.z()));
+    return (i & 0x1fffff) | ((j & 0x1fffff) << 21) | ((k & 0x1fffff) << 42);
+  }
+};
+
+ShellProjection::ShellProjection(const Shell& shell, const SurfaceMesh& input)
+    : m_impl(std::make_unique<Impl>(shell, input)) {
+  Impl& m = *m_impl;
+  const int nf = int(shell.F.rows());
+  std::vector<Eigen::AlignedBox3d> boxes(nf);
+  double diag = 0;
+  m.origin = shell.base.colwise().minCoeff().cwiseMin(shell.top.colwise().minCoeff()).transpose();
+  for (int f = 0; f < nf; ++f) {
+    for (int half = 0; half < 2; ++half)
+      for (int c = 0; c < 6; ++c) boxes[f].extend(m.corner(f, half, c));
+    diag += boxes[f].diagonal().norm();
+  }
+  m.cell = std::max(diag / std::max(nf, 1), 1e-300);
+  for (int f = 0; f < nf; ++f) {
+    const Eigen::Vector3d lo = (boxes[f].min() - m.origin) / m.cell,
+                          hi = (boxes[f].max() - m.origin) / m.cell;
+    for (std::int64_t i = std::int64_t(std::floor(lo.x())); i <= std::int64_t(std::floor(hi.x()));
+         ++i)
+      for (std::int64_t j = std::int64_t(std::floor(lo.y())); j <= std::int64_t(std::floor(hi.y()));
+           ++j)
+        for (std::int64_t k = std::int64_t(std::floor(lo.z()));
+             k <= std::int64_t(std::floor(hi.z())); ++k)
+          m.grid[(i & 0x1fffff) | ((j & 0x1fffff) << 21) | ((k & 0x1fffff) << 42)].push_back(f);
+  }
+}
+
+ShellProjection::~ShellProjection() = default;
+
+std::optional<PrismPoint> ShellProjection::locate(const Eigen::Vector3d& p) const {
+  const Impl& m = *m_impl;
+  auto it = m.grid.find(m.key(p));
+  if (it == m.grid.end()) return std::nullopt;
+  const K::Point_3 q = pt(p);
+  for (int f : it->second) {
+    const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(f)));
+    for (int half = 0; half < 2; ++half)
+      for (const auto& tet : split_tets(type_a)) {
+        K::Point_3 c[4];
+        Eigen::Vector3d e[4];
+        for (int k = 0; k < 4; ++k) {
+          e[k] = m.corner(f, half, tet[k]);
+          c[k] = pt(e[k]);
+        }
+        const auto o = CGAL::orientation(c[0], c[1], c[2], c[3]);
+        if (o == CGAL::COPLANAR) continue;  // a pinched (singular) tet
+        // Inside or on the boundary: q on the same side as the opposite corner for each face.
+        bool inside = true;
+        const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+        for (int i = 0; i < 4 && inside; ++i) {
+          const auto& fc = faces[i];
+          const auto side = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], q);
+          const auto ref = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], c[i]);
+          inside = side == CGAL::COPLANAR || side == ref;
+        }
+        if (!inside) continue;
+        // Barycentric coordinates (double solve), then canonical (u, v, h).
+        Eigen::Matrix3d A;
+        A << e[1] - e[0], e[2] - e[0], e[3] - e[0];
+        const Eigen::Vector3d l = A.colPivHouseholderQr().solve(p - e[0]);
+        const double w[4] = {1 - l.sum(), l[0], l[1], l[2]};
+        PrismPoint r;
+        r.face = f;
+        for (int k = 0; k < 4; ++k) {
+          r.u += w[k] * k_xy[tet[k] % 3][0];
+          r.v += w[k] * k_xy[tet[k] % 3][1];
+          r.h += w[k] * ((tet[k] < 3 ? -1.0 : 0.0) + half);
+        }
+        return r;
+      }
+  }
+  return std::nullopt;
+}
+
+Eigen::Vector3d ShellProjection::point(const PrismPoint& q) const {
+  const Impl& m = *m_impl;
+  const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(q.face)));
+  const int half = q.h < 0 ? 0 : 1;
+  // Points of the fiber on the 4 rising facets and their heights: the PL map is linear in h
+  // along each segment between consecutive facets.
+  const auto& facets = rising_facets(type_a);
+  Eigen::Vector3d prev;
+  double prev_h = 0;
+  for (int i = 0; i < 4; ++i) {
+    const auto& fc = facets[i];
+    std::array<int, 3> sorted = {fc[0], fc[1], fc[2]};
+    std::sort(sorted.begin(), sorted.end(), [](int a, int b) { return a % 3 < b % 3; });
+    const double w[3] = {1 - q.u - q.v, q.u, q.v};
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    double h = 0;
+    for (int k = 0; k < 3; ++k) {
+      x += w[k] * m.corner(q.face, half, sorted[k]);
+      h += w[k] * ((sorted[k] < 3 ? -1.0 : 0.0) + half);
+    }
+    if (i > 0 && q.h <= h + 1e-15) {
+      const double s = h > prev_h ? (q.h - prev_h) / (h - prev_h) : 0.0;
+      return prev + std::clamp(s, 0.0, 1.0) * (x - prev);
+    }
+    prev = x;
+    prev_h = h;
+  }
+  return prev;
+}
+
+std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const {
+  const Impl& m = *m_impl;
+  const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(q.face)));
+  const double w[3] = {1 - q.u - q.v, q.u, q.v};
+  std::vector<Eigen::Vector3d> fiber;
+  for (int half = 0; half < 2; ++half)
+    for (int i = half; i < 4; ++i) {  // the mid facet of half 1 is the top facet of half 0
+      std::array<int, 3> sorted = rising_facets(type_a)[i];
+      std::sort(sorted.begin(), sorted.end(), [](int a, int b) { return a % 3 < b % 3; });
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) x += w[k] * m.corner(q.face, half, sorted[k]);
+      fiber.push_back(x);
+    }
+  // Walk the fiber from the middle outwards: the input crosses it near h = 0.
+  const int mid = 3;
+  for (int d = 0; d < 3; ++d)
+    for (int s : {-1, 1}) {
+      const int a = s < 0 ? mid - d : mid + d, b = a + s;
+      if (b < 0 || b >= int(fiber.size())) continue;
+      Eigen::Vector3d bary;
+      const int f = m.input.segment_hit(fiber[a], fiber[b], bary);
+      if (f < 0) continue;
+      SurfacePoint r;
+      r.face = f;
+      r.bary = bary;
+      for (int k = 0; k < 3; ++k)
+        r.position += bary[k] * Eigen::Vector3d(m.input.V().row(m.input.F()(f, k)));
+      return r;
+    }
+  return std::nullopt;
+}
+
+std::optional<SurfacePoint> ShellProjection::project(const Eigen::Vector3d& p) const {
+  const auto q = locate(p);
+  if (!q) return std::nullopt;
+  return project(*q);
+}
+
+std::optional<PrismPoint> ShellProjection::unproject(const Eigen::Vector3d& x) const {
+  return locate(x);
+}
+
+}  // namespace curvefem::meshing::shell

@@ -1,0 +1,49 @@
+#pragma once
+// The bijective prismatic shell (thesis chapter 4; reference-notes §3.1–3.5, §4).
+//
+// Around a closed, oriented triangle surface (the input), every face f of the shell's middle
+// surface carries a prism: base corners below, middle corners on the middle surface, top corners
+// above, joined by the pillars of its three vertices. Built without simplification the middle
+// surface is the input itself (with edges between two singular vertices split), and base/top
+// are offsets along the QP extrusion directions, shrunk until every prism passes the exact 24-tet
+// positivity test and no base or top triangle intersects the input.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "meshing/core/progress.hpp"
+#include "meshing/core/surface_mesh.hpp"
+
+namespace curvefem::meshing::shell {
+
+struct Shell {
+  Eigen::MatrixXd base, mid, top;  // #V × 3 each
+  Eigen::MatrixXi F;               // #F × 3, same orientation as the input
+  std::vector<char> singular;      // #V: zero-length pillar (base = mid = top)
+  std::vector<int> face_parent;    // #F: an input face under this prism (the one it was built on)
+  std::vector<int>
+      input_vertex;  // #V: the input vertex a middle vertex sits on, -1 for pinch points
+};
+
+struct ShellOptions {
+  double max_thickness_rel = 0.02;  // cap on each half-pillar, relative to the longest bbox edge
+  double singularity_tolerance = 1e-2;
+  int smoothing_rounds = 3;
+  int threads = 0;  // 0: oneTBB default
+};
+
+struct ShellStats {
+  int input_faces = 0, input_vertices = 0;
+  int singular_vertices = 0, pinch_splits = 0;
+  int shrink_rounds_volume = 0, shrink_rounds_intersection = 0;
+  double min_thickness_rel = 0, median_thickness_rel = 0, max_thickness_rel = 0;
+  std::vector<std::pair<std::string, double>> stage_seconds;
+};
+
+// Throws InputError if the input is not a closed, consistently oriented manifold, MeshingError
+// if a face has three singular vertices or a prism cannot be made positive.
+Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellStats& stats,
+                  const ProgressFn& progress = {});
+
+}  // namespace curvefem::meshing::shell

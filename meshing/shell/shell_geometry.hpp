@@ -1,0 +1,34 @@
+#pragma once
+// Index conventions of shell prisms shared by construction, projection and verification
+// (reference-notes §3.5, §10.1): a face is rotated so that its smallest vertex id comes first;
+// it is "type A" when its second id is larger than its third. The canonical 3-tet split of each
+// half-prism (base corners 0..2, top corners 3..5 in rotated order) then joins, on every side
+// quad, the base of the lower global id to the top of the higher one, so neighbours conform.
+
+#include <Eigen/Core>
+#include <array>
+
+namespace curvefem::meshing::shell {
+
+// Rotation r such that (f[r], f[r+1], f[r+2]) starts at the smallest id.
+inline int min_rotation(const Eigen::Vector3i& f) {
+  return (f[0] < f[1] && f[0] < f[2]) ? 0 : (f[1] < f[2] ? 1 : 2);
+}
+inline bool is_type_a(const Eigen::Vector3i& f) {
+  const int r = min_rotation(f);
+  return f[(r + 1) % 3] > f[(r + 2) % 3];
+}
+// The 3 tets of the canonical split (corners in rotated order: base 0..2, top 3..5).
+inline const std::array<std::array<int, 4>, 3>& split_tets(bool type_a) {
+  static const std::array<std::array<int, 4>, 3> a{{{0, 3, 4, 5}, {1, 4, 2, 0}, {2, 5, 0, 4}}};
+  static const std::array<std::array<int, 4>, 3> b{{{0, 3, 4, 5}, {1, 4, 5, 0}, {2, 5, 0, 1}}};
+  return type_a ? a : b;
+}
+// The 4 "rising facets" of the split, bottom to top: a fiber at (u, v) crosses them in order.
+inline const std::array<std::array<int, 3>, 4>& rising_facets(bool type_a) {
+  static const std::array<std::array<int, 3>, 4> a{{{0, 1, 2}, {0, 4, 2}, {0, 4, 5}, {3, 4, 5}}};
+  static const std::array<std::array<int, 3>, 4> b{{{0, 1, 2}, {0, 1, 5}, {0, 4, 5}, {3, 4, 5}}};
+  return type_a ? a : b;
+}
+
+}  // namespace curvefem::meshing::shell

@@ -1,0 +1,190 @@
+#include "meshing/shell/simplify.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <set>
+
+#include "meshing/editing/tri_mesh.hpp"
+#include "meshing/shell/prism_positivity.hpp"
+#include "meshing/shell/shell_geometry.hpp"
+#include "meshing/shell/shell_intersection.hpp"
+
+namespace curvefem::meshing::shell {
+
+namespace {
+
+using editing::Attribute;
+using editing::Id;
+using editing::OperationRecord;
+using editing::TriMesh;
+
+class ShellMesh : public TriMesh {
+ public:
+  Attribute<Eigen::Vector3d> base{*this, 0, Eigen::Vector3d::Zero()};
+  Attribute<Eigen::Vector3d> mid{*this, 0, Eigen::Vector3d::Zero()};
+  Attribute<Eigen::Vector3d> top{*this, 0, Eigen::Vector3d::Zero()};
+  Attribute<char> singular{*this, 0, 0};
+  Attribute<int> input_vertex{*this, 0, -1};
+  Attribute<std::vector<int>> track{*this, 2, {}};  // input faces touching the prism
+  const InputSurfaceIndex* input = nullptr;
+  double section_cos = 0;
+
+  // Input faces touching the 6 canonical split tets of face f; false if a prism half fails.
+  bool prism_ok(Id f, std::vector<int>& touching) const {
+    const Cell& c = cell(f);
+    const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
+    std::array<Eigen::Vector3d, 3> b, m, t;
+    std::array<bool, 3> s;
+    for (int k = 0; k < 3; ++k) {
+      b[k] = base[c[k]];
+      m[k] = mid[c[k]];
+      t[k] = top[c[k]];
+      s[k] = singular[c[k]];
+    }
+    if (!shell_face_positive(b, m, t, s)) return false;  // I1
+    const Eigen::Vector3i ids(input_vertex[c[0]], input_vertex[c[1]], input_vertex[c[2]]);
+    if (input->triangle_intersects(b, s, ids) || input->triangle_intersects(t, s, ids))
+      return false;  // I3
+    const int rot = min_rotation(F);
+    const bool type_a = is_type_a(F);
+    touching.clear();
+    for (int half = 0; half < 2; ++half)
+      for (const auto& tet : split_tets(type_a)) {
+        std::array<Eigen::Vector3d, 4> q;
+        for (int k = 0; k < 4; ++k) {
+          const int local = (rot + tet[k] % 3) % 3;
+          q[k] = tet[k] < 3 ? (half == 0 ? b[local] : m[local]) : (half == 0 ? m[local] : t[local]);
+        }
+        if ((q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]) == 0) continue;
+        for (int x : input->faces_touching_tet(q)) touching.push_back(x);
+      }
+    std::sort(touching.begin(), touching.end());
+    touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
+    for (int x : touching) {  // I2
+      const Eigen::Vector3d p0 = input->V().row(input->F()(x, 0)),
+                            p1 = input->V().row(input->F()(x, 1)),
+                            p2 = input->V().row(input->F()(x, 2));
+      const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+      for (int k = 0; k < 3; ++k) {
+        if (s[k]) continue;
+        const Eigen::Vector3d pillar = t[k] - b[k];
+        const double d = n.dot(pillar);
+        if (!(d > 0 && d * d > section_cos * section_cos * n.squaredNorm() * pillar.squaredNorm()))
+          return false;
+      }
+    }
+    return !touching.empty();
+  }
+
+ protected:
+  bool collapse_edge_before(const Tuple& t) override { return !singular[t.vid]; }
+  bool invariants(const OperationRecord& r) override {
+    std::vector<int> old_union, new_union, touching;
+    for (Id f : r.old_cells) old_union.insert(old_union.end(), track[f].begin(), track[f].end());
+    for (Id f : r.new_cells) {
+      if (!prism_ok(f, touching)) return false;
+      track.set(f, touching);
+      new_union.insert(new_union.end(), touching.begin(), touching.end());
+    }
+    std::sort(old_union.begin(), old_union.end());
+    old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
+    std::sort(new_union.begin(), new_union.end());
+    new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
+    // Every input face the removed prisms touched is still inside one of the new ones.
+    return std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end());
+  }
+};
+
+}  // namespace
+
+Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const SimplifyOptions& options,
+                     SimplifyStats& stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const InputSurfaceIndex index(input.V, input.F);
+  ShellMesh m;
+  m.input = &index;
+  m.section_cos = options.section_cos;
+  const int nv = int(shell.mid.rows()), nf = int(shell.F.rows());
+  std::vector<TriMesh::Cell> cells(nf);
+  for (int f = 0; f < nf; ++f) cells[f] = {Id(shell.F(f, 0)), Id(shell.F(f, 1)), Id(shell.F(f, 2))};
+  m.initialize(std::size_t(nv), cells);
+  for (int v = 0; v < nv; ++v) {
+    m.base.set(Id(v), shell.base.row(v).transpose());
+    m.mid.set(Id(v), shell.mid.row(v).transpose());
+    m.top.set(Id(v), shell.top.row(v).transpose());
+    m.singular.set(Id(v), shell.singular[v]);
+    m.input_vertex.set(Id(v), shell.input_vertex[v]);
+  }
+  std::vector<int> touching;
+  for (int f = 0; f < nf; ++f) {
+    m.prism_ok(Id(f), touching);
+    m.track.set(Id(f), touching);
+  }
+  stats.faces_before = nf;
+
+  using Pass = editing::ExecutePass<TriMesh>;
+  auto length2 = [&m](const TriMesh::Tuple& t) {
+    return (m.mid[t.vid] - m.mid[m.other_vertex(t)]).squaredNorm();
+  };
+  for (int round = 0; round < options.rounds; ++round) {
+    Pass pass;
+    pass.num_threads = options.threads;
+    pass.position = [&m](Id v) { return m.mid[v]; };
+    pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
+      return m.collapse_edge(t);
+    };
+    pass.priority = [length2](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
+      return -length2(t);
+    };
+    pass.should_process = [length2](const TriMesh&, const Pass::Work& w, double p) {
+      return -length2(w.second) == p;
+    };
+    pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
+                                      const TriMesh::Tuple& kept) {
+      std::vector<Pass::Work> work;
+      for (const auto& e : m.vertex_edges(kept.vid)) {
+        work.emplace_back("collapse", e);
+        work.emplace_back("collapse", m.switch_vertex(e));
+      }
+      return work;
+    };
+    std::vector<Pass::Work> work;
+    for (const auto& e : m.get_edges()) {
+      work.emplace_back("collapse", e);
+      work.emplace_back("collapse", m.switch_vertex(e));
+    }
+    const editing::PassStats s = pass.run(m, work);
+    stats.passes.push_back(s);
+    if (s.succeeded == 0) break;
+  }
+
+  m.consolidate();
+  Shell out;
+  const int mv = int(m.vertex_capacity());
+  out.base.resize(mv, 3);
+  out.mid.resize(mv, 3);
+  out.top.resize(mv, 3);
+  out.singular.resize(mv);
+  out.input_vertex.resize(mv);
+  for (int v = 0; v < mv; ++v) {
+    out.base.row(v) = m.base[Id(v)].transpose();
+    out.mid.row(v) = m.mid[Id(v)].transpose();
+    out.top.row(v) = m.top[Id(v)].transpose();
+    out.singular[v] = m.singular[Id(v)];
+    out.input_vertex[v] = m.input_vertex[Id(v)];
+  }
+  const auto faces = m.cells_array();
+  out.F.resize(int(faces.size()), 3);
+  out.face_parent.resize(faces.size());
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) out.F(int(f), k) = int(faces[f][k]);
+    const auto& tr = m.track[Id(f)];
+    out.face_parent[f] = tr.empty() ? -1 : tr.front();
+  }
+  stats.faces_after = int(faces.size());
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace curvefem::meshing::shell

@@ -1,0 +1,144 @@
+#include "meshing/shell/verify.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <set>
+
+#include "meshing/shell/prism_positivity.hpp"
+#include "meshing/shell/projection.hpp"
+#include "meshing/shell/shell_geometry.hpp"
+#include "meshing/shell/shell_intersection.hpp"
+
+namespace curvefem::meshing::shell {
+
+ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ShellVerification r;
+  const int nf = int(shell.F.rows()), nv = int(shell.mid.rows());
+  r.faces = nf;
+  auto row = [](const Eigen::MatrixXd& M, int v) { return Eigen::Vector3d(M.row(v)); };
+
+  // Positivity.
+  for (int f = 0; f < nf; ++f) {
+    std::array<Eigen::Vector3d, 3> b, m, t;
+    std::array<bool, 3> s;
+    for (int k = 0; k < 3; ++k) {
+      const int v = shell.F(f, k);
+      b[k] = row(shell.base, v);
+      m[k] = row(shell.mid, v);
+      t[k] = row(shell.top, v);
+      s[k] = shell.singular[v];
+    }
+    if (!shell_face_positive(b, m, t, s)) ++r.non_positive_faces;
+  }
+
+  // Separation, from the input side: an index over all base and top triangles. A singular
+  // vertex carries its input vertex id in both, so contact there is recognized as a pinch;
+  // every other cage vertex gets an id no input vertex has.
+  {
+    const int ni = input.num_vertices();
+    Eigen::MatrixXd cage(2 * nv, 3);
+    cage << shell.base, shell.top;
+    Eigen::MatrixXd cage_v(ni + 2 * nv, 3);
+    cage_v.topRows(ni) = input.V;
+    cage_v.bottomRows(2 * nv) = cage;
+    Eigen::MatrixXi cf(2 * nf, 3);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int v = shell.F(f, k);
+        const bool pinch = shell.singular[v] && shell.input_vertex[v] >= 0;
+        cf(f, k) = pinch ? shell.input_vertex[v] : ni + v;
+        cf(nf + f, k) = pinch ? shell.input_vertex[v] : ni + nv + v;
+      }
+    const InputSurfaceIndex cage_index(cage_v, cf);
+    std::vector<char> singular_input(ni, 0);
+    for (int v = 0; v < nv; ++v)
+      if (shell.singular[v] && shell.input_vertex[v] >= 0)
+        singular_input[shell.input_vertex[v]] = 1;
+    for (int f = 0; f < input.num_faces(); ++f) {
+      std::array<Eigen::Vector3d, 3> tri;
+      std::array<bool, 3> s;
+      const Eigen::Vector3i ids = input.F.row(f);
+      for (int k = 0; k < 3; ++k) {
+        tri[k] = input.V.row(input.F(f, k));
+        s[k] = singular_input[input.F(f, k)];
+      }
+      if (cage_index.triangle_intersects(tri, s, ids)) ++r.intersecting_input_faces;
+    }
+  }
+
+  // Section condition. Only input faces whose normal fails the pillar test can violate it, so
+  // the exact touching test runs for those candidates alone.
+  {
+    const InputSurfaceIndex index(input.V, input.F);
+    for (int f = 0; f < nf; ++f) {
+      const Eigen::Vector3i F = shell.F.row(f);
+      const int rot = min_rotation(F);
+      const bool type_a = is_type_a(F);
+      Eigen::AlignedBox3d box;
+      std::vector<std::array<Eigen::Vector3d, 4>> tets;
+      for (int half = 0; half < 2; ++half)
+        for (const auto& tet : split_tets(type_a)) {
+          std::array<Eigen::Vector3d, 4> c;
+          for (int k = 0; k < 4; ++k) {
+            const int v = F[(rot + tet[k] % 3) % 3];
+            const Eigen::MatrixXd& M = tet[k] < 3 ? (half == 0 ? shell.base : shell.mid)
+                                                  : (half == 0 ? shell.mid : shell.top);
+            c[k] = row(M, v);
+            box.extend(c[k]);
+          }
+          if ((c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) == 0) continue;  // pinched
+          tets.push_back(c);
+        }
+      bool ok = true;
+      for (int t : index.faces_in_box(box.min(), box.max())) {
+        const Eigen::Vector3d a = input.V.row(input.F(t, 0)), b = input.V.row(input.F(t, 1)),
+                              c = input.V.row(input.F(t, 2));
+        const Eigen::Vector3d n = (b - a).cross(c - a);
+        bool transversal = true;
+        for (int k = 0; k < 3 && transversal; ++k) {
+          const int v = F[k];
+          if (!shell.singular[v]) transversal = n.dot(row(shell.top, v) - row(shell.base, v)) > 0;
+        }
+        if (transversal) continue;
+        for (const auto& tet : tets)
+          if (index.face_touches_tet(t, tet)) {
+            ok = false;
+            break;
+          }
+        if (!ok) break;
+      }
+      if (!ok) ++r.non_section_faces;
+    }
+  }
+
+  // Roundtrip of every input vertex through P⁻¹ and P.
+  {
+    const ShellProjection projection(shell, input);
+    const double unit = bbox_longest_edge(input.V);
+    std::vector<char> referenced(input.num_vertices(), 0);
+    for (int f = 0; f < input.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) referenced[input.F(f, k)] = 1;
+    for (int v = 0; v < input.num_vertices(); ++v) {
+      if (!referenced[v]) continue;
+      const Eigen::Vector3d x = input.V.row(v);
+      const auto q = projection.unproject(x);
+      if (!q) {
+        ++r.roundtrip_failures;
+        continue;
+      }
+      const auto back = projection.project(*q);
+      if (!back) {
+        ++r.roundtrip_failures;
+        continue;
+      }
+      r.roundtrip_max_error_rel =
+          std::max(r.roundtrip_max_error_rel, (back->position - x).norm() / unit);
+    }
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace curvefem::meshing::shell

@@ -1,0 +1,33 @@
+#pragma once
+// Independent verification of a shell (reference-notes §4.7): code paths separate from the
+// construction check every claim the shell makes and report counts.
+//   positive      every half-prism passes the exact 12-tet test (24 per face)
+//   separated     no input triangle intersects a base or top triangle (queried from the input
+//                 side against an index of the base/top triangles; contact at pinch points only)
+//   section       for every prism, every input triangle touching its canonical split tets has a
+//                 normal making a positive dot product with every non-singular pillar, so every
+//                 fiber crosses the input transversally and at most once (thesis §4.4, I2)
+//   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge
+
+#include "meshing/core/surface_mesh.hpp"
+#include "meshing/shell/shell.hpp"
+
+namespace curvefem::meshing::shell {
+
+struct ShellVerification {
+  int faces = 0;
+  int non_positive_faces = 0;
+  int intersecting_input_faces = 0;
+  int non_section_faces = 0;
+  int roundtrip_failures = 0;  // input vertices P⁻¹ or P could not map
+  double roundtrip_max_error_rel = 0;
+  double seconds = 0;
+  bool positive() const { return non_positive_faces == 0; }
+  bool separated() const { return intersecting_input_faces == 0; }
+  bool section() const { return non_section_faces == 0; }
+  bool valid() const { return positive() && separated() && section() && roundtrip_failures == 0; }
+};
+
+ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input);
+
+}  // namespace curvefem::meshing::shell

@@ -1,0 +1,474 @@
+// The two predicates of the prismatic shell: the per-vertex extrusion direction (the QP of the
+// "most visible normal") and exact prism positivity (the 12 tets of the 3-tet splits).
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
+#include "meshing/shell/extrusion_direction.hpp"
+#include "meshing/shell/prism_positivity.hpp"
+
+namespace sh = curvefem::meshing::shell;
+using Eigen::Vector3d;
+
+namespace {
+
+Vector3d face_normal(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, int f) {
+  const Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+  return (b - a).cross(c - a).normalized();
+}
+
+Vector3d random_unit(std::mt19937& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  Vector3d v;
+  do v = Vector3d(g(rng), g(rng), g(rng));
+  while (v.norm() < 1e-3);
+  return v.normalized();
+}
+
+// `count` unit normals within `half_angle` of `axis`.
+std::vector<Vector3d> random_cone(std::mt19937& rng, const Vector3d& axis, double half_angle,
+                                  int count) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  std::vector<Vector3d> n;
+  for (int i = 0; i < count; ++i) {
+    const double theta = half_angle * std::sqrt(u(rng)), phi = 2 * M_PI * u(rng);
+    n.push_back(
+        (std::cos(theta) * axis + std::sin(theta) * (std::cos(phi) * e1 + std::sin(phi) * e2))
+            .normalized());
+  }
+  return n;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- extrusion directions (QP)
+
+TEST(ExtrusionDirection, FlatPatchGivesTheNormal) {
+  Vector3d d;
+  ASSERT_TRUE(sh::most_visible_direction({Vector3d::UnitZ(), Vector3d::UnitZ(), Vector3d::UnitZ()},
+                                         1e-2, d));
+  EXPECT_EQ(d, Vector3d::UnitZ());
+  const Vector3d n = Vector3d(1, 2, 2).normalized();
+  ASSERT_TRUE(sh::most_visible_direction({n, n, n, n, n}, 1e-2, d));
+  EXPECT_LE((d - n).norm(), 4e-16);
+
+  // A planar open grid: every vertex (corners, border, interior) gets exactly +z.
+  const int k = 4;
+  Eigen::MatrixXd V((k + 1) * (k + 1), 3);
+  Eigen::MatrixXi F(2 * k * k, 3);
+  for (int i = 0; i <= k; ++i)
+    for (int j = 0; j <= k; ++j) V.row(i * (k + 1) + j) << 0.3 * j, 0.7 * i, 2.0;
+  for (int i = 0, f = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      const int a = i * (k + 1) + j, b = a + 1, c = a + k + 2, e = a + k + 1;
+      F.row(f++) << a, b, c;
+      F.row(f++) << a, c, e;
+    }
+  const sh::ExtrusionDirections dirs = sh::extrusion_directions(V, F);
+  EXPECT_EQ(dirs.singular_count, 0);
+  for (int v = 0; v < V.rows(); ++v) EXPECT_EQ(Vector3d(dirs.N.row(v)), Vector3d::UnitZ()) << v;
+}
+
+TEST(ExtrusionDirection, CubeCornerGivesTheDiagonal) {
+  Vector3d d;
+  ASSERT_TRUE(sh::most_visible_direction(
+      {Vector3d::UnitX(), Vector3d::UnitY(), Vector3d::UnitY(), Vector3d::UnitZ()}, 1e-2, d));
+  EXPECT_LE((d - Vector3d(1, 1, 1) / std::sqrt(3.0)).norm(), 1e-15);
+  ASSERT_TRUE(sh::detail::most_visible_direction_exact(
+      {Vector3d::UnitX(), Vector3d::UnitY(), Vector3d::UnitZ()}, 1e-2, d));
+  EXPECT_LE((d - Vector3d(1, 1, 1) / std::sqrt(3.0)).norm(), 1e-15);
+  // A cube edge: the bisector.
+  ASSERT_TRUE(sh::most_visible_direction({Vector3d::UnitX(), -Vector3d::UnitY()}, 1e-2, d));
+  EXPECT_LE((d - Vector3d(1, -1, 0) / std::sqrt(2.0)).norm(), 1e-15);
+}
+
+TEST(ExtrusionDirection, SingularVertices) {
+  Vector3d d(1, 1, 1);
+  // Normals ±z: infeasible, for both solvers.
+  EXPECT_FALSE(sh::most_visible_direction({Vector3d::UnitZ(), -Vector3d::UnitZ()}, 1e-2, d));
+  EXPECT_EQ(d, Vector3d::Zero());
+  EXPECT_FALSE(
+      sh::detail::most_visible_direction_exact({Vector3d::UnitZ(), -Vector3d::UnitZ()}, 1e-2, d));
+  EXPECT_EQ(
+      sh::detail::most_visible_direction_fast({Vector3d::UnitZ(), -Vector3d::UnitZ()}, 1e-2, d),
+      sh::detail::FastOutcome::singular);
+  // The origin inside the hull of four normals (a saddle-like fan).
+  const std::vector<Vector3d> saddle = {
+      Vector3d(1, 0, 0.2).normalized(), Vector3d(0, 1, -0.2).normalized(),
+      Vector3d(-1, 0, 0.2).normalized(), Vector3d(0, -1, -0.2).normalized()};
+  EXPECT_FALSE(sh::most_visible_direction(saddle, 1e-2, d));
+  EXPECT_FALSE(sh::detail::most_visible_direction_exact(saddle, 1e-2, d));
+  // Feasible but too flat: two faces at 89.7° from the optimum (cos = 0.005 < 0.01); at 88.9°
+  // (cos = 0.02) the vertex is regular with direction +z.
+  for (double c : {0.005, 0.02}) {
+    const double s = std::sqrt(1 - c * c);
+    const std::vector<Vector3d> wedge = {Vector3d(s, 0, c), Vector3d(-s, 0, c)};
+    EXPECT_EQ(sh::most_visible_direction(wedge, 1e-2, d), c > 0.01) << c;
+    EXPECT_EQ(sh::detail::most_visible_direction_exact(wedge, 1e-2, d), c > 0.01) << c;
+    if (c > 0.01) {
+      EXPECT_LE((d - Vector3d::UnitZ()).norm(), 1e-15);
+    }
+  }
+  EXPECT_FALSE(sh::most_visible_direction({}, 1e-2, d));
+}
+
+TEST(ExtrusionDirection, FastPathMatchesExactSolver) {
+  std::mt19937 rng(20240611);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int fast_direction = 0, fast_singular = 0, undecided = 0, compared = 0;
+  double worst = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const Vector3d axis = random_unit(rng);
+    // Mostly feasible cones (half-angle up to 88°), some wider than a hemisphere.
+    const double half_angle = (trial % 5 == 4 ? 1.3 + 1.2 * u(rng) : 1.54 * u(rng));
+    const int count = 3 + static_cast<int>(u(rng) * 10);
+    std::vector<Vector3d> n = random_cone(rng, axis, half_angle, count);
+    if (trial % 4 == 3) {  // near-duplicates, as on flat or faceted regions
+      const int copies = 1 + static_cast<int>(u(rng) * 3);
+      for (int c = 0; c < copies; ++c) {
+        const Vector3d base = n[static_cast<int>(u(rng) * n.size())];
+        const double scale = std::pow(10.0, -4 - 12 * u(rng));
+        n.push_back((base + scale * random_unit(rng)).normalized());
+      }
+    }
+    Vector3d exact, fast, combined;
+    const bool exact_regular = sh::detail::most_visible_direction_exact(n, 1e-2, exact);
+    const auto outcome = sh::detail::most_visible_direction_fast(n, 1e-2, fast);
+    const bool regular = sh::most_visible_direction(n, 1e-2, combined);
+    ASSERT_EQ(regular, exact_regular) << trial;
+    if (regular) {
+      ASSERT_LE((combined - exact).norm(), 1e-12) << trial;
+      ASSERT_NEAR(combined.norm(), 1.0, 1e-15);
+      for (const Vector3d& nf : n) ASSERT_GE(nf.dot(combined), 1e-2);
+    }
+    switch (outcome) {
+      case sh::detail::FastOutcome::direction:
+        ++fast_direction;
+        ASSERT_TRUE(exact_regular) << trial;
+        worst = std::max(worst, (fast - exact).norm());
+        ASSERT_LE((fast - exact).norm(), 1e-12) << trial;
+        ++compared;
+        break;
+      case sh::detail::FastOutcome::singular:
+        ++fast_singular;
+        ASSERT_FALSE(exact_regular) << trial;
+        break;
+      case sh::detail::FastOutcome::undecided:
+        ++undecided;
+        break;
+    }
+  }
+  // The fast path decides nearly everything itself; both kinds of vertices occur.
+  EXPECT_GE(fast_direction, 2000);
+  EXPECT_GE(fast_singular, 150);
+  EXPECT_LE(undecided, 60);  // near-singular vertices (small ‖y‖) go to the exact solver
+  EXPECT_LE(worst, 1e-12);
+  std::printf("fast: %d directions, %d singular, %d undecided; worst |fast - exact| = %.2e\n",
+              fast_direction, fast_singular, undecided, worst);
+}
+
+TEST(ExtrusionDirection, IcosphereIsRegularAndRadial) {
+  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  const sh::ExtrusionDirections dirs = sh::extrusion_directions(sphere.V, sphere.F);
+  ASSERT_EQ(dirs.N.rows(), sphere.V.rows());
+  EXPECT_EQ(dirs.singular_count, 0);
+  double min_dot = 1;
+  for (int f = 0; f < sphere.F.rows(); ++f) {
+    const Vector3d n = face_normal(sphere.V, sphere.F, f);
+    for (int c = 0; c < 3; ++c) min_dot = std::min(min_dot, n.dot(dirs.N.row(sphere.F(f, c))));
+  }
+  EXPECT_GE(min_dot, 0.9);
+  for (int v = 0; v < sphere.V.rows(); ++v) {
+    EXPECT_EQ(dirs.singular[v], 0);
+    EXPECT_NEAR(dirs.N.row(v).norm(), 1.0, 1e-15);
+    EXPECT_LE((dirs.N.row(v) - sphere.V.row(v).normalized()).norm(), 1e-2) << v;
+  }
+}
+
+TEST(ExtrusionDirection, BoxCornersEdgesAndFaces) {
+  const Vector3d lo(-1, -2, -3), hi(1, 2, 3);
+  const curvefem::SurfaceMesh box = curvefem::make_box(lo, hi, 2);
+  const sh::ExtrusionDirections dirs = sh::extrusion_directions(box.V, box.F);
+  EXPECT_EQ(dirs.singular_count, 0);
+  int corners = 0;
+  for (int v = 0; v < box.V.rows(); ++v) {
+    Vector3d expected = Vector3d::Zero();
+    for (int c = 0; c < 3; ++c) {
+      if (box.V(v, c) == lo[c]) expected[c] = -1;
+      if (box.V(v, c) == hi[c]) expected[c] = 1;
+    }
+    corners += expected.cwiseAbs().sum() == 3 ? 1 : 0;
+    expected.normalize();  // corner (±1,±1,±1)/√3, edge (±1,±1,0)/√2, face ±axis
+    EXPECT_LE((dirs.N.row(v).transpose() - expected).norm(), 1e-15) << v;
+  }
+  EXPECT_EQ(corners, 8);
+}
+
+TEST(ExtrusionDirection, DegenerateUnreferencedAndInvalidInput) {
+  // Two faces; the second is degenerate (collinear), vertex 4 is unreferenced.
+  Eigen::MatrixXd V(5, 3);
+  V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0, 7, 7, 7;
+  Eigen::MatrixXi F(2, 3);
+  F << 0, 1, 2, 0, 3, 1;
+  const sh::ExtrusionDirections dirs = sh::extrusion_directions(V, F);
+  EXPECT_EQ(dirs.singular_count, 3);  // 0, 1, 3 touch the degenerate face
+  EXPECT_EQ(dirs.singular, (std::vector<char>{1, 1, 0, 1, 0}));
+  EXPECT_EQ(Vector3d(dirs.N.row(2)), Vector3d::UnitZ());
+  EXPECT_EQ(Vector3d(dirs.N.row(4)), Vector3d::Zero());
+  EXPECT_EQ(Vector3d(dirs.N.row(0)), Vector3d::Zero());
+  F(1, 2) = 5;
+  EXPECT_THROW(sh::extrusion_directions(V, F), curvefem::InputError);
+}
+
+TEST(ExtrusionDirection, IdenticalAtOneAndTwoThreads) {
+  curvefem::SurfaceMesh mesh = curvefem::make_icosphere(3);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.02, 0.02);
+  for (int v = 0; v < mesh.V.rows(); ++v)
+    for (int c = 0; c < 3; ++c) mesh.V(v, c) += u(rng);
+  sh::ExtrusionDirections one, two;
+  tbb::task_arena(1).execute([&] { one = sh::extrusion_directions(mesh.V, mesh.F); });
+  tbb::task_arena(2).execute([&] { two = sh::extrusion_directions(mesh.V, mesh.F); });
+  EXPECT_EQ(one.singular, two.singular);
+  EXPECT_EQ(one.singular_count, two.singular_count);
+  EXPECT_TRUE(one.N == two.N);
+}
+
+// ---------------------------------------------------------------- prism positivity
+
+namespace {
+
+using Tet = std::array<int, 4>;
+
+// The right prism: base (0,0,0), (1,0,0), (0,1,0), top = base + (0,0,1).
+std::array<Vector3d, 6> right_prism() {
+  return {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+          Vector3d(0, 0, 1), Vector3d(1, 0, 1), Vector3d(0, 1, 1)};
+}
+
+double orient(const std::array<Vector3d, 6>& p, const Tet& t) {
+  return (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).dot(p[t[3]] - p[t[0]]);
+}
+
+// Oriented tet as (sorted corners, parity of the sorting permutation).
+std::pair<Tet, int> oriented_key(Tet t) {
+  int parity = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j + 1 < 4 - i; ++j)
+      if (t[j] > t[j + 1]) {
+        std::swap(t[j], t[j + 1]);
+        parity ^= 1;
+      }
+  return {t, parity};
+}
+
+struct SplitEnumeration {
+  std::set<std::pair<Tet, int>> tets;  // union over the valid splits, oriented positively
+  int valid_choices = 0, cyclic_choices = 0;
+  std::vector<std::array<int, 3>> cyclic;  // diagonal choices without a split
+};
+
+// Brute force: each side quad gets one of its two diagonals; a split is 3 tets on the 6 corners,
+// non-degenerate on the right prism, whose faces are exactly the 8 boundary triangles (once each)
+// plus interior triangles shared by two tets, and whose volumes add up to the volume of a
+// (non-right) frustum-shaped prism.
+SplitEnumeration enumerate_splits() {
+  const std::array<std::array<int, 4>, 3> quads = {{{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}};
+  const auto right = right_prism();
+  std::array<Vector3d, 6> frustum;  // top = 0.6 · base + offset: planar side quads, convex
+  for (int i = 0; i < 3; ++i) {
+    frustum[i] = right[i];
+    frustum[i + 3] = 0.6 * right[i] + Vector3d(0.1, 0.15, 1.3);
+  }
+  const double a0 = 0.5, a1 = 0.5 * 0.36, h = 1.3;
+  const double frustum_volume = h / 3 * (a0 + a1 + std::sqrt(a0 * a1));
+
+  std::vector<Tet> candidates;  // 4-subsets that are not degenerate on the right prism
+  for (int a = 0; a < 6; ++a)
+    for (int b = a + 1; b < 6; ++b)
+      for (int c = b + 1; c < 6; ++c)
+        for (int d = c + 1; d < 6; ++d) {
+          Tet t{a, b, c, d};
+          if (std::abs(orient(right, t)) < 1e-12) continue;
+          if (orient(right, t) < 0) std::swap(t[2], t[3]);
+          candidates.push_back(t);
+        }
+  EXPECT_EQ(candidates.size(), 12u);  // 15 minus the 3 side quads
+
+  SplitEnumeration out;
+  for (int choice = 0; choice < 8; ++choice) {
+    std::map<std::array<int, 3>, int> boundary;
+    auto tri = [](int a, int b, int c) {
+      std::array<int, 3> t{a, b, c};
+      std::sort(t.begin(), t.end());
+      return t;
+    };
+    boundary[tri(0, 1, 2)] = 0;
+    boundary[tri(3, 4, 5)] = 0;
+    std::array<int, 3> diagonal_start{};
+    for (int q = 0; q < 3; ++q) {
+      const auto& Q = quads[q];
+      if (choice & (1 << q)) {  // diagonal Q0–Q2
+        boundary[tri(Q[0], Q[1], Q[2])] = 0;
+        boundary[tri(Q[0], Q[2], Q[3])] = 0;
+        diagonal_start[q] = Q[0];
+      } else {  // diagonal Q1–Q3
+        boundary[tri(Q[0], Q[1], Q[3])] = 0;
+        boundary[tri(Q[1], Q[2], Q[3])] = 0;
+        diagonal_start[q] = Q[1];
+      }
+    }
+    int splits = 0;
+    const int m = static_cast<int>(candidates.size());
+    for (int i = 0; i < m; ++i)
+      for (int j = i + 1; j < m; ++j)
+        for (int k = j + 1; k < m; ++k) {
+          std::map<std::array<int, 3>, int> faces;
+          double volume = 0;
+          for (int t : {i, j, k}) {
+            const Tet& T = candidates[t];
+            for (int skip = 0; skip < 4; ++skip) {
+              std::array<int, 3> f{};
+              for (int c = 0, n = 0; c < 4; ++c)
+                if (c != skip) f[n++] = T[c];
+              std::sort(f.begin(), f.end());
+              ++faces[f];
+            }
+            volume += orient(frustum, T) / 6;
+          }
+          bool ok = true;
+          for (const auto& [f, count] : faces) {
+            const bool on_boundary = boundary.count(f) > 0;
+            if ((on_boundary && count != 1) || (!on_boundary && count != 2)) ok = false;
+          }
+          for (const auto& [f, unused] : boundary)
+            if (!faces.count(f)) ok = false;
+          if (!ok) continue;
+          EXPECT_NEAR(volume, frustum_volume, 1e-12);
+          ++splits;
+          for (int t : {i, j, k}) out.tets.insert(oriented_key(candidates[t]));
+        }
+    EXPECT_LE(splits, 1) << choice;
+    if (splits == 1) {
+      ++out.valid_choices;
+    } else {
+      ++out.cyclic_choices;
+      out.cyclic.push_back(diagonal_start);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(PrismPositivity, TuplesArePositiveOnTheRightPrismAndGroupedByPillar) {
+  const auto& tets = sh::prism_tets();
+  const auto right = right_prism();
+  std::set<std::pair<Tet, int>> keys;
+  for (int k = 0; k < 12; ++k) {
+    EXPECT_DOUBLE_EQ(orient(right, tets[k]), 1.0) << k;  // 6 · (volume 1/6)
+    const int pillar = k / 4;
+    EXPECT_NE(std::count(tets[k].begin(), tets[k].end(), pillar), 0) << k;
+    EXPECT_NE(std::count(tets[k].begin(), tets[k].end(), pillar + 3), 0) << k;
+    keys.insert(oriented_key(tets[k]));
+  }
+  EXPECT_EQ(keys.size(), 12u);
+  EXPECT_TRUE(sh::prism_positive(right));
+  std::array<Vector3d, 6> mirrored = right;  // z → −z: every tet negative
+  for (auto& p : mirrored) p.z() = -p.z();
+  EXPECT_FALSE(sh::prism_positive(mirrored));
+}
+
+TEST(PrismPositivity, TuplesAreTheTetsOfTheValidSplits) {
+  const SplitEnumeration splits = enumerate_splits();
+  EXPECT_EQ(splits.valid_choices, 6);
+  EXPECT_EQ(splits.cyclic_choices, 2);
+  // The two cyclic choices: diagonals 0–4, 1–5, 2–3 and 1–3, 2–4, 0–5.
+  std::set<std::array<int, 3>> cyclic(splits.cyclic.begin(), splits.cyclic.end());
+  EXPECT_EQ(cyclic, (std::set<std::array<int, 3>>{{0, 1, 2}, {1, 2, 0}}));
+  std::set<std::pair<Tet, int>> listed;
+  for (const Tet& t : sh::prism_tets()) listed.insert(oriented_key(t));
+  EXPECT_EQ(splits.tets.size(), 12u);
+  EXPECT_EQ(listed, splits.tets);
+}
+
+TEST(PrismPositivity, RandomPrismsMatchAllSplitsPositive) {
+  const SplitEnumeration splits = enumerate_splits();
+  std::vector<Tet> tets;
+  for (const auto& [t, parity] : splits.tets) {
+    Tet s = t;
+    if (parity) std::swap(s[2], s[3]);
+    tets.push_back(s);
+  }
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int positive = 0, negative = 0, skipped = 0;
+  const auto right = right_prism();
+  for (int trial = 0; trial < 5000; ++trial) {
+    std::array<Vector3d, 6> p;
+    for (int i = 0; i < 6; ++i) {
+      const double noise = i < 3 ? 0.25 : 0.6;
+      p[i] = right[i] + noise * Vector3d(u(rng), u(rng), u(rng));
+    }
+    bool expected = true, degenerate = false;
+    for (const Tet& t : tets) {
+      const double o = orient(p, t);
+      if (std::abs(o) < 1e-6) degenerate = true;
+      if (o <= 0) expected = false;
+    }
+    if (degenerate) {
+      ++skipped;
+      continue;
+    }
+    ASSERT_EQ(sh::prism_positive(p), expected) << trial;
+    (expected ? positive : negative) += 1;
+  }
+  EXPECT_GE(positive, 500);
+  EXPECT_GE(negative, 500);
+  EXPECT_LE(skipped, 50);
+}
+
+TEST(PrismPositivity, SingularPillarSkipsItsBlock) {
+  std::array<Vector3d, 6> p = right_prism();
+  p[3] = p[0];  // pillar 0 has zero length
+  EXPECT_TRUE(sh::prism_positive(p, {true, false, false}));
+  EXPECT_FALSE(sh::prism_positive(p));  // block 0 is degenerate
+  for (int k = 4; k < 12; ++k) EXPECT_GT(orient(p, sh::prism_tets()[k]), 0.0) << k;
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(orient(p, sh::prism_tets()[k]), 0.0) << k;
+  p[4].z() = -0.5;  // the rest must still be positive
+  EXPECT_FALSE(sh::prism_positive(p, {true, false, false}));
+}
+
+TEST(PrismPositivity, ShellFaceChecksBothHalves) {
+  std::array<Vector3d, 3> base, mid, top;
+  const auto right = right_prism();
+  for (int i = 0; i < 3; ++i) {
+    base[i] = right[i];
+    mid[i] = right[i] + Vector3d(0, 0, 1);
+    top[i] = right[i] + Vector3d(0, 0, 2);
+  }
+  EXPECT_TRUE(sh::shell_face_positive(base, mid, top));
+  auto low = mid;
+  low[0].z() = -0.5;  // mid below the base at corner 0: the lower half inverts
+  EXPECT_FALSE(sh::shell_face_positive(base, low, top));
+  auto high = mid;
+  high[1].z() = 2.5;  // mid above the top at corner 1: the upper half inverts
+  EXPECT_FALSE(sh::shell_face_positive(base, high, top));
+  // A singular vertex: base = mid = top at corner 2.
+  base[2] = mid[2];
+  top[2] = mid[2];
+  EXPECT_TRUE(sh::shell_face_positive(base, mid, top, {false, false, true}));
+  EXPECT_FALSE(sh::shell_face_positive(base, mid, top));
+}
