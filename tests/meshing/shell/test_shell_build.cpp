@@ -9,6 +9,7 @@
 #include "meshing/core/primitives.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
+#include "meshing/shell/simplify.hpp"
 #include "meshing/shell/verify.hpp"
 
 namespace sh = curvefem::meshing::shell;
