@@ -1,5 +1,6 @@
 #include "meshing/editing/scheduler.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -146,10 +147,27 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
       for (std::size_t v = 0; v < part.size(); ++v) part[v] = int(v * threads / part.size());
     }
   }
-  for (const auto& [name, t] : work) {
-    const int op = op_index(name);
+  // Seeding: priorities are computed in parallel (read-only), then pushed in input order.
+  std::vector<int> ops(work.size());
+  for (std::size_t i = 0; i < work.size(); ++i) ops[i] = op_index(work[i].first);
+  std::vector<double> priorities(work.size());
+  auto seed = [&](std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i) priorities[i] = prio(ops[i], work[i].second);
+  };
+  if (threads > 1) {
+    tbb::task_arena seeding(threads);
+    seeding.execute([&] {
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, work.size(), 4096),
+          [&](const tbb::blocked_range<std::size_t>& r) { seed(r.begin(), r.end()); });
+    });
+  } else {
+    seed(0, work.size());
+  }
+  for (std::size_t i = 0; i < work.size(); ++i) {
+    const Tuple& t = work[i].second;
     const int p = threads > 1 && t.vid < part.size() ? part[t.vid] : 0;
-    queues[p].push(Entry{prio(op, t), op, t, 0});
+    queues[p].push(Entry{priorities[i], ops[i], t, 0});
   }
 
   std::atomic<bool> stop{false};

@@ -1,5 +1,7 @@
 #include "meshing/editing/tri_mesh.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 
 #include "meshing/core/error.hpp"
@@ -72,17 +74,36 @@ bool TriMesh::is_boundary_vertex(Id v) const {
 }
 
 std::vector<TriMesh::Tuple> TriMesh::get_edges() const {
-  std::vector<Tuple> out;
-  for (std::size_t f = 0; f < cell_capacity(); ++f) {
-    if (is_cell_removed(Id(f))) continue;
-    const Cell& c = cell(Id(f));
-    for (int le = 0; le < 3; ++le) {
-      const Id a = c[(le + 1) % 3], b = c[(le + 2) % 3];
-      const Id e[2] = {a, b};
-      if (cells_containing(std::span<const Id>(e, 2)).front() == Id(f))
-        out.push_back(tuple(Id(f), (le + 1) % 3, le));
+  // Each edge is reported by the smallest face containing it; faces are scanned in parallel
+  // blocks and the blocks concatenated in order, so the result is the same as a serial scan.
+  const std::size_t n = cell_capacity();
+  const std::size_t block = 8192, blocks = (n + block - 1) / block;
+  std::vector<std::vector<Tuple>> parts(blocks);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    for (std::size_t f = b * block; f < std::min(n, (b + 1) * block); ++f) {
+      if (is_cell_removed(Id(f))) continue;
+      const Cell& c = cell(Id(f));
+      for (int le = 0; le < 3; ++le) {
+        const Id a = c[(le + 1) % 3], bb = c[(le + 2) % 3];
+        // The smallest face containing (a, bb): scan the shorter incident list.
+        const auto& la = vertex_cells(a);
+        const auto& lb = vertex_cells(bb);
+        const auto& shorter = la.size() < lb.size() ? la : lb;
+        const Id other = la.size() < lb.size() ? bb : a;
+        Id smallest = k_no_id;
+        for (Id g : shorter) {
+          const Cell& gc = cell(g);
+          if (gc[0] == other || gc[1] == other || gc[2] == other) {
+            smallest = g;
+            break;  // incident lists are sorted
+          }
+        }
+        if (smallest == Id(f)) parts[b].push_back(tuple(Id(f), (le + 1) % 3, le));
+      }
     }
-  }
+  });
+  std::vector<Tuple> out;
+  for (auto& p : parts) out.insert(out.end(), p.begin(), p.end());
   return out;
 }
 
