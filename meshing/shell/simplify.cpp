@@ -143,7 +143,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
                                       const TriMesh::Tuple& kept) {
       std::vector<Pass::Work> work;
-      for (const auto& e : m.vertex_edges(kept.vid)) {
+      for (const auto& e : m.edges_of_faces(m.vertex_cells(kept.vid))) {
         work.emplace_back("collapse", e);
         work.emplace_back("collapse", m.switch_vertex(e));
       }

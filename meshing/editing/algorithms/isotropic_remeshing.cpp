@@ -48,7 +48,20 @@ class IsotropicMesh : public SurfaceEditMesh {
       if ((position[u] - position[r.v1]).squaredNorm() > high2) return false;
     return true;
   }
-  bool swap_acceptable(const Tuple& t) const override { return deviation_change(t) < 0; }
+  // Flip toward valence 6, but never create an edge longer than 4/3 L (it would stay: splits
+  // come before flips in a round).
+  bool swap_acceptable(const Tuple& t) const override {
+    if (deviation_change(t) >= 0) return false;
+    const Id a = t.vid, b = other_vertex(t);
+    const Id e[2] = {a, b};
+    const auto faces = cells_containing(std::span<const Id>(e, 2));
+    if (faces.size() != 2) return false;
+    Id opp[2] = {k_no_id, k_no_id};
+    for (int i = 0; i < 2; ++i)
+      for (Id v : cell(faces[i]))
+        if (v != a && v != b) opp[i] = v;
+    return (position[opp[0]] - position[opp[1]]).squaredNorm() <= high2;
+  }
   Eigen::Vector3d smooth_position(Id v) const override {
     const auto ring = one_ring(v);
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -99,7 +112,7 @@ void isotropic_remeshing(SurfaceEditMesh& base, const SurfaceDistance& input, do
       };
       pass.renew_neighbor_tuples = [&m, high2](const TriMesh&, const std::string&,
                                                const TriMesh::Tuple& t) {
-        return edges_where(m, m.vertex_edges(t.vid), "split",
+        return edges_where(m, m.edges_of_faces(m.vertex_cells(t.vid)), "split",
                            [high2](double l2) { return l2 > high2; });
       };
       log.emplace_back("split",
@@ -117,7 +130,7 @@ void isotropic_remeshing(SurfaceEditMesh& base, const SurfaceDistance& input, do
       };
       pass.renew_neighbor_tuples = [&m, low2](const TriMesh&, const std::string&,
                                               const TriMesh::Tuple& t) {
-        return edges_where(m, m.vertex_edges(t.vid), "collapse",
+        return edges_where(m, m.edges_of_faces(m.vertex_cells(t.vid)), "collapse",
                            [low2](double l2) { return l2 < low2; });
       };
       log.emplace_back("collapse",

@@ -28,7 +28,8 @@ void shortest_edge_collapse(SurfaceEditMesh& m, std::size_t target_faces, int th
   pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
                                     const TriMesh::Tuple& kept) {
     std::vector<SurfacePass::Work> work;
-    for (const auto& e : m.vertex_edges(kept.vid)) work.emplace_back("collapse", e);
+    for (const auto& e : m.edges_of_faces(m.vertex_cells(kept.vid)))
+      work.emplace_back("collapse", e);
     return work;
   };
   pass.stopping_criterion = [&m, target_faces](const TriMesh&) {

@@ -36,7 +36,9 @@ class SurfaceEditMesh : public TriMesh {
   double edge_length2(const Tuple& t) const {
     return (position[t.vid] - position[other_vertex(t)]).squaredNorm();
   }
-  int valence(Id v) const { return int(one_ring(v).size()); }
+  // Valence on an edge-manifold surface: faces around v, plus one on the boundary (boundary
+  // vertices are exactly the frozen ones here).
+  int valence(Id v) const { return int(vertex_cells(v).size()) + (frozen[v] ? 1 : 0); }
 
  protected:
   // Placement hooks for the algorithms.
