@@ -72,6 +72,8 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
   check(KSPSetTolerances(ksp, options.rtol, PETSC_DEFAULT, PETSC_DEFAULT, options.max_iterations),
         "KSPSetTolerances");
   check(KSPMonitorSet(ksp, record_residual, &info.residual_history, nullptr), "KSPMonitorSet");
+  // PETSc's options database ($PETSC_OPTIONS, e.g. "-pc_type hypre") may override the defaults.
+  check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
   check(KSPSetUp(ksp), "KSPSetUp");
   info.setup_s = watch.seconds();
   watch.reset();
