@@ -66,30 +66,9 @@ std::unique_ptr<SurfaceEditMesh> make_qslim_mesh() { return std::make_unique<QSl
 void qslim(SurfaceEditMesh& base, std::size_t target_faces, int threads, PassLog& log) {
   auto& m = dynamic_cast<QSlimMesh&>(base);
   m.init_quadrics();
-  SurfacePass pass = make_surface_pass(m, threads);
-  auto cost = [&m](const TriMesh::Tuple& t) { return m.best(t.vid, m.other_vertex(t)).second; };
-  pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
-    return m.collapse_edge(t);
-  };
-  pass.priority = [cost](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
-    return -cost(t);
-  };
-  pass.should_process = [cost](const TriMesh&, const SurfacePass::Work& w, double queued) {
-    return -cost(w.second) == queued;
-  };
-  pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
-                                    const TriMesh::Tuple& kept) {
-    std::vector<SurfacePass::Work> work;
-    for (const auto& e : m.edges_of_faces(m.vertex_cells(kept.vid)))
-      work.emplace_back("collapse", e);
-    return work;
-  };
-  pass.stopping_criterion = [&m, target_faces](const TriMesh&) {
-    return m.num_cells() <= target_faces;
-  };
-  std::vector<SurfacePass::Work> work;
-  for (const auto& e : m.get_edges()) work.emplace_back("collapse", e);
-  log.emplace_back("qslim", pass.run(m, work));
+  run_collapse_pass(
+      m, [&m](const TriMesh::Tuple& t) { return m.best(t.vid, m.other_vertex(t)).second; },
+      target_faces, threads, "qslim", log);
 }
 
 }  // namespace curvefem::meshing::editing

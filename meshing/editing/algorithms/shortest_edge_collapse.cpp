@@ -13,17 +13,18 @@ std::unique_ptr<SurfaceEditMesh> make_shortest_collapse_mesh() {
   return std::make_unique<SurfaceEditMesh>();
 }
 
-void shortest_edge_collapse(SurfaceEditMesh& m, std::size_t target_faces, int threads,
-                            PassLog& log) {
+void run_collapse_pass(SurfaceEditMesh& m, const std::function<double(const TriMesh::Tuple&)>& cost,
+                       std::size_t target_faces, int threads, const std::string& name,
+                       PassLog& log) {
   SurfacePass pass = make_surface_pass(m, threads);
   pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
     return m.collapse_edge(t);
   };
-  pass.priority = [&m](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
-    return -m.edge_length2(t);
+  pass.priority = [&cost](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
+    return -cost(t);
   };
-  pass.should_process = [&m](const TriMesh&, const SurfacePass::Work& w, double queued) {
-    return -m.edge_length2(w.second) == queued;
+  pass.should_process = [&cost](const TriMesh&, const SurfacePass::Work& w, double queued) {
+    return -cost(w.second) == queued;
   };
   pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
                                     const TriMesh::Tuple& kept) {
@@ -37,7 +38,14 @@ void shortest_edge_collapse(SurfaceEditMesh& m, std::size_t target_faces, int th
   };
   std::vector<SurfacePass::Work> work;
   for (const auto& e : m.get_edges()) work.emplace_back("collapse", e);
-  log.emplace_back("collapse", pass.run(m, work));
+  log.emplace_back(name, pass.run(m, work));
+}
+
+void shortest_edge_collapse(SurfaceEditMesh& m, std::size_t target_faces, int threads,
+                            PassLog& log) {
+  run_collapse_pass(
+      m, [&m](const TriMesh::Tuple& t) { return m.edge_length2(t); }, target_faces, threads,
+      "collapse", log);
 }
 
 }  // namespace curvefem::meshing::editing

@@ -2,6 +2,7 @@
 // Internal: the three surface algorithms as functions on a loaded SurfaceEditMesh, each one
 // scheduler configuration per pass (see the .cpp files, which read like their papers).
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +21,13 @@ inline SurfacePass make_surface_pass(SurfaceEditMesh& m, int threads) {
   pass.position = [&m](Id v) { return m.position[v]; };
   return pass;
 }
+
+// Cheapest-first edge collapses until the face budget is met: the pass both decimation
+// algorithms are (they differ in cost and placement only). Entries whose cost changed since they
+// were queued are skipped; a success re-queues every edge of the kept vertex's star.
+void run_collapse_pass(SurfaceEditMesh& m, const std::function<double(const TriMesh::Tuple&)>& cost,
+                       std::size_t target_faces, int threads, const std::string& name,
+                       PassLog& log);
 
 // The mesh type each algorithm needs (QSlim adds quadrics); create with make_*_mesh.
 std::unique_ptr<SurfaceEditMesh> make_shortest_collapse_mesh();
