@@ -7,9 +7,10 @@
 //   4. tangential relaxation: move each vertex towards the centroid of its neighbours within
 //      its tangent plane, then back onto the input surface (closest point).
 // Each step is one scheduler pass; splits and collapses renew the edges around the new vertex,
-// flips renew the edges of the two new faces (each flip lowers the total valence deviation, so
-// the pass terminates).
+// flips renew the improving edges around their four vertices (each flip lowers the total
+// valence deviation, so the pass terminates).
 
+#include <algorithm>
 #include <memory>
 
 #include "meshing/editing/algorithms/surface_passes.hpp"
@@ -143,16 +144,25 @@ void isotropic_remeshing(SurfaceEditMesh& base, const SurfaceDistance& input, do
       pass.priority = [&m](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
         return -double(m.deviation_change(t));
       };
-      pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
-                                        const TriMesh::Tuple& t) {
+      // Only flips that lower the deviation are queued. A flip changes the valences of its four
+      // vertices, which changes the gain of every edge in their stars: those are re-queued (read
+      // under a two-ring lock, since their opposite vertices lie two rings away).
+      pass.lock_rings = 2;
+      pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&, const TriMesh::Tuple&) {
         std::vector<SurfacePass::Work> work;
-        const Id e[2] = {t.vid, m.other_vertex(t)};
-        for (const auto& x : m.edges_of_faces(m.cells_containing(std::span<const Id>(e, 2))))
-          work.emplace_back("swap", x);
+        const auto& r = m.operation_record();
+        std::vector<Id> star;
+        for (Id v : {r.v0, r.v1, r.new_edge[0], r.new_edge[1]})
+          star.insert(star.end(), m.vertex_cells(v).begin(), m.vertex_cells(v).end());
+        std::sort(star.begin(), star.end());
+        star.erase(std::unique(star.begin(), star.end()), star.end());
+        for (const auto& x : m.edges_of_faces(star))
+          if (m.deviation_change(x) < 0) work.emplace_back("swap", x);
         return work;
       };
       std::vector<SurfacePass::Work> work;
-      for (const auto& e : m.get_edges()) work.emplace_back("swap", e);
+      for (const auto& e : m.get_edges())
+        if (m.deviation_change(e) < 0) work.emplace_back("swap", e);
       log.emplace_back("swap", pass.run(m, work));
     }
     {  // 4. tangential relaxation, projected back onto the input
