@@ -325,6 +325,25 @@ def render(records, meta):
                            (", %d run(s) without report" % (st["runs"] - st["n"]))
                            if st["runs"] > st["n"] else "",
                            "met" if ok else "not met"))
+    for mode in modes:
+        reps = [by[(m, mode)]["report"] for m in meshes
+                if (m, mode) in by and by[(m, mode)].get("report")]
+        rss = [(p.get("peak_rss_mb") or 0, os.path.splitext(os.path.basename(p["input"]))[0])
+               for p in reps if p.get("peak_rss_mb") is not None]
+        if rss:
+            w("- Peak RSS, %s: median %.0f MB, max %.0f MB (%s)." %
+              (mode, median([x[0] for x in rss]), max(rss)[0], max(rss)[1]))
+    for mode in ("simp_t1", "simp_t2"):
+        stalled = [os.path.splitext(m)[0] + " (%.0f%%)" % (100 * by[(m, mode)]["report"]
+                                                          ["prisms_per_input_face"])
+                   for m in meshes if (m, mode) in by and by[(m, mode)].get("report") and
+                   by[(m, mode)]["report"]["prisms_per_input_face"] > 0.9]
+        if stalled:
+            w("- Simplification removed less than 10%% of the faces (%s): %s." %
+              (mode, ", ".join(stalled)))
+    w("- The 2-thread numbers were measured on a 2-core machine whose 1-min load was already "
+      "around 1 from other users' jobs (see the load column of the raw data), so the second "
+      "thread was contended; the speedups are lower bounds for an idle machine.")
     # stage breakdown for the simplified single-thread mode
     for mode in ("simp_t1",):
         reps = [by[(m, mode)]["report"] for m in meshes
