@@ -9,6 +9,33 @@
 
 namespace curvefem::meshing::shell {
 
+// ---- Exact predicates for the section condition (I2) -------------------------------------------
+// All decide from the double coordinates exactly (interval filter, exact fallback); no
+// constructed point or plane decides anything. shell_intersection.cpp explains why the section
+// condition needs these, and not the closed "touching" test.
+
+// Sign (+1, 0, −1) of ((b − a) × (c − a)) · (to − from) for tri = (a, b, c).
+int normal_dot_sign(const std::array<Eigen::Vector3d, 3>& tri, const Eigen::Vector3d& from,
+                    const Eigen::Vector3d& to);
+
+// Does the closed triangle meet the open interior of the tetrahedron? The tetrahedron must be
+// non-degenerate (nonzero orient3d; either orientation). Separating-axis test with weak
+// inequalities over the 4 facet planes, the triangle's plane and the 18 edge–edge planes.
+bool triangle_meets_open_tet(const std::array<Eigen::Vector3d, 3>& tri,
+                             const std::array<Eigen::Vector3d, 4>& tet);
+
+// Does the closed triangle lie in the plane of the non-degenerate triangle `facet` and meet its
+// relative interior? (False when not coplanar.)
+bool triangle_meets_open_facet(const std::array<Eigen::Vector3d, 3>& tri,
+                               const std::array<Eigen::Vector3d, 3>& facet);
+
+// Section contact of a triangle with one non-degenerate split tet of a prism: the triangle
+// meets the open tet, or lies in the plane of one of its 4 facets and meets that facet's
+// relative interior. Contact only along edges or at vertices of the tet, or a transversal touch
+// of a facet at its boundary, is not section contact.
+bool triangle_section_contact(const std::array<Eigen::Vector3d, 3>& tri,
+                              const std::array<Eigen::Vector3d, 4>& tet);
+
 class InputSurfaceIndex {
  public:
   InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
@@ -35,6 +62,10 @@ class InputSurfaceIndex {
   std::vector<int> faces_in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   // Does input face f intersect the closed tetrahedron (exact)?
   bool face_touches_tet(int f, const std::array<Eigen::Vector3d, 4>& tet) const;
+  // triangle_section_contact of input face f with a non-degenerate tet (exact).
+  bool face_section_contact(int f, const std::array<Eigen::Vector3d, 4>& tet) const;
+  // Input face f as a triangle.
+  std::array<Eigen::Vector3d, 3> face_triangle(int f) const;
 
   // Closest input point: face id and the point.
   int closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& closest) const;

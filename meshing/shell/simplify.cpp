@@ -3,9 +3,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <optional>
 #include <set>
 
 #include "meshing/editing/tri_mesh.hpp"
+#include "meshing/shell/prism_location.hpp"
 #include "meshing/shell/prism_positivity.hpp"
 #include "meshing/shell/shell_geometry.hpp"
 #include "meshing/shell/shell_intersection.hpp"
@@ -27,8 +30,66 @@ class ShellMesh : public TriMesh {
   Attribute<char> singular{*this, 0, 0};
   Attribute<int> input_vertex{*this, 0, -1};
   Attribute<std::vector<int>> track{*this, 2, {}};  // input faces touching the prism
+  Attribute<std::vector<int>> owned{*this, 2, {}};  // input vertices located in the prism
   const InputSurfaceIndex* input = nullptr;
   double section_cos = 0;
+  double max_distance = 0;
+  double max_mips = 0;
+  const std::vector<char>* frozen = nullptr;
+
+  double mips(Id f) const {
+    const Cell& c = cell(f);
+    const Eigen::Vector3d a = mid[c[0]], b = mid[c[1]], d = mid[c[2]];
+    const double area2 = (b - a).cross(d - a).norm();  // twice the area
+    if (!(area2 > 0)) return HUGE_VAL;
+    return ((b - a).squaredNorm() + (d - b).squaredNorm() + (a - d).squaredNorm()) /
+           (std::sqrt(3.0) * area2);
+  }
+  bool shape_ok(const OperationRecord& r) const {
+    double before = max_mips, after = 0;
+    for (Id f : r.old_cells) before = std::max(before, mips(f));
+    for (Id f : r.new_cells) after = std::max(after, mips(f));
+    return after <= before;
+  }
+
+  // Prism coordinates of x in face f and the distance to the linear middle triangle there.
+  std::optional<double> owned_distance(Id f, const Eigen::Vector3d& x) const {
+    const Cell& c = cell(f);
+    const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
+    std::array<Eigen::Vector3d, 3> b, m, t;
+    for (int k = 0; k < 3; ++k) {
+      b[k] = base[c[k]];
+      m[k] = mid[c[k]];
+      t[k] = top[c[k]];
+    }
+    const auto q = locate_in_prism(F, b, m, t, x);
+    if (!q) return std::nullopt;
+    const int r = min_rotation(F);
+    const Eigen::Vector3d p =
+        (1 - q->u - q->v) * m[r] + q->u * m[(r + 1) % 3] + q->v * m[(r + 2) % 3];
+    return (p - x).norm();
+  }
+
+  // Re-homes the input vertices owned by the old cells into the new ones under the bound.
+  bool rehome_owned(const OperationRecord& r) {
+    std::vector<int> points;
+    for (Id f : r.old_cells) points.insert(points.end(), owned[f].begin(), owned[f].end());
+    std::vector<std::vector<int>> next(r.new_cells.size());
+    for (int x : points) {
+      const Eigen::Vector3d p = input->V().row(x);
+      bool placed = false;
+      for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
+        const auto d = owned_distance(r.new_cells[i], p);
+        if (!d) continue;
+        if (*d > max_distance) return false;
+        next[i].push_back(x);
+        placed = true;
+      }
+      if (!placed) return false;
+    }
+    for (std::size_t i = 0; i < r.new_cells.size(); ++i) owned.set(r.new_cells[i], next[i]);
+    return true;
+  }
 
   // Input faces touching the 6 canonical split tets of face f; false if a prism half fails.
   bool prism_ok(Id f, std::vector<int>& touching) const {
@@ -49,6 +110,7 @@ class ShellMesh : public TriMesh {
     const int rot = min_rotation(F);
     const bool type_a = is_type_a(F);
     touching.clear();
+    std::vector<std::array<Eigen::Vector3d, 4>> tets;
     for (int half = 0; half < 2; ++half)
       for (const auto& tet : split_tets(type_a)) {
         std::array<Eigen::Vector3d, 4> q;
@@ -58,28 +120,45 @@ class ShellMesh : public TriMesh {
         }
         if ((q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]) == 0) continue;
         for (int x : input->faces_touching_tet(q)) touching.push_back(x);
+        tets.push_back(q);
       }
     std::sort(touching.begin(), touching.end());
     touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
-    for (int x : touching) {  // I2
-      const Eigen::Vector3d p0 = input->V().row(input->F()(x, 0)),
-                            p1 = input->V().row(input->F()(x, 1)),
-                            p2 = input->V().row(input->F()(x, 2));
-      const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
-      for (int k = 0; k < 3; ++k) {
+    // I2: a touching face failing the pillar test rejects the prism only if it is in section
+    // contact with a split tet (meets the open tet, or lies in a facet plane and meets the
+    // facet's relative interior; the argument is in shell_intersection.cpp). The track keeps
+    // every touching face.
+    for (int x : touching) {
+      const auto tri = input->face_triangle(x);
+      const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+      bool seen = true;
+      for (int k = 0; k < 3 && seen; ++k) {
         if (s[k]) continue;
         const Eigen::Vector3d pillar = t[k] - b[k];
         const double d = n.dot(pillar);
-        if (!(d > 0 && d * d > section_cos * section_cos * n.squaredNorm() * pillar.squaredNorm()))
-          return false;
+        // The cosine bound, and the exact sign on both half-pillars as the verifier checks it.
+        seen = d > 0 &&
+               d * d > section_cos * section_cos * n.squaredNorm() * pillar.squaredNorm() &&
+               normal_dot_sign(tri, b[k], m[k]) > 0 && normal_dot_sign(tri, m[k], t[k]) > 0;
       }
+      if (seen) continue;
+      for (const auto& q : tets)
+        if (input->face_section_contact(x, q)) return false;
     }
     return !touching.empty();
   }
 
  protected:
-  bool collapse_edge_before(const Tuple& t) override { return !singular[t.vid]; }
+  bool collapse_edge_before(const Tuple& t) override {
+    if (singular[t.vid]) return false;
+    const int x = input_vertex[t.vid];
+    return !(frozen && x >= 0 && std::size_t(x) < frozen->size() && (*frozen)[x]);
+  }
   bool invariants(const OperationRecord& r) override {
+    // The distance bound first: a few orientation tests per input vertex, far cheaper than the
+    // prism checks, and the reason most collapses fail once the surface is coarse.
+    if (max_mips > 0 && !shape_ok(r)) return false;
+    if (max_distance > 0 && !rehome_owned(r)) return false;
     std::vector<int> old_union, new_union, touching;
     for (Id f : r.old_cells) old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     for (Id f : r.new_cells) {
@@ -105,6 +184,9 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   ShellMesh m;
   m.input = &index;
   m.section_cos = options.section_cos;
+  m.max_distance = options.max_distance;
+  m.max_mips = options.max_mips;
+  if (!options.frozen_input_vertices.empty()) m.frozen = &options.frozen_input_vertices;
   const int nv = int(shell.mid.rows()), nf = int(shell.F.rows());
   std::vector<TriMesh::Cell> cells(nf);
   for (int f = 0; f < nf; ++f) cells[f] = {Id(shell.F(f, 0)), Id(shell.F(f, 1)), Id(shell.F(f, 2))};
@@ -122,6 +204,19 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.track.set(Id(f), touching);
   }
   stats.faces_before = nf;
+  if (m.max_distance > 0) {  // every input vertex starts in a prism of its middle vertex
+    std::vector<char> seen(input.num_vertices(), 0);
+    std::vector<std::vector<int>> own(nf);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int x = shell.input_vertex[shell.F(f, k)];
+        if (x >= 0 && !seen[x]) {
+          seen[x] = 1;
+          own[f].push_back(x);
+        }
+      }
+    for (int f = 0; f < nf; ++f) m.owned.set(Id(f), own[f]);
+  }
 
   using Pass = editing::ExecutePass<TriMesh>;
   auto length2 = [&m](const TriMesh::Tuple& t) {
@@ -183,6 +278,12 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     out.face_parent[f] = tr.empty() ? -1 : tr.front();
   }
   stats.faces_after = int(faces.size());
+  if (m.max_distance > 0)
+    for (std::size_t f = 0; f < faces.size(); ++f)
+      for (int x : m.owned[Id(f)]) {
+        const auto d = m.owned_distance(Id(f), input.V.row(x).transpose());
+        stats.max_distance = std::max(stats.max_distance, d ? *d : HUGE_VAL);
+      }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

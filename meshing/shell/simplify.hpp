@@ -19,11 +19,23 @@ struct SimplifyOptions {
   int threads = 1;
   double section_cos = 0.0;  // distortion bound on pillar/normal cosines (0: strict positivity)
   int rounds = 3;            // collapse passes (a pass re-seeds every edge)
+  // > 0: distance bound. Every input vertex is owned by the prism that contains it; a collapse is
+  // accepted only if each owned vertex x lies in one of the new prisms, at prism coordinates
+  // (u, v, h), with |x - mid(u, v)| <= max_distance (mid: the linear middle triangle).
+  double max_distance = 0;
+  // #input vertices or empty: input vertices whose middle vertex must never be collapsed away
+  // (feature vertices, user constraints).
+  std::vector<char> frozen_input_vertices;
+  // > 0: shape guard on the middle triangles. A collapse whose new triangles have a worse maximum
+  // 2-D MIPS energy (|e0|²+|e1|²+|e2|²)/(2√3·area), 2 for the equilateral triangle, than both
+  // the removed ones and this bound is rejected.
+  double max_mips = 0;
 };
 
 struct SimplifyStats {
   int faces_before = 0, faces_after = 0;
   std::vector<editing::PassStats> passes;
+  double max_distance = 0;  // max |x - mid(u, v)| over owned input vertices at the end (if bounded)
   double seconds = 0;
 };
 

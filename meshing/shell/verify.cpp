@@ -68,8 +68,12 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     }
   }
 
-  // Section condition. Only input faces whose normal fails the pillar test can violate it, so
-  // the exact touching test runs for those candidates alone.
+  // Section condition (the argument is in shell_intersection.cpp): every input face in section
+  // contact with a non-degenerate split tet (it meets the open tet, or lies in a facet plane and
+  // meets the facet's relative interior) must make a positive dot product, exact sign, with
+  // every non-singular half-pillar. Contact with the prism's boundary alone is not checked here:
+  // the fibers there belong to the neighbour as well, whose tets see that face. Faces passing
+  // the pillar test are skipped before the contact test.
   {
     const InputSurfaceIndex index(input.V, input.F);
     for (int f = 0; f < nf; ++f) {
@@ -91,19 +95,25 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
           if ((c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) == 0) continue;  // pinched
           tets.push_back(c);
         }
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> half_pillars;
+      for (int k = 0; k < 3; ++k) {
+        const int v = F[k];
+        if (shell.singular[v]) continue;
+        half_pillars.emplace_back(row(shell.base, v), row(shell.mid, v));
+        half_pillars.emplace_back(row(shell.mid, v), row(shell.top, v));
+      }
       bool ok = true;
       for (int t : index.faces_in_box(box.min(), box.max())) {
-        const Eigen::Vector3d a = input.V.row(input.F(t, 0)), b = input.V.row(input.F(t, 1)),
-                              c = input.V.row(input.F(t, 2));
-        const Eigen::Vector3d n = (b - a).cross(c - a);
+        const auto tri = index.face_triangle(t);
         bool transversal = true;
-        for (int k = 0; k < 3 && transversal; ++k) {
-          const int v = F[k];
-          if (!shell.singular[v]) transversal = n.dot(row(shell.top, v) - row(shell.base, v)) > 0;
-        }
+        for (const auto& [from, to] : half_pillars)
+          if (normal_dot_sign(tri, from, to) <= 0) {
+            transversal = false;
+            break;
+          }
         if (transversal) continue;
         for (const auto& tet : tets)
-          if (index.face_touches_tet(t, tet)) {
+          if (index.face_section_contact(t, tet)) {
             ok = false;
             break;
           }

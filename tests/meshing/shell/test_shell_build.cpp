@@ -89,3 +89,31 @@ TEST(ShellBuild, RejectsOpenAndMisorientedInput) {
   std::swap(flipped.F(0, 1), flipped.F(0, 2));
   EXPECT_THROW(build(flipped, stats), curvefem::InputError);
 }
+
+TEST(ShellBuild, BoxShellIsASectionAtSharpEdges) {
+  // At a 90° edge the face across the edge touches the prism only along the shared edge, on the
+  // lateral boundary: not section contact, so the box's shell is a section (the closed
+  // "touching" test flagged almost every prism here).
+  const SurfaceMesh box = curvefem::make_box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 2, 1), 4);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(box, stats);
+  const sh::ShellVerification v = sh::verify_shell(shell, box);
+  EXPECT_TRUE(v.positive());
+  EXPECT_TRUE(v.separated());
+  EXPECT_TRUE(v.section()) << v.non_section_faces << " of " << v.faces;
+  EXPECT_EQ(v.roundtrip_failures, 0);
+}
+
+TEST(ShellBuild, VerifyFlagsAReversedPillar) {
+  // Swapping base and top of one vertex reverses its pillar: the faces around it lie in the mid
+  // triangles of their prisms (coplanar section contact) with a negative dot product.
+  const SurfaceMesh sphere = curvefem::make_icosphere(2);
+  sh::ShellStats stats;
+  sh::Shell shell = build(sphere, stats);
+  const Eigen::RowVector3d b = shell.base.row(0);
+  shell.base.row(0) = shell.top.row(0);
+  shell.top.row(0) = b;
+  const sh::ShellVerification v = sh::verify_shell(shell, sphere);
+  EXPECT_FALSE(v.positive());
+  EXPECT_GE(v.non_section_faces, 5);  // the 5 or 6 faces around vertex 0, and maybe neighbours
+}

@@ -1,6 +1,8 @@
-// The two predicates of the prismatic shell: the per-vertex extrusion direction (the QP of the
-// "most visible normal") and exact prism positivity (the 12 tets of the 3-tet splits).
+// The predicates of the prismatic shell: the per-vertex extrusion direction (the QP of the
+// "most visible normal"), exact prism positivity (the 12 tets of the 3-tet splits) and the
+// section-contact predicates (triangle vs open tet / open coplanar facet) against brute force.
 
+#include <CGAL/Exact_rational.h>
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -17,6 +19,8 @@
 #include "meshing/core/primitives.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
 #include "meshing/shell/prism_positivity.hpp"
+#include "meshing/shell/shell_geometry.hpp"
+#include "meshing/shell/shell_intersection.hpp"
 
 namespace sh = curvefem::meshing::shell;
 using Eigen::Vector3d;
@@ -506,4 +510,340 @@ TEST(PrismPositivity, ShellFaceChecksBothHalves) {
   top[2] = mid[2];
   EXPECT_TRUE(sh::shell_face_positive(base, mid, top, {false, false, true}));
   EXPECT_FALSE(sh::shell_face_positive(base, mid, top));
+}
+
+// ---------------------------------------------------------------- section contact (I2)
+//
+// Brute force, independent of the separating-axis code: clip the triangle by the closed
+// half-spaces of the tet (or, for a coplanar facet, by the facet's in-plane edge half-spaces)
+// in exact rational arithmetic. The clipped polygon P meets the open tet iff the average of its
+// vertices lies strictly inside (it lies in relint P, and a convex P ⊂ T meeting int T cannot
+// have a relative-interior point on a supporting plane of T without lying in that plane).
+
+namespace {
+
+using Q = CGAL::Exact_rational;
+using QV = std::array<Q, 3>;
+
+QV qv(const Vector3d& p) { return {Q(p.x()), Q(p.y()), Q(p.z())}; }
+QV sub(const QV& a, const QV& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+QV cross(const QV& a, const QV& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+Q dot(const QV& a, const QV& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// Half-space {x : n · (x − o) ≥ 0}.
+struct HalfSpace {
+  QV n, o;
+  Q eval(const QV& x) const { return dot(n, sub(x, o)); }
+};
+
+std::vector<QV> clip(const std::vector<QV>& poly, const HalfSpace& h) {
+  std::vector<QV> out;
+  const std::size_t m = poly.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    const QV &a = poly[i], &b = poly[(i + 1) % m];
+    const Q fa = h.eval(a), fb = h.eval(b);
+    if (fa >= 0) out.push_back(a);
+    if ((fa > 0 && fb < 0) || (fa < 0 && fb > 0)) {
+      const Q t = fa / (fa - fb);
+      out.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
+    }
+  }
+  return out;
+}
+
+// Clips the triangle by the half-spaces; true iff the result meets their common open interior.
+bool brute_meets_open(const std::array<Vector3d, 3>& tri, const std::vector<HalfSpace>& hs) {
+  std::vector<QV> poly{qv(tri[0]), qv(tri[1]), qv(tri[2])};
+  for (const HalfSpace& h : hs) {
+    poly = clip(poly, h);
+    if (poly.empty()) return false;
+  }
+  QV c{Q(0), Q(0), Q(0)};
+  for (const QV& p : poly)
+    for (int k = 0; k < 3; ++k) c[k] += p[k];
+  for (int k = 0; k < 3; ++k) c[k] /= Q(int(poly.size()));
+  for (const HalfSpace& h : hs)
+    if (!(h.eval(c) > 0)) return false;
+  return true;
+}
+
+bool brute_closed_contact(const std::array<Vector3d, 3>& tri, const std::vector<HalfSpace>& hs) {
+  std::vector<QV> poly{qv(tri[0]), qv(tri[1]), qv(tri[2])};
+  for (const HalfSpace& h : hs) {
+    poly = clip(poly, h);
+    if (poly.empty()) return false;
+  }
+  return true;
+}
+
+Q qdet(const QV& a, const QV& b, const QV& c, const QV& d) {
+  return dot(cross(sub(b, a), sub(c, a)), sub(d, a));
+}
+
+std::vector<HalfSpace> tet_halfspaces(const std::array<Vector3d, 4>& T) {
+  static const int f[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};
+  std::vector<HalfSpace> hs;
+  for (const auto& k : f) {
+    const QV a = qv(T[k[0]]), b = qv(T[k[1]]), c = qv(T[k[2]]), d = qv(T[k[3]]);
+    QV n = cross(sub(b, a), sub(c, a));
+    if (dot(n, sub(d, a)) < 0) n = {-n[0], -n[1], -n[2]};
+    hs.push_back({n, a});
+  }
+  return hs;
+}
+
+bool brute_open_tet(const std::array<Vector3d, 3>& tri, const std::array<Vector3d, 4>& T) {
+  return brute_meets_open(tri, tet_halfspaces(T));
+}
+
+bool brute_open_facet(const std::array<Vector3d, 3>& tri, const std::array<Vector3d, 3>& F) {
+  const QV a = qv(F[0]), b = qv(F[1]), c = qv(F[2]);
+  const QV n = cross(sub(b, a), sub(c, a));
+  for (const Vector3d& p : tri)
+    if (dot(n, sub(qv(p), a)) != 0) return false;
+  std::vector<HalfSpace> hs;
+  const std::array<QV, 3> f{a, b, c};
+  for (int i = 0; i < 3; ++i) {
+    const QV &p = f[i], &q = f[(i + 1) % 3], &r = f[(i + 2) % 3];
+    QV m = cross(sub(q, p), n);
+    if (dot(m, sub(r, p)) < 0) m = {-m[0], -m[1], -m[2]};
+    hs.push_back({m, p});
+  }
+  return brute_meets_open(tri, hs);
+}
+
+bool non_degenerate(const std::array<Vector3d, 4>& T) {
+  return qdet(qv(T[0]), qv(T[1]), qv(T[2]), qv(T[3])) != 0;
+}
+
+// Outcome counts of one comparison run.
+struct ContactCounts {
+  int open = 0, facet_only = 0, closed_only = 0, apart = 0;
+};
+
+// Compares the three predicates with brute force on (tri, T); T non-degenerate.
+void compare_with_brute_force(const std::array<Vector3d, 3>& tri, const std::array<Vector3d, 4>& T,
+                              ContactCounts& counts, const std::string& where) {
+  const bool open = brute_open_tet(tri, T);
+  ASSERT_EQ(sh::triangle_meets_open_tet(tri, T), open) << where;
+  static const int f[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  bool facet = false;
+  for (const auto& k : f) {
+    const std::array<Vector3d, 3> F{T[k[0]], T[k[1]], T[k[2]]};
+    const bool b = brute_open_facet(tri, F);
+    ASSERT_EQ(sh::triangle_meets_open_facet(tri, F), b) << where;
+    facet = facet || b;
+  }
+  ASSERT_EQ(sh::triangle_section_contact(tri, T), open || facet) << where;
+  if (open)
+    ++counts.open;
+  else if (facet)
+    ++counts.facet_only;
+  else if (brute_closed_contact(tri, tet_halfspaces(T)))
+    ++counts.closed_only;
+  else
+    ++counts.apart;
+}
+
+std::string counts_text(const ContactCounts& c) {
+  return "open " + std::to_string(c.open) + ", facet only " + std::to_string(c.facet_only) +
+         ", closed only " + std::to_string(c.closed_only) + ", apart " + std::to_string(c.apart);
+}
+
+std::array<Vector3d, 4> random_integer_tet(std::mt19937& rng, int range) {
+  std::uniform_int_distribution<int> c(0, range);
+  std::array<Vector3d, 4> T;
+  do
+    for (auto& p : T) p = Vector3d(c(rng), c(rng), c(rng));
+  while (!non_degenerate(T));
+  return T;
+}
+
+}  // namespace
+
+TEST(SectionContact, SmallIntegerConfigurationsMatchBruteForce) {
+  // Coordinates in {0..3}: shared vertices, shared edges, coplanar faces and parallel edges are
+  // frequent.
+  std::mt19937 rng(2024);
+  std::uniform_int_distribution<int> c(0, 3);
+  ContactCounts counts;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const auto T = random_integer_tet(rng, 3);
+    std::array<Vector3d, 3> tri;
+    for (auto& p : tri) p = Vector3d(c(rng), c(rng), c(rng));
+    compare_with_brute_force(tri, T, counts, "trial " + std::to_string(trial));
+  }
+  RecordProperty("counts", counts_text(counts));
+  EXPECT_GE(counts.open, 400);
+  EXPECT_GE(counts.facet_only, 10);
+  EXPECT_GE(counts.closed_only, 200);
+  EXPECT_GE(counts.apart, 200);
+}
+
+TEST(SectionContact, AdversarialTouchingConfigurationsMatchBruteForce) {
+  // Triangle corners drawn from a pool built on the tet: its corners, edge midpoints, facet
+  // centroids, its centroid, and points outside (corners pushed away from the centroid, edge
+  // extensions, corners reflected through facets). Coordinates are multiples of 1/6 of integers,
+  // exact in double.
+  std::mt19937 rng(7);
+  ContactCounts counts;
+  for (int trial = 0; trial < 1000; ++trial) {
+    std::array<Vector3d, 4> T = random_integer_tet(rng, 4);
+    for (auto& p : T) p *= 6.0;
+    std::vector<Vector3d> pool(T.begin(), T.end());
+    const Vector3d g = 0.25 * (T[0] + T[1] + T[2] + T[3]);
+    pool.push_back(g);
+    for (int i = 0; i < 4; ++i) {
+      pool.push_back(2 * T[i] - g);
+      for (int j = i + 1; j < 4; ++j) {
+        pool.push_back(0.5 * (T[i] + T[j]));
+        pool.push_back(2 * T[j] - T[i]);
+        pool.push_back(2 * T[i] - T[j]);
+      }
+      Vector3d fc = Vector3d::Zero();
+      for (int j = 0; j < 4; ++j)
+        if (j != i) fc += T[j];
+      fc /= 3.0;
+      pool.push_back(fc);
+      pool.push_back(2 * fc - T[i]);  // the corner reflected through its facet's centroid
+      pool.push_back(fc + (fc - g));
+    }
+    std::uniform_int_distribution<int> pick(0, int(pool.size()) - 1);
+    for (int rep = 0; rep < 4; ++rep) {
+      std::array<Vector3d, 3> tri{pool[pick(rng)], pool[pick(rng)], pool[pick(rng)]};
+      compare_with_brute_force(tri, T, counts,
+                               "trial " + std::to_string(trial) + "." + std::to_string(rep));
+    }
+  }
+  RecordProperty("counts", counts_text(counts));
+  EXPECT_GE(counts.open, 1000);
+  EXPECT_GE(counts.facet_only, 100);
+  EXPECT_GE(counts.closed_only, 500);
+  EXPECT_GE(counts.apart, 100);
+}
+
+TEST(SectionContact, GenericAndNearlyTouchingConfigurationsMatchBruteForce) {
+  // Non-integer coordinates, and triangles through a tet corner or along an edge direction
+  // perturbed by one ulp-scale offset: exact decisions near contact.
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ContactCounts counts;
+  for (int trial = 0; trial < 1500; ++trial) {
+    std::array<Vector3d, 4> T;
+    do
+      for (auto& p : T) p = Vector3d(u(rng), u(rng), u(rng));
+    while (!non_degenerate(T));
+    std::array<Vector3d, 3> tri;
+    for (auto& p : tri) p = Vector3d(u(rng), u(rng), u(rng));
+    if (trial % 3 == 1) tri[0] = T[trial % 4];  // through a corner
+    if (trial % 3 == 2) {
+      // Along an edge, nudged by 1e-17.
+      tri[0] = T[0];
+      tri[1] = T[0] + 2.0 * (T[1] - T[0]) + Vector3d(1e-17, -1e-17, 0);
+    }
+    compare_with_brute_force(tri, T, counts, "trial " + std::to_string(trial));
+  }
+  RecordProperty("counts", counts_text(counts));
+  EXPECT_GE(counts.open, 300);
+  EXPECT_GE(counts.apart, 150);
+}
+
+TEST(SectionContact, DegenerateTetAndTriangle) {
+  const std::array<Vector3d, 4> flat{Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                                     Vector3d(1, 1, 0)};
+  const std::array<Vector3d, 3> through{Vector3d(0.2, 0.2, -1), Vector3d(0.3, 0.2, 1),
+                                        Vector3d(0.2, 0.3, 1)};
+  EXPECT_FALSE(sh::triangle_meets_open_tet(through, flat));  // no interior
+  const std::array<Vector3d, 4> T{Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                                  Vector3d(0, 0, 1)};
+  // A segment (degenerate triangle) through the interior, and one along an edge.
+  const std::array<Vector3d, 3> needle{Vector3d(0.1, 0.1, -1), Vector3d(0.1, 0.1, 2),
+                                       Vector3d(0.1, 0.1, 0.5)};
+  EXPECT_TRUE(sh::triangle_meets_open_tet(needle, T));
+  const std::array<Vector3d, 3> on_edge{Vector3d(-1, 0, 0), Vector3d(2, 0, 0), Vector3d(0.5, 0, 0)};
+  EXPECT_FALSE(sh::triangle_meets_open_tet(on_edge, T));
+  EXPECT_FALSE(sh::triangle_section_contact(on_edge, T));
+  // Both orientations of the tet.
+  std::array<Vector3d, 4> mirrored = T;
+  std::swap(mirrored[1], mirrored[2]);
+  EXPECT_TRUE(sh::triangle_meets_open_tet(needle, mirrored));
+  // Exact sign of the normal against a direction.
+  const std::array<Vector3d, 3> xy{Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
+  EXPECT_EQ(sh::normal_dot_sign(xy, Vector3d(5, 5, 1), Vector3d(7, -3, std::nextafter(1.0, 2.0))),
+            1);
+  EXPECT_EQ(sh::normal_dot_sign(xy, Vector3d(5, 5, 1), Vector3d(7, -3, 1)), 0);
+  EXPECT_EQ(sh::normal_dot_sign(xy, Vector3d(0, 0, 1), Vector3d(0, 0, 0.5)), -1);
+}
+
+namespace {
+// The 6 canonical split tets of a prism over (m0, m1, m2) with pillar directions d and half
+// height h (face ids 0, 1, 2: type B); flat tets of zero-length pillars are dropped.
+std::vector<std::array<Vector3d, 4>> split(const std::array<Vector3d, 3>& m,
+                                           const std::array<Vector3d, 3>& d, double h) {
+  const Eigen::Vector3i F(0, 1, 2);
+  std::vector<std::array<Vector3d, 4>> tets;
+  for (int half = 0; half < 2; ++half)
+    for (const auto& tet : sh::split_tets(sh::is_type_a(F))) {
+      std::array<Vector3d, 4> c;
+      for (int k = 0; k < 4; ++k) {
+        const int v = tet[k] % 3;
+        const double level = (tet[k] < 3 ? -1.0 : 0.0) + half;
+        c[k] = m[v] + level * h * d[v];
+      }
+      if (non_degenerate(c)) tets.push_back(c);
+    }
+  return tets;
+}
+}  // namespace
+
+TEST(SectionContact, SharpEdgeNeighbourTouchesOnlyTheLateralBoundary) {
+  // A face of a box (z = 0) next to the wall across its edge on the x axis (y = 0, going down,
+  // normal −y). Pillars on the edge bisect the 90° angle; the opposite pillar is +z.
+  const std::array<Vector3d, 3> m{Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
+  const Vector3d bis = Vector3d(0, -1, 1).normalized();
+  for (const double h : {0.1, 0.4}) {
+    const auto tets = split(m, {bis, bis, Vector3d::UnitZ()}, h);
+    ASSERT_EQ(tets.size(), 6u);
+    const std::array<Vector3d, 3> own = m;
+    const std::array<Vector3d, 3> wall{m[1], m[0], Vector3d(0.5, 0, -1)};
+    // A flat continuation touches along the edge only; a steep one (concave, > 45°) enters.
+    const std::array<Vector3d, 3> flat{m[1], m[0], Vector3d(0.5, -1, 0)};
+    const std::array<Vector3d, 3> steep{m[1], m[0], Vector3d(0.5, -1, 1.5)};
+    const std::array<Vector3d, 3> in_side{m[0], m[1], m[1] + 0.5 * h * bis};  // in a side quad
+    int wall_touching = 0, own_contact = 0, steep_contact = 0, side_contact = 0;
+    for (const auto& T : tets) {
+      EXPECT_FALSE(sh::triangle_section_contact(wall, T));  // the old closed test flagged it
+      wall_touching += brute_closed_contact(wall, tet_halfspaces(T));
+      own_contact += sh::triangle_section_contact(own, T);
+      EXPECT_FALSE(sh::triangle_section_contact(flat, T));
+      steep_contact += sh::triangle_section_contact(steep, T);
+      side_contact += sh::triangle_section_contact(in_side, T);
+      EXPECT_FALSE(sh::triangle_meets_open_tet(own, T));  // it lies in the mid triangle
+    }
+    EXPECT_GE(wall_touching, 2);
+    EXPECT_GE(own_contact, 2);    // coplanar with the mid facet of both halves
+    EXPECT_GE(steep_contact, 1);  // enters the upper half: must be checked
+    EXPECT_GE(side_contact, 1);   // lies in a lateral facet: flagged (normal ⊥ pillar)
+    // The wall's normal is perpendicular to the opposite pillar: only boundary contact spared it.
+    EXPECT_EQ(sh::normal_dot_sign(wall, Vector3d::Zero(), Vector3d::UnitZ()), 0);
+    EXPECT_EQ(sh::normal_dot_sign(in_side, Vector3d::Zero(), bis), 0);
+  }
+}
+
+TEST(SectionContact, PinchedPrismSkipsFlatTets) {
+  // Corner 2 singular (zero pillar): 4 non-degenerate tets; a face through the pinch point
+  // outside the prism touches it there only.
+  const std::array<Vector3d, 3> m{Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
+  const auto tets = split(m, {Vector3d::UnitZ(), Vector3d::UnitZ(), Vector3d::Zero()}, 0.2);
+  EXPECT_EQ(tets.size(), 4u);
+  const std::array<Vector3d, 3> outside{m[2], Vector3d(-1, 2, 1), Vector3d(-1, 2, -1)};
+  const std::array<Vector3d, 3> own = m;
+  int own_contact = 0;
+  for (const auto& T : tets) {
+    EXPECT_FALSE(sh::triangle_section_contact(outside, T));
+    own_contact += sh::triangle_section_contact(own, T);
+  }
+  EXPECT_GE(own_contact, 2);
 }

@@ -42,3 +42,20 @@ TEST(ShellSimplify, CoarsensASphereShellAndKeepsItValid) {
     }
   }
 }
+
+TEST(ShellSimplify, CoarsensABoxShellAcrossSharpEdges) {
+  // With section contact (not closed touching) the faces across the box's 90° edges no longer
+  // block every collapse near an edge: the flat sides coarsen and the result stays a section.
+  const SurfaceMesh box = curvefem::make_box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 2, 1), 6);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(box, stats);
+  sh::SimplifyOptions o;
+  sh::SimplifyStats s;
+  const sh::Shell coarse = sh::simplify_shell(shell, box, o, s);
+  EXPECT_LT(s.faces_after, s.faces_before / 2);
+  const sh::ShellVerification v = sh::verify_shell(coarse, box);
+  EXPECT_TRUE(v.positive());
+  EXPECT_TRUE(v.separated());
+  EXPECT_TRUE(v.section()) << v.non_section_faces;
+  EXPECT_EQ(v.roundtrip_failures, 0);
+}

@@ -1,0 +1,61 @@
+#include "meshing/shell/prism_location.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <Eigen/Dense>
+
+#include "meshing/shell/shell_geometry.hpp"
+
+namespace curvefem::meshing::shell {
+
+namespace {
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+K::Point_3 pt(const Eigen::Vector3d& p) { return K::Point_3(p.x(), p.y(), p.z()); }
+constexpr double k_xy[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+}  // namespace
+
+std::optional<PrismCoordinates> locate_in_prism(const Eigen::Vector3i& F,
+                                                const std::array<Eigen::Vector3d, 3>& base,
+                                                const std::array<Eigen::Vector3d, 3>& mid,
+                                                const std::array<Eigen::Vector3d, 3>& top,
+                                                const Eigen::Vector3d& p) {
+  const int r = min_rotation(F);
+  const bool type_a = is_type_a(F);
+  const K::Point_3 q = pt(p);
+  for (int half = 0; half < 2; ++half)
+    for (const auto& tet : split_tets(type_a)) {
+      Eigen::Vector3d e[4];
+      K::Point_3 c[4];
+      for (int k = 0; k < 4; ++k) {
+        const int local = (r + tet[k] % 3) % 3;
+        e[k] = tet[k] < 3 ? (half == 0 ? base[local] : mid[local])
+                          : (half == 0 ? mid[local] : top[local]);
+        c[k] = pt(e[k]);
+      }
+      const auto o = CGAL::orientation(c[0], c[1], c[2], c[3]);
+      if (o == CGAL::COPLANAR) continue;
+      static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+      bool inside = true;
+      for (int i = 0; i < 4 && inside; ++i) {
+        const auto& fc = faces[i];
+        const auto side = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], q);
+        inside =
+            side == CGAL::COPLANAR || side == CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], c[i]);
+      }
+      if (!inside) continue;
+      Eigen::Matrix3d A;
+      A << e[1] - e[0], e[2] - e[0], e[3] - e[0];
+      const Eigen::Vector3d l = A.colPivHouseholderQr().solve(p - e[0]);
+      const double w[4] = {1 - l.sum(), l[0], l[1], l[2]};
+      PrismCoordinates out;
+      for (int k = 0; k < 4; ++k) {
+        out.u += w[k] * k_xy[tet[k] % 3][0];
+        out.v += w[k] * k_xy[tet[k] % 3][1];
+        out.h += w[k] * ((tet[k] < 3 ? -1.0 : 0.0) + half);
+      }
+      return out;
+    }
+  return std::nullopt;
+}
+
+}  // namespace curvefem::meshing::shell
