@@ -158,3 +158,49 @@ TEST(Cli, RemeshWritesSurfaceAndReport) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.obj"));
   EXPECT_FALSE(std::filesystem::exists(dir / "x.json"));
 }
+
+TEST(Cli, MeshThenValidateAndDetectTampering) {
+  const auto dir = test::scratch_dir("cli_mesh");
+  io::write_surface(dir / "sphere.obj", make_icosphere(3), io::SurfaceFormat::obj);  // 1280 faces
+  const std::string in = (dir / "sphere.obj").string(), out_dir = (dir / "m").string();
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
+                                  " --order 3 --eps 0.01 --no-features --threads 2",
+                              &out),
+            0)
+      << out;
+  const auto j = read_json(dir / "m" / "report.json");
+  EXPECT_EQ(j["input_faces"], 1280);
+  EXPECT_EQ(j["order"], 3);
+  EXPECT_TRUE(j["min_jacobian_certified"].get<bool>());
+  EXPECT_EQ(j["boundary_self_intersections"], 0);
+  EXPECT_LE(j["max_distance_rel"].get<double>(), 0.01);
+  EXPECT_LT(j["output_boundary_faces"].get<int>(), 640);
+  EXPECT_LE(j["map_roundtrip_max_error_rel"].get<double>(), 1e-9);
+  EXPECT_EQ(j["map_roundtrip_failures"], 0);
+  EXPECT_TRUE(j["valid"].get<bool>());
+  for (const char* f : {"mesh.vtu", "mesh.msh", "boundary_map.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "m" / f)) << f;
+  // The validator re-reads everything and agrees.
+  ASSERT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 0) << out;
+  EXPECT_NE(out.find("valid"), std::string::npos) << out;
+  // A tighter bound than the mesh was built for must fail (exit 3) and say so.
+  EXPECT_EQ(test::run_command(cli() + " validate " + out_dir + " --eps 1e-6", &out), 3) << out;
+  EXPECT_NE(out.find("EXCEEDS"), std::string::npos) << out;
+  // Tampered map: one input vertex sent to another corner of its face.
+  auto map = read_json(dir / "m" / "boundary_map.json");
+  map["vertex_uv"][0] = {0.0, 0.0};
+  map["vertex_uv"][1] = {0.0, 0.0};
+  { std::ofstream(dir / "m" / "boundary_map.json") << map.dump(); }
+  EXPECT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 3) << out;
+  // Invalid inputs: open surface → exit 2, nothing written.
+  SurfaceMesh open = make_icosphere(1);
+  open.F.conservativeResize(open.F.rows() - 1, 3);
+  io::write_surface(dir / "open.obj", open, io::SurfaceFormat::obj);
+  EXPECT_EQ(
+      test::run_command(
+          cli() + " mesh -q " + (dir / "open.obj").string() + " -o " + (dir / "x").string(), &out),
+      2)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x"));
+}

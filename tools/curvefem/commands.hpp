@@ -10,12 +10,14 @@ namespace curvefem::cli {
 /// Records `run` as the action of subcommand `sub`.
 void add_command(CLI::App* sub, std::function<int()> run);
 
-void register_check(CLI::App& app);    // cmd_check.cpp
-void register_convert(CLI::App& app);  // cmd_convert.cpp
-void register_demo(CLI::App& app);     // cmd_demo.cpp
-void register_run(CLI::App& app);      // cmd_run.cpp
-void register_remesh(CLI::App& app);   // cmd_remesh.cpp
-void register_shell(CLI::App& app);    // cmd_shell.cpp
+void register_check(CLI::App& app);     // cmd_check.cpp
+void register_convert(CLI::App& app);   // cmd_convert.cpp
+void register_demo(CLI::App& app);      // cmd_demo.cpp
+void register_run(CLI::App& app);       // cmd_run.cpp
+void register_remesh(CLI::App& app);    // cmd_remesh.cpp
+void register_shell(CLI::App& app);     // cmd_shell.cpp
+void register_mesh(CLI::App& app);      // cmd_mesh.cpp
+void register_validate(CLI::App& app);  // cmd_validate.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
@@ -24,6 +26,8 @@ inline void register_commands(CLI::App& app) {
   register_run(app);
   register_remesh(app);
   register_shell(app);
+  register_mesh(app);
+  register_validate(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

@@ -1,0 +1,191 @@
+#!/usr/bin/python3
+"""Curved-mesher benchmark over the dev meshes (/work/shared/data/dev/MANIFEST.tsv).
+
+For every mesh and order K it runs `curvefem mesh INPUT -o DIR --order K --eps EPS -q --threads T`
+(timeout per run), reads DIR/report.json (every guarantee in it comes from the independent
+validator), and records the exit code (0 valid, 3 a guarantee failed, 2 bad input, other =
+crash / timeout), wall time and peak RSS. The dense-linear baseline (the input itself
+tetrahedralized with its boundary unchanged) is counted with `tetfill_tool` when it is built.
+The authors' reference implementation (bichon) was measured on this kind of machine for four of
+the meshes (reference-notes/bichon-measured.md); its numbers are printed beside ours.
+
+Usage (from the repository root):
+  /usr/bin/python3 benchmarks/run_curved.py [--meshes spot.obj ...] [--orders 3 4] [--eps 0.01]
+      [--threads 2] [--timeout 900] [--exe build/tools/curvefem/curvefem]
+Writes benchmarks/results/curved.md; raw JSON lines go to /tmp/curved_runs.jsonl.
+Standard library only.
+"""
+import argparse
+import datetime
+import json
+import os
+import resource
+import shlex
+import statistics
+import subprocess
+import sys
+import time
+
+root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ap = argparse.ArgumentParser()
+ap.add_argument("--data", default="/work/shared/data/dev")
+ap.add_argument("--meshes", nargs="+")
+ap.add_argument("--orders", nargs="+", type=int, default=[3, 4])
+ap.add_argument("--eps", type=float, default=0.01)
+ap.add_argument("--threads", type=int, default=2)
+ap.add_argument("--timeout", type=float, default=900)
+ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvefem"))
+ap.add_argument("--tetfill-tool", default=None)
+ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/curved.md"))
+ap.add_argument("--work", default="/tmp/curved_bench")
+args = ap.parse_args()
+command = "/usr/bin/python3 " + " ".join(shlex.quote(a) for a in ["benchmarks/run_curved.py"] + sys.argv[1:])
+
+# reference-notes/bichon-measured.md: P4 tets (cubic surface), eps 1e-2, 2 threads, this machine type.
+BICHON = {
+    "knight_decimated": dict(seconds=161.7, rss=237, tets=2191, tris=656),
+    "spot": dict(seconds=152.8, rss=130, tets=1207, tris=356),
+    "bunny": dict(seconds=169.4, rss=174, tets=1992, tris=564),
+    "fandisk": dict(seconds=177.0, rss=187, tets=676, tris=312),
+}
+
+
+def manifest():
+    with open(os.path.join(args.data, "MANIFEST.tsv")) as f:
+        rows = [l.rstrip("\n").split("\t") for l in f if l.strip()]
+    return [dict(zip(rows[0], r)) for r in rows[1:]]
+
+
+def run(cmd, timeout):
+    start = time.time()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        out, err = p.communicate(timeout=timeout)
+        code = p.returncode
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, err = p.communicate()
+        code = "timeout"
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return code, time.time() - start, out, err, usage.ru_maxrss / 1024.0
+
+
+def dense_baseline(path):
+    tool = args.tetfill_tool or os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
+        args.exe))), "meshing/tetfill/tetfill_tool")
+    if not os.path.exists(tool):
+        return None
+    code, secs, out, err, _ = run([tool, path], args.timeout)
+    if code != 0:
+        return {"failed": str(code), "message": (err or out).strip().splitlines()[-1:]}
+    try:
+        return json.loads(out.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return None
+
+
+def main():
+    meshes = [m["file"] for m in manifest()]
+    if args.meshes:
+        meshes = [m for m in meshes if m in args.meshes]
+    os.makedirs(args.work, exist_ok=True)
+    records = []
+    raw = open("/tmp/curved_runs.jsonl", "a")
+    for mesh in meshes:
+        name = os.path.splitext(mesh)[0]
+        path = os.path.join(args.data, mesh)
+        base = dense_baseline(path)
+        for k in args.orders:
+            out_dir = os.path.join(args.work, "%s_k%d" % (name, k))
+            subprocess.run(["rm", "-rf", out_dir])
+            load = os.getloadavg()[0]
+            code, secs, out, err, rss = run([args.exe, "mesh", path, "-o", out_dir, "--order",
+                                            str(k), "--eps", str(args.eps), "-q", "--threads",
+                                            str(args.threads)], args.timeout)
+            rep = None
+            try:
+                with open(os.path.join(out_dir, "report.json")) as f:
+                    rep = json.load(f)
+            except (OSError, ValueError):
+                pass
+            rec = dict(mesh=name, order=k, exit=code, wall=secs, load=load, report=rep,
+                       dense=base, error=(err.strip().splitlines() or [""])[-1])
+            records.append(rec)
+            raw.write(json.dumps(rec) + "\n")
+            raw.flush()
+            print("%-22s k=%d exit=%s %.1fs %s" % (name, k, code, secs,
+                  "" if rep else rec["error"]), flush=True)
+    render(records)
+
+
+def fmt(x, f="%.3g"):
+    return "–" if x is None else (f % x)
+
+
+def render(records):
+    w = []
+    w.append("# Curved meshing benchmark (issue 6)\n")
+    w.append("Generated %s by `%s` at commit %s, on %d cores; eps = %g of the longest bbox edge, "
+             "%d threads.\n" % (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), command,
+                                subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"],
+                                               capture_output=True, text=True).stdout.strip(),
+                                os.cpu_count(), args.eps, args.threads))
+    w.append("Every figure below comes from the run's report.json, whose guarantees are computed "
+             "by the independent validator (certified det J per tet, boundary faces, embedding "
+             "of the subdivided curved boundary, distance at every input vertex). `valid` = all "
+             "hold. Dense = the input itself tetrahedralized with its boundary unchanged "
+             "(tetfill_tool); ratio = dense tets / curved tets.\n")
+    w.append("| mesh | K | exit | valid | input F | boundary F | tets (slab+interior) | dense tets | "
+             "ratio | max dist | min sJ slab / interior | mean MIPS | time s (coarsen) | "
+             "RSS MB | load |")
+    w.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    ok = 0
+    times = []
+    for r in records:
+        rep = r["report"] or {}
+        val = rep.get("validation", {})
+        q = val.get("quality_by_tag", {})
+        dense = (r["dense"] or {}).get("tets")
+        tets = rep.get("output_tets")
+        valid = rep.get("valid")
+        ok += bool(valid and r["exit"] == 0)
+        if rep:
+            times.append(rep["time_s"]["total"])
+        w.append("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s / %s | %s | %s (%s) | %s | %.1f |" % (
+            r["mesh"], r["order"], r["exit"], "yes" if valid else "NO",
+            rep.get("input_faces", "–"), rep.get("output_boundary_faces", "–"),
+            "%s (%s+%s)" % (tets, rep.get("slab_tets"), rep.get("interior_tets")) if tets else "–",
+            dense or "–", fmt(dense / tets, "%.1f") if dense and tets else "–",
+            fmt(rep.get("max_distance_rel")),
+            fmt(q.get("slab", {}).get("min_scaled_jacobian")),
+            fmt(q.get("interior", {}).get("min_scaled_jacobian")),
+            fmt(val.get("mean_mips"), "%.0f"),
+            fmt(rep.get("time_s", {}).get("total"), "%.1f"),
+            fmt(rep.get("time_s", {}).get("coarsen"), "%.1f"),
+            fmt(rep.get("peak_rss_mb"), "%.0f"), r["load"]))
+    w.append("")
+    w.append("- Valid runs: %d of %d." % (ok, len(records)))
+    if times:
+        w.append("- Median total time: %.1f s (goal: under 60 s)." % statistics.median(times))
+    w.append("\n## Beside the reference implementation (bichon, P4 tets, measured here)\n")
+    w.append("| mesh | bichon s | bichon tets | bichon surface tris | curvefem K=4 s | curvefem K=4 tets | "
+             "curvefem boundary tris | speed ratio |")
+    w.append("|---|---|---|---|---|---|---|---|")
+    for r in records:
+        if r["order"] != 4 or r["mesh"] not in BICHON or not r["report"]:
+            continue
+        b, rep = BICHON[r["mesh"]], r["report"]
+        t = rep["time_s"]["total"]
+        w.append("| %s | %.1f | %d | %d | %.1f | %d | %d | %.1f× |" % (
+            r["mesh"], b["seconds"], b["tets"], b["tris"], t, rep["output_tets"],
+            rep["output_boundary_faces"], b["seconds"] / t))
+    w.append("\nThe bichon numbers are from reference-notes/bichon-measured.md (same machine type, "
+             "not the same run).")
+    os.makedirs(os.path.dirname(args.out), exist_ok=True)
+    with open(args.out, "w") as f:
+        f.write("\n".join(w) + "\n")
+    print("wrote", args.out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,41 @@
+#include "meshing/core/boundary_map.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "meshing/core/error.hpp"
+
+namespace curvefem {
+
+Eigen::Vector3d BoundaryMap::image(int v) const {
+  const int f = vertex_face[v];
+  CF_VERIFY(f >= 0, "boundary map: vertex " + std::to_string(v) + " has no image");
+  return boundary.map(f, Eigen::Vector3d(vertex_uv(v, 0), vertex_uv(v, 1), 0.0));
+}
+
+void validate_structure(const BoundaryMap& map, double tol) {
+  if (map.boundary.kind != CellKind::triangle)
+    throw InputError("boundary map: the boundary must be made of triangles");
+  validate_structure(map.boundary, "boundary map");
+  if (map.boundary_node_to_volume.size() != 0 &&
+      map.boundary_node_to_volume.size() != map.boundary.num_nodes())
+    throw InputError("boundary map: " + std::to_string(map.boundary_node_to_volume.size()) +
+                     " volume node ids for " + std::to_string(map.boundary.num_nodes()) +
+                     " boundary nodes");
+  if (map.vertex_uv.rows() != map.vertex_face.size() || map.vertex_uv.cols() != 2)
+    throw InputError("boundary map: vertex coordinates must be #vertices x 2");
+  for (int v = 0; v < map.num_input_vertices(); ++v) {
+    const int f = map.vertex_face[v];
+    if (f < -1 || f >= map.boundary.num_cells())
+      throw InputError("boundary map: face id " + std::to_string(f) + " out of range",
+                       {.vertex = v});
+    if (f < 0) continue;
+    const double a = map.vertex_uv(v, 0), b = map.vertex_uv(v, 1);
+    if (!std::isfinite(a) || !std::isfinite(b) || a < -tol || b < -tol || a + b > 1 + tol)
+      throw InputError("boundary map: coordinates (" + std::to_string(a) + ", " +
+                           std::to_string(b) + ") outside the reference triangle",
+                       {.vertex = v});
+  }
+}
+
+}  // namespace curvefem

@@ -1,0 +1,32 @@
+// The boundary map φ between a dense input surface M and the curved boundary ∂T^k of a tet mesh
+// (DESIGN.md §2): for every input vertex v, the boundary triangle of T^k and the reference
+// coordinates (u, v) in it such that the curved triangle evaluated there is φ(v).
+//
+// `boundary` is a triangle LagrangeMesh of the same order as the volume mesh whose cells are the
+// boundary faces of the volume mesh, with its own copy of the nodes (so the map is self-contained
+// and serializable without the volume); `boundary_node_to_volume` gives, for each of its nodes,
+// the node of the volume mesh it is (#boundary nodes, -1 if not tied to a volume).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "meshing/core/lagrange_mesh.hpp"
+
+namespace curvefem {
+
+struct BoundaryMap {
+  LagrangeMesh boundary;  // kind = triangle, order k
+  Eigen::VectorXi boundary_node_to_volume;
+  Eigen::VectorXi vertex_face;  // #input V: boundary triangle of φ(v), -1 for unreferenced vertices
+  Eigen::MatrixXd vertex_uv;    // #input V × 2: reference coordinates (ξ, η) in that triangle
+
+  int num_input_vertices() const { return static_cast<int>(vertex_face.size()); }
+  /// φ(v): the curved boundary triangle evaluated at the vertex's coordinates.
+  Eigen::Vector3d image(int input_vertex) const;
+};
+
+/// Throws InputError naming the first structural defect (sizes, ids, coordinates outside the
+/// reference triangle by more than `uv_tolerance`).
+void validate_structure(const BoundaryMap& map, double uv_tolerance = 1e-9);
+
+}  // namespace curvefem

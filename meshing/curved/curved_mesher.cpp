@@ -1,0 +1,601 @@
+#include "meshing/curved/curved_mesher.hpp"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <optional>
+#include <unordered_map>
+
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/lagrange_nodes.hpp"
+#include "meshing/core/log.hpp"
+#include "meshing/core/timer.hpp"
+#include "meshing/curved/features.hpp"
+#include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/shell/projection.hpp"
+#include "meshing/shell/shell.hpp"
+#include "meshing/shell/shell_geometry.hpp"
+#include "meshing/shell/simplify.hpp"
+#include "meshing/shell/verify.hpp"
+#include "meshing/tetfill/tetfill.hpp"
+
+namespace curvefem::meshing::curved {
+
+namespace {
+
+namespace sh = meshing::shell;
+
+constexpr double k_xy[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+
+// A node is identified by the multiset of global corner ids it is a lattice point of (each id
+// repeated by its multi-index entry): the same point of the same sub-simplex in any cell.
+struct NodeKey {
+  std::array<int, 4> id;
+  bool operator==(const NodeKey&) const = default;
+};
+struct NodeKeyHash {
+  std::size_t operator()(const NodeKey& k) const {
+    std::size_t h = 0;
+    for (int x : k.id) h = h * 1000003u ^ std::hash<int>()(x);
+    return h;
+  }
+};
+NodeKey make_key(const int* gid, const std::array<int, 4>& alpha, int corners) {
+  NodeKey key;
+  key.id.fill(INT_MAX);
+  int n = 0;
+  for (int j = 0; j < corners; ++j)
+    for (int m = 0; m < alpha[j]; ++m) key.id[n++] = gid[j];
+  std::sort(key.id.begin(), key.id.begin() + n);
+  return key;
+}
+
+struct Owned {
+  int vertex;
+  double u, v;
+};
+
+// One straight or curved tet before stitching: its corner ids and the positions of its nodes.
+struct TetNodes {
+  std::array<int, 4> gid;
+  Eigen::MatrixXd nodes;  // #lattice × 3, canonical order
+};
+
+class Builder {
+ public:
+  Builder(const sh::Shell& shell, const SurfaceMesh& input, int order)
+      : s(shell),
+        in(input),
+        k(order),
+        nv(int(shell.mid.rows())),
+        nf(int(shell.F.rows())),
+        projection(shell, input),
+        tri_lattice(lagrange_lattice(CellKind::triangle, order)),
+        tet_lattice(lagrange_lattice(CellKind::tetrahedron, order)),
+        inner(shell.base) {
+    for (int f = 0; f < nf; ++f)
+      for (int e = 0; e < 3; ++e) {
+        const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
+        edge_faces[{std::min(a, b), std::max(a, b)}].push_back(f);
+      }
+  }
+
+  const sh::Shell& s;
+  const SurfaceMesh& in;
+  const int k, nv, nf;
+  sh::ShellProjection projection;
+  const std::vector<std::array<int, 4>>& tri_lattice;
+  const std::vector<std::array<int, 4>>& tet_lattice;
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  std::vector<std::vector<Eigen::Vector3d>>
+      raw;  // per face, per triangle node: fiber target - linear
+  std::vector<double> alpha;
+  std::vector<std::vector<Owned>> owned;
+  int fiber_misses = 0;
+  int below_failures = 0;
+
+  int rotated(int f, int local) const {
+    const int r = sh::min_rotation(Eigen::Vector3i(s.F.row(f)));
+    return s.F(f, (r + local) % 3);
+  }
+  int gid_base(int v) const { return s.singular[v] ? nv + v : v; }
+  int gid_mid(int v) const { return nv + v; }
+  Eigen::Vector3d mid(int v) const { return s.mid.row(v).transpose(); }
+  Eigen::Vector3d base(int v) const { return inner.row(v).transpose(); }
+  Eigen::MatrixXd inner;  // the inner surface of the slab layer (starts as the shell's base)
+  Eigen::Vector3d linear_mid(int f, double u, double v) const {
+    return (1 - u - v) * mid(rotated(f, 0)) + u * mid(rotated(f, 1)) + v * mid(rotated(f, 2));
+  }
+
+  // Fiber targets of every curved node (edge nodes computed once per edge, so both faces agree).
+  void compute_targets(const ProgressFn& progress) {
+    raw.assign(nf, std::vector<Eigen::Vector3d>(tri_lattice.size(), Eigen::Vector3d::Zero()));
+    if (k == 1) return;
+    std::map<std::array<int, 3>, Eigen::Vector3d> edge_cache;  // (lo, hi, steps from lo)
+    for (int f = 0; f < nf; ++f) {
+      for (std::size_t i = 0; i < tri_lattice.size(); ++i) {
+        const auto& a = tri_lattice[i];
+        const int nonzero = (a[0] > 0) + (a[1] > 0) + (a[2] > 0);
+        if (nonzero == 1) continue;  // corners sit on the input
+        std::array<int, 3> edge_key{-1, -1, -1};
+        if (nonzero == 2) {
+          const int p = a[0] == 0 ? 1 : 0, q = a[2] == 0 ? 1 : 2;
+          const int vp = rotated(f, p), vq = rotated(f, q);
+          edge_key = vp < vq ? std::array<int, 3>{vp, vq, a[q]} : std::array<int, 3>{vq, vp, a[p]};
+          if (auto it = edge_cache.find(edge_key); it != edge_cache.end()) {
+            raw[f][i] = it->second;
+            continue;
+          }
+        }
+        const double u = double(a[1]) / k, v = double(a[2]) / k;
+        const auto hit = projection.project(sh::PrismPoint{f, u, v, 0.0});
+        Eigen::Vector3d d = Eigen::Vector3d::Zero();
+        if (hit)
+          d = hit->position - linear_mid(f, u, v);
+        else
+          ++fiber_misses;
+        raw[f][i] = d;
+        if (nonzero == 2) edge_cache[edge_key] = d;
+      }
+      if (progress && f % 256 == 0) progress("curve: fiber targets", double(f) / nf);
+    }
+  }
+
+  void locate_input(const ProgressFn& progress) {
+    owned.assign(nf, {});
+    std::vector<char> referenced(in.num_vertices(), 0);
+    for (int f = 0; f < in.num_faces(); ++f)
+      for (int c = 0; c < 3; ++c) referenced[in.F(f, c)] = 1;
+    std::vector<std::optional<sh::PrismPoint>> where(in.num_vertices());
+    tbb::parallel_for(0, in.num_vertices(), [&](int x) {
+      if (referenced[x]) where[x] = projection.locate(in.V.row(x).transpose());
+    });
+    for (int x = 0; x < in.num_vertices(); ++x) {
+      if (!referenced[x]) continue;
+      if (!where[x])
+        throw MeshingError("curve: input vertex is outside the coarse shell", {.vertex = x});
+      owned[where[x]->face].push_back({x, where[x]->u, where[x]->v});
+    }
+    if (progress) progress("curve: locate input", 1.0);
+  }
+
+  double edge_alpha(int a, int b) const {
+    double out = 1;
+    for (int g : edge_faces.at({std::min(a, b), std::max(a, b)})) out = std::min(out, alpha[g]);
+    return out;
+  }
+  // Blended displacement of every node of face f.
+  std::vector<Eigen::Vector3d> node_displacements(int f) const {
+    std::vector<Eigen::Vector3d> d(tri_lattice.size(), Eigen::Vector3d::Zero());
+    for (std::size_t i = 0; i < tri_lattice.size(); ++i) {
+      const auto& a = tri_lattice[i];
+      const int nonzero = (a[0] > 0) + (a[1] > 0) + (a[2] > 0);
+      if (nonzero == 1) continue;
+      double w = alpha[f];
+      if (nonzero == 2) {
+        const int p = a[0] == 0 ? 1 : 0, q = a[2] == 0 ? 1 : 2;
+        w = edge_alpha(rotated(f, p), rotated(f, q));
+      }
+      d[i] = w * raw[f][i];
+    }
+    return d;
+  }
+  static Eigen::Vector3d evaluate(const std::vector<Eigen::Vector3d>& d, int order, double u,
+                                  double v) {
+    const Eigen::VectorXd phi =
+        lagrange_shape_values(CellKind::triangle, order, Eigen::Vector3d(u, v, 0));
+    Eigen::Vector3d out = Eigen::Vector3d::Zero();
+    for (int i = 0; i < phi.size(); ++i) out += phi[i] * d[i];
+    return out;
+  }
+
+  // The bottom half-prism of face f as order-k tets (pinched tets dropped).
+  std::vector<TetNodes> slab_tets(int f, const std::vector<Eigen::Vector3d>& d) const {
+    const bool type_a = sh::is_type_a(Eigen::Vector3i(s.F.row(f)));
+    std::vector<TetNodes> out;
+    for (const auto& tet : sh::split_tets(type_a)) {
+      TetNodes t;
+      Eigen::Vector3d P[4];
+      int lv[4], level[4];
+      for (int j = 0; j < 4; ++j) {
+        lv[j] = tet[j] % 3;
+        level[j] = tet[j] >= 3;
+        const int v = rotated(f, lv[j]);
+        t.gid[j] = level[j] ? gid_mid(v) : gid_base(v);
+        P[j] = level[j] ? mid(v) : base(v);
+      }
+      bool repeated = false;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) repeated |= t.gid[i] == t.gid[j];
+      if (repeated) continue;
+      t.nodes.resize(Eigen::Index(tet_lattice.size()), 3);
+      for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
+        const auto& b = tet_lattice[n];
+        Eigen::Vector3d L = Eigen::Vector3d::Zero();
+        double u = 0, v = 0, h = 0;
+        for (int j = 0; j < 4; ++j) {
+          const double l = double(b[j]) / k;
+          L += l * P[j];
+          u += l * k_xy[lv[j]][0];
+          v += l * k_xy[lv[j]][1];
+          h += l * level[j];
+        }
+        t.nodes.row(Eigen::Index(n)) = (h > 0 ? L + h * evaluate(d, k, u, v) : L).transpose();
+      }
+      out.push_back(std::move(t));
+    }
+    return out;
+  }
+
+  bool slabs_certified(int f) const {
+    const auto d = node_displacements(f);
+    for (const auto& t : slab_tets(f, d))
+      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
+    return true;
+  }
+
+  // Deepens the inner surface along the pillars: slabs as thin as the shell make needle tets.
+  // Target depth beta × mean coarse edge length at v (never shallower than the shell's base);
+  // a vertex of a face whose slabs are not certified, or of an inner triangle in a
+  // self-intersecting pair, moves halfway back to the shell's base, for a few rounds, then all the
+  // way. The shell's base is the fallback that always passes. Returns the vertices deepened.
+  int thicken(double beta, double eps) {
+    std::vector<double> base_depth(nv, 0), depth(nv, 0), length(nv, 0);
+    std::vector<int> count(nv, 0);
+    std::vector<Eigen::Vector3d> dir(nv, Eigen::Vector3d::Zero());
+    for (int f = 0; f < nf; ++f)
+      for (int e = 0; e < 3; ++e) {
+        const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
+        const double l = (mid(a) - mid(b)).norm();
+        length[a] += l;
+        length[b] += l;
+        ++count[a];
+        ++count[b];
+      }
+    // Direction: the area-weighted normal of the coarse middle surface (better-shaped slabs than
+    // the pillars), unless it leans more than 60° from the pillar.
+    std::vector<Eigen::Vector3d> normal(nv, Eigen::Vector3d::Zero());
+    for (int f = 0; f < nf; ++f) {
+      const Eigen::Vector3d n =
+          (mid(s.F(f, 1)) - mid(s.F(f, 0))).cross(mid(s.F(f, 2)) - mid(s.F(f, 0)));
+      for (int c = 0; c < 3; ++c) normal[s.F(f, c)] += n;
+    }
+    for (int v = 0; v < nv; ++v) {
+      const Eigen::Vector3d p = mid(v) - Eigen::Vector3d(s.base.row(v));
+      base_depth[v] = depth[v] = p.norm();
+      if (s.singular[v] || base_depth[v] == 0) continue;
+      dir[v] = p / base_depth[v];
+      const Eigen::Vector3d n = normal[v].normalized();
+      if (n.dot(dir[v]) > 0.5) dir[v] = n;
+      depth[v] = std::max(base_depth[v], beta * length[v] / std::max(count[v], 1));
+    }
+    // Lipschitz-smooth the target depths so the inner surface has no steps: depth(v) <=
+    // depth(u) + |uv| / 2 for every edge.
+    for (int pass = 0; pass < 20; ++pass) {
+      bool changed = false;
+      for (int f = 0; f < nf; ++f)
+        for (int e = 0; e < 3; ++e) {
+          const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
+          const double l = 0.5 * (mid(a) - mid(b)).norm();
+          for (auto [x, y] : {std::pair{a, b}, std::pair{b, a}})
+            if (depth[x] > std::max(base_depth[x], depth[y] + l)) {
+              depth[x] = std::max(base_depth[x], depth[y] + l);
+              changed = true;
+            }
+        }
+      if (!changed) break;
+    }
+    std::vector<Eigen::Vector3d> pillar(nv, Eigen::Vector3d::Zero());
+    for (int v = 0; v < nv; ++v)
+      if (base_depth[v] > 0) pillar[v] = (mid(v) - Eigen::Vector3d(s.base.row(v))) / base_depth[v];
+    // Above the shell's base the inner vertex follows `dir`; at or below it, the pillar (so the
+    // slab stays a sub-prism of the shell's positive prism).
+    auto place = [&](int v) {
+      if (depth[v] == base_depth[v])
+        inner.row(v) = s.base.row(v);
+      else if (depth[v] > base_depth[v])
+        inner.row(v) = (mid(v) - depth[v] * dir[v]).transpose();
+      else
+        inner.row(v) = (mid(v) - depth[v] * pillar[v]).transpose();
+    };
+    for (int v = 0; v < nv; ++v) place(v);
+    // Repair rounds. A face failing (slabs not certified, or ε violated after an α change)
+    // shrinks its deepened vertices back toward the base, or, if none is deeper than the base,
+    // halves its curving α. Vertices of self-intersecting or degenerate inner triangles move
+    // halfway back to the base, then below it along the pillar (the shell's base itself can
+    // self-intersect in thin parts: it is only guaranteed to be separated from the input).
+    bool clean = false;
+    for (int round = 0; round < 40 && !clean; ++round) {
+      std::vector<char> ok(nf, 1);
+      tbb::parallel_for(0, nf, [&](int f) { ok[f] = face_ok(f, eps); });
+      std::vector<char> shrink(nv, 0);
+      const Eigen::MatrixXi F = s.F;
+      const std::vector<char> degenerate = check::exactly_degenerate_faces(inner, F);
+      std::vector<char> deepen(nv, 0);  // shrink below the base (self-intersection only)
+      for (int f = 0; f < nf; ++f) {
+        if (degenerate[f])
+          for (int c = 0; c < 3; ++c) shrink[F(f, c)] = deepen[F(f, c)] = 1;
+        if (ok[f]) continue;
+        bool any = false;
+        for (int c = 0; c < 3; ++c)
+          if (depth[F(f, c)] > base_depth[F(f, c)]) any = shrink[F(f, c)] = 1;
+        if (!any) {
+          alpha[f] = alpha[f] > 1.0 / 64 ? alpha[f] / 2 : 0.0;
+          if (depth[F(f, 0)] < base_depth[F(f, 0)] || depth[F(f, 1)] < base_depth[F(f, 1)] ||
+              depth[F(f, 2)] < base_depth[F(f, 2)])
+            ++below_failures;
+        }
+      }
+      const auto si = check::find_self_intersections(inner, F, degenerate, true,
+                                                     check::SelfIntersectionEngine::soup);
+      for (const auto& [f, g] : si.pairs)
+        for (int c = 0; c < 3; ++c)
+          shrink[F(f, c)] = shrink[F(g, c)] = deepen[F(f, c)] = deepen[F(g, c)] = 1;
+      clean = std::count(ok.begin(), ok.end(), 0) == 0 && si.pairs.empty() &&
+              std::count(degenerate.begin(), degenerate.end(), 1) == 0;
+      for (int v = 0; v < nv; ++v) {
+        if (!shrink[v] || s.singular[v]) continue;
+        if (depth[v] > base_depth[v])
+          depth[v] = round < 8 ? base_depth[v] + 0.5 * (depth[v] - base_depth[v]) : base_depth[v];
+        else if (deepen[v])
+          depth[v] *= 0.5;
+        place(v);
+      }
+    }
+    if (!clean)
+      throw MeshingError(
+          "thicken: the inner surface of the slab layer could not be made free of "
+          "self-intersections with certified slabs in 40 rounds");
+    int moved = 0;
+    for (int v = 0; v < nv; ++v) moved += depth[v] > base_depth[v];
+    return moved;
+  }
+
+  // Certified slab tets and the distance bound at the face's input vertices.
+  bool face_ok(int f, double eps) const {
+    const auto d = node_displacements(f);
+    for (const auto& t : slab_tets(f, d))
+      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
+    if (alpha[f] == 0) return true;  // the linear shell's bound was enforced by simplification
+    for (const Owned& o : owned[f]) {
+      const Eigen::Vector3d p = linear_mid(f, o.u, o.v) + evaluate(d, k, o.u, o.v);
+      if ((p - in.V.row(o.vertex).transpose()).norm() > eps) return false;
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
+                             CurvedMeshStats& stats, const ProgressFn& progress) {
+  if (options.order < 1 || options.order > k_max_order)
+    throw InputError("mesh: order " + std::to_string(options.order) + " is not in 1..4");
+  if (!(options.eps_rel > 0)) throw InputError("mesh: eps must be positive");
+  std::unique_ptr<tbb::global_control> threads;
+  if (options.threads > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    std::size_t(options.threads));
+  const double unit = bbox_longest_edge(input.V);
+  const double eps = options.eps_rel * unit;
+  stats.input_vertices = input.num_vertices();
+  stats.input_faces = input.num_faces();
+  stats.feature_edges = int(options.feature_edges.size());
+  const std::vector<char> frozen = feature_vertices(input.num_vertices(), options.feature_edges);
+  stats.frozen_vertices = int(std::count(frozen.begin(), frozen.end(), 1));
+
+  // 1. Shell.
+  Stopwatch watch;
+  sh::ShellOptions shell_options;
+  shell_options.max_thickness_rel = options.thickness_rel;
+  shell_options.threads = options.threads;
+  sh::ShellStats shell_stats;
+  sh::Shell shell = sh::build_shell(input, shell_options, shell_stats, progress);
+  stats.singular_vertices = shell_stats.singular_vertices;
+  stats.shell_faces = int(shell.F.rows());
+  stats.stage_seconds.emplace_back("shell", watch.seconds());
+
+  // 2. Coarsen under the distance bound.
+  watch = Stopwatch();
+  sh::SimplifyOptions simplify_options;
+  simplify_options.threads = options.threads > 0 ? options.threads : 2;
+  simplify_options.rounds = options.simplify_rounds;
+  simplify_options.max_distance = eps;
+  simplify_options.max_mips = options.max_triangle_mips;
+  simplify_options.frozen_input_vertices = frozen;
+  sh::SimplifyStats simplify_stats;
+  if (progress) progress("coarsen", 0.0);
+  shell = sh::simplify_shell(shell, input, simplify_options, simplify_stats);
+  if (progress) progress("coarsen", 1.0);
+  stats.coarse_faces = int(shell.F.rows());
+  stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
+  stats.stage_seconds.emplace_back("coarsen", watch.seconds());
+  log::info("mesh: shell ", stats.shell_faces, " prisms coarsened to ", stats.coarse_faces,
+            " (linear distance ", stats.linear_max_distance_rel, " of bbox)");
+
+  watch = Stopwatch();
+  const sh::ShellVerification shell_check = sh::verify_shell(shell, input);
+  stats.shell_section_verified = shell_check.section();
+  stats.shell_non_section_prisms = shell_check.non_section_faces;
+  if (!shell_check.positive() || !shell_check.separated())
+    throw MeshingError("coarsen: the coarse shell failed verification (" +
+                       std::to_string(shell_check.non_positive_faces) + " non-positive prisms, " +
+                       std::to_string(shell_check.intersecting_input_faces) +
+                       " input faces crossing base/top)");
+  stats.stage_seconds.emplace_back("shell verification", watch.seconds());
+
+  // 3. Curve.
+  watch = Stopwatch();
+  const int k = options.order;
+  Builder b(shell, input, k);
+  b.compute_targets(progress);
+  b.locate_input(progress);
+  stats.fiber_misses = b.fiber_misses;
+  const int nf = b.nf, nv = b.nv;
+  b.alpha.assign(nf, 1.0);
+  std::vector<int> work(nf);
+  for (int f = 0; f < nf; ++f) work[f] = f;
+  while (!work.empty()) {
+    ++stats.curving_rounds;
+    std::vector<char> ok(work.size(), 0);
+    tbb::parallel_for(std::size_t(0), work.size(),
+                      [&](std::size_t i) { ok[i] = b.face_ok(work[i], eps); });
+    std::vector<int> failing;
+    for (std::size_t i = 0; i < work.size(); ++i)
+      if (!ok[i]) failing.push_back(work[i]);
+    if (failing.empty()) break;
+    std::vector<int> next;
+    for (int f : failing) {
+      if (b.alpha[f] == 0)
+        throw MeshingError("curve: the linear bottom slab of coarse face " + std::to_string(f) +
+                           " is not certified positive");
+      b.alpha[f] = b.alpha[f] > 1.0 / 64 ? b.alpha[f] / 2 : 0.0;
+      next.push_back(f);
+      for (int e = 0; e < 3; ++e) {
+        const int p = shell.F(f, e), q = shell.F(f, (e + 1) % 3);
+        for (int g : b.edge_faces.at({std::min(p, q), std::max(p, q)})) next.push_back(g);
+      }
+    }
+    std::sort(next.begin(), next.end());
+    next.erase(std::unique(next.begin(), next.end()), next.end());
+    work = std::move(next);
+    if (progress) progress("curve: certify", 1.0 - double(work.size()) / nf);
+  }
+  for (int f = 0; f < nf; ++f) {
+    if (b.alpha[f] == 1)
+      ++stats.faces_fully_curved;
+    else if (b.alpha[f] == 0)
+      ++stats.faces_linear;
+    else
+      ++stats.faces_blended;
+  }
+  stats.stage_seconds.emplace_back("curve", watch.seconds());
+
+  // 4. Thicken the slab layer, then fill the inside of its inner surface.
+  watch = Stopwatch();
+  stats.thickened_vertices = b.thicken(std::max(options.slab_depth, 0.0), eps);
+  stats.stage_seconds.emplace_back("thicken", watch.seconds());
+  watch = Stopwatch();
+  if (progress) progress("fill interior", 0.0);
+  tetfill::TetFillOptions fill_options;
+  fill_options.threads = options.threads;
+  tetfill::TetFillResult fill;
+  try {
+    fill = tetfill::fill_interior(b.inner, shell.F, fill_options);
+  } catch (const MeshingError& e) {
+    if (stats.thickened_vertices == 0) throw;
+    log::warn("mesh: filling the thickened inner surface failed (", e.what(),
+              "); using the shell's base");
+    b.inner = shell.base;
+    stats.thickened_vertices = 0;
+    fill = tetfill::fill_interior(b.inner, shell.F, fill_options);
+  }
+  stats.stage_seconds.emplace_back("fill interior", watch.seconds());
+
+  // 5. Stitch.
+  watch = Stopwatch();
+  std::unordered_map<NodeKey, int, NodeKeyHash> node_id;
+  std::vector<Eigen::Vector3d> nodes;
+  std::vector<std::vector<int>> cells;
+  std::vector<int> tags;
+  const auto& tet_lattice = lagrange_lattice(CellKind::tetrahedron, k);
+  auto add_tet = [&](const TetNodes& t, int tag) {
+    std::vector<int> row(tet_lattice.size());
+    for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
+      const NodeKey key = make_key(t.gid.data(), tet_lattice[n], 4);
+      auto [it, inserted] = node_id.try_emplace(key, int(nodes.size()));
+      if (inserted) nodes.push_back(t.nodes.row(Eigen::Index(n)).transpose());
+      row[n] = it->second;
+    }
+    cells.push_back(std::move(row));
+    tags.push_back(tag);
+  };
+  for (int f = 0; f < nf; ++f)
+    for (const auto& t : b.slab_tets(f, b.node_displacements(f))) {
+      add_tet(t, 1);
+      ++stats.slab_tets;
+    }
+  for (int c = 0; c < int(fill.T.rows()); ++c) {
+    TetNodes t;
+    Eigen::Vector3d P[4];
+    for (int j = 0; j < 4; ++j) {
+      const int v = fill.T(c, j);
+      t.gid[j] = v < nv ? b.gid_base(v) : 2 * nv + (v - nv);
+      P[j] = fill.V.row(v).transpose();
+    }
+    t.nodes.resize(Eigen::Index(tet_lattice.size()), 3);
+    for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int j = 0; j < 4; ++j) x += (double(tet_lattice[n][j]) / k) * P[j];
+      t.nodes.row(Eigen::Index(n)) = x.transpose();
+    }
+    add_tet(t, 2);
+    ++stats.interior_tets;
+  }
+  CurvedMesh out;
+  out.mesh.kind = CellKind::tetrahedron;
+  out.mesh.order = k;
+  out.mesh.nodes.resize(Eigen::Index(nodes.size()), 3);
+  for (std::size_t n = 0; n < nodes.size(); ++n) out.mesh.nodes.row(Eigen::Index(n)) = nodes[n];
+  out.mesh.cells.resize(Eigen::Index(cells.size()), Eigen::Index(tet_lattice.size()));
+  out.mesh.cell_tags.resize(Eigen::Index(cells.size()));
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    for (std::size_t n = 0; n < cells[c].size(); ++n)
+      out.mesh.cells(Eigen::Index(c), Eigen::Index(n)) = cells[c][n];
+    out.mesh.cell_tags[Eigen::Index(c)] = tags[c];
+  }
+  stats.nodes = int(nodes.size());
+
+  // Boundary map: the curved middle triangles (rotated to their smallest shell id, so (u, v) of
+  // the shell projection are their reference coordinates) and every input vertex's place.
+  const auto& tri_lattice = lagrange_lattice(CellKind::triangle, k);
+  std::vector<int> local_of(nodes.size(), -1), volume_of;
+  Eigen::MatrixXi bcells(nf, Eigen::Index(tri_lattice.size()));
+  for (int f = 0; f < nf; ++f) {
+    const int gid[3] = {b.gid_mid(b.rotated(f, 0)), b.gid_mid(b.rotated(f, 1)),
+                        b.gid_mid(b.rotated(f, 2))};
+    for (std::size_t n = 0; n < tri_lattice.size(); ++n) {
+      const auto it = node_id.find(make_key(gid, tri_lattice[n], 3));
+      CF_VERIFY(it != node_id.end(), "stitch: a boundary node of coarse face " + std::to_string(f) +
+                                         " belongs to no tet");
+      if (local_of[it->second] < 0) {
+        local_of[it->second] = int(volume_of.size());
+        volume_of.push_back(it->second);
+      }
+      bcells(f, Eigen::Index(n)) = local_of[it->second];
+    }
+  }
+  BoundaryMap& map = out.map;
+  map.boundary.kind = CellKind::triangle;
+  map.boundary.order = k;
+  map.boundary.cells = bcells;
+  map.boundary.nodes.resize(Eigen::Index(volume_of.size()), 3);
+  map.boundary_node_to_volume.resize(Eigen::Index(volume_of.size()));
+  for (std::size_t i = 0; i < volume_of.size(); ++i) {
+    map.boundary.nodes.row(Eigen::Index(i)) = nodes[volume_of[i]].transpose();
+    map.boundary_node_to_volume[Eigen::Index(i)] = volume_of[i];
+  }
+  map.vertex_face = Eigen::VectorXi::Constant(input.num_vertices(), -1);
+  map.vertex_uv = Eigen::MatrixXd::Zero(input.num_vertices(), 2);
+  for (int f = 0; f < nf; ++f)
+    for (const Owned& o : b.owned[f]) {
+      map.vertex_face[o.vertex] = f;
+      map.vertex_uv(o.vertex, 0) = o.u;
+      map.vertex_uv(o.vertex, 1) = o.v;
+    }
+  out.shell = std::move(shell);
+  stats.stage_seconds.emplace_back("stitch", watch.seconds());
+  log::info("mesh: ", stats.slab_tets, " slab + ", stats.interior_tets, " interior tets of order ",
+            k, "; faces curved/blended/linear ", stats.faces_fully_curved, "/", stats.faces_blended,
+            "/", stats.faces_linear);
+  return out;
+}
+
+}  // namespace curvefem::meshing::curved

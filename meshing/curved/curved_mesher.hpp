@@ -1,0 +1,81 @@
+#pragma once
+// Coarse curved tetrahedral meshes of order k = 1..4 whose boundary is in bijection with a dense
+// input surface (thesis chapter 5; DESIGN.md §1–2; reference-notes §3.8–3.9).
+//
+// Pipeline:
+//   1. shell      the bijective prismatic shell around the input (meshing/shell);
+//   2. coarsen    shell simplification under the distance bound: every input vertex x stays in a
+//                 prism, at prism coordinates (u, v, h), with |x - mid(u, v)| <= ε for the
+//                 *linear* middle triangle; feature vertices are frozen (never collapsed);
+//   3. curve      the middle surface of every coarse face becomes an order-k Lagrange triangle
+//                 whose nodes interpolate the input along the shell's fibers (P_T at the node's
+//                 (u, v)); the displacement from the linear triangle is blended per face by
+//                 α ∈ {1, 1/2, ..., 0} until the curved slab tets are certified positive and the
+//                 ε bound holds at the face's input vertices. α = 0 is the linear shell, valid by
+//                 the invariants of steps 1–2, so the search always ends;
+//   4. fill       the inside of the shell's bottom surface is tetrahedralized without changing it
+//                 (meshing/tetfill, straight tets);
+//   5. stitch     each coarse face's bottom half-prism (base → curved middle) becomes 3 order-k
+//                 tets of the canonical split (2 at a pinched corner): node = linear point +
+//                 h · displacement(u, v), h the node's share of the middle corners; nodes are
+//                 shared through the multiset of global corner ids they are built from.
+// The boundary is the curved middle surface; φ maps input vertex x to its coarse face at (u, v).
+// Every claim is re-checked by validate_curved_mesh (curved_validate.hpp), not trusted here.
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "meshing/core/boundary_map.hpp"
+#include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/progress.hpp"
+#include "meshing/core/surface_mesh.hpp"
+#include "meshing/shell/shell.hpp"
+
+namespace curvefem::meshing::curved {
+
+struct CurvedMeshOptions {
+  int order = 3;                                  // geometric order k, 1..4
+  double eps_rel = 1e-2;                          // distance bound, relative to the bbox edge
+  double thickness_rel = 0.02;                    // shell half-thickness cap
+  std::vector<std::array<int, 2>> feature_edges;  // input vertex pairs (validated by the caller)
+  int simplify_rounds = 5;
+  // Depth of the slab layer below the curved surface, relative to the mean coarse edge length at
+  // each vertex (0: keep the shell's base, whose thin slabs make needle tets).
+  double slab_depth = 0.4;
+  // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
+  double max_triangle_mips = 10;
+  int threads = 0;  // 0: oneTBB default
+};
+
+struct CurvedMeshStats {
+  int input_vertices = 0, input_faces = 0, feature_edges = 0, frozen_vertices = 0;
+  int singular_vertices = 0;
+  int shell_faces = 0, coarse_faces = 0;
+  bool shell_section_verified = false;
+  int shell_non_section_prisms = 0;
+  int faces_fully_curved = 0, faces_blended = 0, faces_linear = 0;
+  int fiber_misses = 0;  // curved nodes whose fiber found no input point (kept linear)
+  int curving_rounds = 0;
+  int slab_tets = 0, interior_tets = 0, nodes = 0;
+  int thickened_vertices = 0;
+  double linear_max_distance_rel = 0;
+  std::vector<std::pair<std::string, double>> stage_seconds;
+};
+
+struct CurvedMesh {
+  LagrangeMesh mesh;  // tetrahedra of order k; cell_tags 1: boundary slab, 2: interior
+  BoundaryMap map;    // φ for every input vertex
+  // The coarse shell the boundary was curved in: boundary triangle f of `map` is shell face f
+  // (rotated to its smallest vertex id), so φ⁻¹(f, u, v) is the shell projection P_T(f, u, v).
+  meshing::shell::Shell shell;
+};
+
+// Throws InputError for an input the shell rejects, MeshingError naming the stage when a stage
+// cannot meet its guarantees (e.g. interior boundary recovery).
+CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
+                             CurvedMeshStats& stats, const ProgressFn& progress = {});
+
+}  // namespace curvefem::meshing::curved

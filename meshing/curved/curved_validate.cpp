@@ -1,0 +1,190 @@
+#include "meshing/curved/curved_validate.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/curved/jacobian_certificate.hpp"
+
+namespace curvefem::meshing::curved {
+
+namespace {
+
+std::array<int, 3> sorted3(int a, int b, int c) {
+  std::array<int, 3> t{a, b, c};
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+// The curved boundary as flat triangles: an m×m lattice per triangle; points on a shared edge or
+// corner are computed once (from the first triangle that has them), so the soup is welded.
+void subdivide_boundary(const LagrangeMesh& b, int m, Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
+  std::map<std::array<int, 3>, int> shared;  // (lo corner node, hi corner node, steps from lo)
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::array<int, 3>> tris;
+  const int nb = b.num_cells();
+  for (int f = 0; f < nb; ++f) {
+    const int c[3] = {b.cells(f, 0), b.cells(f, 1), b.cells(f, 2)};
+    std::vector<int> id((m + 1) * (m + 2) / 2);
+    auto index = [m](int i, int j) { return j * (m + 1) - j * (j - 1) / 2 + i; };  // i + j <= m
+    for (int j = 0; j <= m; ++j)
+      for (int i = 0; i + j <= m; ++i) {
+        const int a0 = m - i - j;  // barycentric weights (a0, i, j) on corners (0, 1, 2)
+        std::array<int, 3> key{-1, -1, -1};
+        const int w[3] = {a0, i, j};
+        const int nz = (a0 > 0) + (i > 0) + (j > 0);
+        if (nz == 1) {
+          const int corner = a0 > 0 ? 0 : (i > 0 ? 1 : 2);
+          key = {c[corner], c[corner], 0};
+        } else if (nz == 2) {
+          const int p = a0 == 0 ? 1 : 0, q = j == 0 ? 1 : 2;
+          key = c[p] < c[q] ? std::array<int, 3>{c[p], c[q], w[q]}
+                            : std::array<int, 3>{c[q], c[p], w[p]};
+        }
+        int pid = -1;
+        if (key[0] >= 0) {
+          if (auto it = shared.find(key); it != shared.end()) pid = it->second;
+        }
+        if (pid < 0) {
+          pid = int(points.size());
+          points.push_back(b.map(f, Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
+          if (key[0] >= 0) shared[key] = pid;
+        }
+        id[index(i, j)] = pid;
+      }
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i + j < m; ++i) {
+        tris.push_back({id[index(i, j)], id[index(i + 1, j)], id[index(i, j + 1)]});
+        if (i + j + 1 < m)
+          tris.push_back({id[index(i + 1, j)], id[index(i + 1, j + 1)], id[index(i, j + 1)]});
+      }
+  }
+  V.resize(Eigen::Index(points.size()), 3);
+  for (std::size_t p = 0; p < points.size(); ++p) V.row(Eigen::Index(p)) = points[p];
+  F.resize(Eigen::Index(tris.size()), 3);
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) F(Eigen::Index(t), k) = tris[t][k];
+}
+
+}  // namespace
+
+CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMap& map,
+                                      const SurfaceMesh& input, int subdivision) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CurvedValidation r;
+  const int nt = mesh.num_cells(), k = mesh.order;
+  r.tets = nt;
+
+  // Positivity certificates and quality.
+  std::vector<JacobianVerdict> verdict(nt);
+  std::vector<double> sj(nt), mips(nt);
+  tbb::parallel_for(0, nt, [&](int c) {
+    Eigen::MatrixXd X(mesh.cells.cols(), 3);
+    for (int n = 0; n < X.rows(); ++n) X.row(n) = mesh.nodes.row(mesh.cells(c, n));
+    verdict[c] = certify_tet_jacobian(k, X).verdict;
+    sj[c] = min_scaled_jacobian(k, X);
+    mips[c] = curved_mips(k, X);
+  });
+  r.min_scaled_jacobian = nt ? HUGE_VAL : 0;
+  for (int c = 0; c < nt; ++c) {
+    if (verdict[c] == JacobianVerdict::non_positive) ++r.non_positive_tets;
+    if (verdict[c] == JacobianVerdict::undecided) ++r.undecided_tets;
+    if (verdict[c] != JacobianVerdict::positive && r.first_bad_tet < 0) r.first_bad_tet = c;
+    r.min_scaled_jacobian = std::min(r.min_scaled_jacobian, sj[c]);
+    r.mean_mips += mips[c] / std::max(nt, 1);
+    r.max_mips = std::max(r.max_mips, mips[c]);
+    if (mesh.cell_tags.size() == nt) {
+      auto& q = r.quality_by_tag[mesh.cell_tags[c]];
+      ++q.tets;
+      q.min_scaled_jacobian = std::min(q.min_scaled_jacobian, sj[c]);
+      q.mean_mips += mips[c];
+      q.max_mips = std::max(q.max_mips, mips[c]);
+    }
+  }
+  for (auto& [tag, q] : r.quality_by_tag) q.mean_mips /= std::max(q.tets, 1);
+
+  // Boundary faces of the volume (by corner nodes) against the map's triangles.
+  {
+    std::map<std::array<int, 3>, int> count;
+    static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    for (int c = 0; c < nt; ++c)
+      for (const auto& fc : faces)
+        ++count[sorted3(mesh.cells(c, fc[0]), mesh.cells(c, fc[1]), mesh.cells(c, fc[2]))];
+    std::set<std::array<int, 3>> volume_boundary;
+    for (const auto& [f, n] : count)
+      if (n == 1) volume_boundary.insert(f);
+    const auto& vol = map.boundary_node_to_volume;
+    std::set<std::array<int, 3>> map_boundary;
+    for (int f = 0; f < map.boundary.num_cells(); ++f) {
+      int v[3];
+      for (int j = 0; j < 3; ++j) {
+        const int b = map.boundary.cells(f, j);
+        v[j] = vol.size() ? vol[b] : -1;
+      }
+      map_boundary.insert(sorted3(v[0], v[1], v[2]));
+    }
+    r.boundary_faces = int(volume_boundary.size());
+    for (const auto& f : map_boundary)
+      if (!volume_boundary.count(f)) ++r.boundary_faces_missing;
+    for (const auto& f : volume_boundary)
+      if (!map_boundary.count(f)) ++r.boundary_faces_extra;
+    for (int b = 0; b < map.boundary.num_nodes(); ++b)
+      if (vol.size() == 0 || vol[b] < 0 || vol[b] >= mesh.num_nodes() ||
+          (map.boundary.nodes.row(b) - mesh.nodes.row(vol[b])).cwiseAbs().maxCoeff() != 0)
+        ++r.boundary_node_mismatches;
+  }
+
+  // Embedding of the curved boundary on a fine subdivision.
+  {
+    r.subdivision = subdivision > 0 ? subdivision : 2 * k;
+    Eigen::MatrixXd V;
+    Eigen::MatrixXi F;
+    subdivide_boundary(map.boundary, r.subdivision, V, F);
+    const auto degenerate = check::exactly_degenerate_faces(V, F);
+    const auto si = check::find_self_intersections(V, F, degenerate, false,
+                                                   check::SelfIntersectionEngine::soup);
+    r.boundary_self_intersections =
+        int(si.pairs.size()) + int(std::count(degenerate.begin(), degenerate.end(), 1));
+  }
+
+  // Distance bound and local orientation of φ.
+  {
+    const double unit = bbox_longest_edge(input.V);
+    std::vector<char> referenced(input.num_vertices(), 0);
+    for (int f = 0; f < input.num_faces(); ++f)
+      for (int c = 0; c < 3; ++c) referenced[input.F(f, c)] = 1;
+    for (int v = 0; v < input.num_vertices(); ++v) {
+      if (!referenced[v]) continue;
+      if (v >= map.num_input_vertices() || map.vertex_face[v] < 0) {
+        ++r.unmapped_vertices;
+        continue;
+      }
+      const double d = (map.image(v) - input.V.row(v).transpose()).norm() / unit;
+      if (d > r.max_distance_rel) {
+        r.max_distance_rel = d;
+        r.max_distance_vertex = v;
+      }
+    }
+    if (r.unmapped_vertices == 0 && map.num_input_vertices() >= input.num_vertices())
+      for (int f = 0; f < input.num_faces(); ++f) {
+        const int a = input.F(f, 0), b = input.F(f, 1), c = input.F(f, 2);
+        if (map.vertex_face[a] != map.vertex_face[b] || map.vertex_face[a] != map.vertex_face[c])
+          continue;
+        ++r.input_faces_checked;
+        const Eigen::Vector2d pa = map.vertex_uv.row(a), pb = map.vertex_uv.row(b),
+                              pc = map.vertex_uv.row(c);
+        const Eigen::Vector2d e1 = pb - pa, e2 = pc - pa;
+        if (!(e1.x() * e2.y() - e1.y() * e2.x() > 0)) ++r.flipped_input_faces;
+      }
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace curvefem::meshing::curved

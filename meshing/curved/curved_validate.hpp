@@ -1,0 +1,55 @@
+#pragma once
+// Independent validation of a curved mesh and its boundary map (DESIGN.md §2–3; the `validate`
+// subcommand and every `mesh` report). Code paths separate from the mesher check:
+//   positivity   every tet's det J certified positive (certify_tet_jacobian: lattice values,
+//                Bernstein coefficients, subdivision, interval arithmetic);
+//   boundary     the faces used by exactly one tet are exactly the map's boundary triangles, and
+//                the map's node copy equals the volume nodes it points to;
+//   embedding    the boundary, subdivided into flat triangles at `subdivision` per edge, has no
+//                self-intersecting pair (exact predicates);
+//   distance     max over input vertices of |x - φ(x)|, relative to the bbox edge;
+//   orientation  every input triangle whose three vertices map into the same boundary triangle
+//                keeps its orientation in that triangle's (u, v) plane (no fold of φ there).
+
+#include <cmath>
+#include <map>
+
+#include "meshing/core/boundary_map.hpp"
+#include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/surface_mesh.hpp"
+
+namespace curvefem::meshing::curved {
+
+struct CurvedValidation {
+  int tets = 0, non_positive_tets = 0, undecided_tets = 0;
+  int first_bad_tet = -1;
+  double min_scaled_jacobian = 0, mean_mips = 0, max_mips = 0;
+  struct Quality {
+    int tets = 0;
+    double min_scaled_jacobian = HUGE_VAL, mean_mips = 0, max_mips = 0;
+  };
+  std::map<int, Quality> quality_by_tag;  // by LagrangeMesh::cell_tags (1 slab, 2 interior)
+  int boundary_faces = 0, boundary_faces_missing = 0, boundary_faces_extra = 0;
+  int boundary_node_mismatches = 0;
+  int subdivision = 0, boundary_self_intersections = 0;
+  int unmapped_vertices = 0;
+  double max_distance_rel = 0;
+  int max_distance_vertex = -1;
+  int input_faces_checked = 0, flipped_input_faces = 0;
+  double seconds = 0;
+  bool certified() const { return non_positive_tets == 0 && undecided_tets == 0; }
+  bool boundary_ok() const {
+    return boundary_faces_missing == 0 && boundary_faces_extra == 0 &&
+           boundary_node_mismatches == 0 && boundary_self_intersections == 0;
+  }
+  bool valid(double eps_rel) const {
+    return certified() && boundary_ok() && unmapped_vertices == 0 && max_distance_rel <= eps_rel &&
+           flipped_input_faces == 0;
+  }
+};
+
+// subdivision 0: 2·order.
+CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMap& map,
+                                      const SurfaceMesh& input, int subdivision = 0);
+
+}  // namespace curvefem::meshing::curved

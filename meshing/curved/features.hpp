@@ -1,0 +1,25 @@
+#pragma once
+// Feature edges of a dense input surface (thesis §5.2.2; reference-notes §3.7): given as
+// vertex-index pairs, or detected where the dihedral angle between the two faces of an edge —
+// the angle between their normals — exceeds a threshold.
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+#include "meshing/core/surface_mesh.hpp"
+
+namespace curvefem::meshing::curved {
+
+// Edges (a < b) whose two faces' normals make an angle above `angle_deg` degrees; sorted.
+std::vector<std::array<int, 2>> detect_feature_edges(const SurfaceMesh& mesh, double angle_deg);
+
+// Throws InputError naming the pair if an edge is not an edge of the mesh; returns the edges
+// sorted with a < b and without duplicates.
+std::vector<std::array<int, 2>> validate_feature_edges(const SurfaceMesh& mesh,
+                                                       std::vector<std::array<int, 2>> edges);
+
+// #V flags: endpoints of feature edges.
+std::vector<char> feature_vertices(int num_vertices, const std::vector<std::array<int, 2>>& edges);
+
+}  // namespace curvefem::meshing::curved

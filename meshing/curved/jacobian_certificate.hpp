@@ -1,0 +1,103 @@
+#pragma once
+// Certified positivity of the Jacobian determinant of curved Lagrange tetrahedra, k = 1..4
+// (DESIGN.md §2 "Certified positivity"; reference-notes shell-and-curved §4.5).
+//
+// A tet of order k is given by its n = (k+1)(k+2)(k+3)/6 nodes, an n × 3 matrix in the canonical
+// order of meshing/core/lagrange_nodes.hpp; it maps the reference tet (v0 = 0, v1 = e_x,
+// v2 = e_y, v3 = e_z) by x(ξ) = Σ N_i(ξ) x_i. J(ξ) = ∂x/∂ξ (column c = ∂x/∂ξ_c) and det J is a
+// polynomial of degree d = 3(k−1), measured against the *right reference tet* (a straight tet
+// has det J = 6·volume everywhere).
+//
+// Certificate (Johnen-style, but rigorous in floating point):
+//   1. det J at the m points of the uniform degree-d lattice; any value certainly ≤ 0 →
+//      non_positive (a proof: det J ≤ 0 at that point);
+//   2. Bernstein coefficients b = M·v (M the exact Lagrange-to-Bernstein matrix of
+//      tools/gen_bernstein_tables.py, committed in generated/bernstein_tables.inc);
+//      all certainly > 0 → positive (a proof: det J ≥ min b > 0 on the whole tet);
+//   3. otherwise red refinement (4 corner tets + 4 around the diagonal between the midpoints of
+//      edges 02 and 13), child coefficients by exact dyadic subdivision matrices; a child corner
+//      coefficient is a point value (certainly ≤ 0 → non_positive); recurse up to
+//      CertificateOptions::max_depth; anything left → undecided. Callers treat undecided as
+//      invalid.
+// Every step carries a proven error bound from the exact double node coordinates onwards (a priori
+// bounds of round-to-nearest dot products, outward-rounded comparisons), so "positive" and
+// "non_positive" are proofs, not tolerances. The computation runs in round-to-nearest; a caller
+// inside another rounding mode (e.g. CGAL's protected scopes) is switched to nearest for the call
+// and restored. Coordinates must satisfy |x| < 1e90 (NaN, inf or larger → undecided), and det J
+// must exceed ~1e-280 (absolute underflow guards), i.e. tets not smaller than ~1e-90.
+// Slack: the proven lower bound is within ~1e-9 (well-shaped) to ~1e-5 (flat P4) of the true
+// minimum for straight tets; the a priori bounds use table-wide row sums, not per-entry ones.
+//
+// Thread safety: all functions are reentrant (the tables are built once, thread-safely, on first
+// use and are immutable afterwards); call them from a oneTBB loop freely.
+
+#include <Eigen/Core>
+#include <limits>
+
+namespace curvefem::meshing::curved {
+
+enum class JacobianVerdict { positive, non_positive, undecided };
+
+/// "positive", "non_positive", "undecided".
+const char* to_string(JacobianVerdict verdict);
+
+struct CertificateOptions {
+  /// Red-refinement levels below the element (0 = no subdivision). Each level shrinks a sub-tet
+  /// by 2, so the gap between Bernstein coefficients and det J values shrinks about 4×; level 4
+  /// resolves a gap 256× smaller than the element's own control net, at a worst-case cost of
+  /// 4680 sub-tets (a few ms at P4); tets that need more are almost degenerate and are better
+  /// reported as invalid. The thesis stops after 3 levels.
+  int max_depth = 4;
+  /// Hard budget on the number of sub-tets examined (children created); reaching it → undecided.
+  int max_subtets = 4680;
+};
+
+struct JacobianCertificate {
+  JacobianVerdict verdict = JacobianVerdict::undecided;
+  /// Floating-point estimate of min det J over the degree-d lattice (k = 1: the constant det J).
+  double min_lattice_estimate = std::numeric_limits<double>::quiet_NaN();
+  /// Proven enclosure [lower, upper] of min over the degree-d lattice of det J.
+  double min_lattice_lower = -std::numeric_limits<double>::infinity();
+  double min_lattice_upper = std::numeric_limits<double>::infinity();
+  /// Proven: det J ≥ lower_bound on the whole tet. > 0 when positive; −∞ otherwise.
+  double lower_bound = -std::numeric_limits<double>::infinity();
+  /// Proven: min det J over the tet ≤ min_upper_bound (from all point values evaluated: the
+  /// lattice and the sub-tet corners). ≤ 0 when non_positive.
+  double min_upper_bound = std::numeric_limits<double>::infinity();
+  int depth_reached = 0;    ///< deepest refinement level examined (0 = the element only)
+  int subtets_visited = 0;  ///< sub-tets (children) examined; 0 when decided at the element
+};
+
+/// Certifies det J > 0 on the whole tet. order = k ∈ 1..4; nodes: n × 3, canonical order.
+/// Throws InputError for an order outside 1..4 or a wrong node count / column count.
+JacobianCertificate certify_tet_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
+                                         const CertificateOptions& opts = {});
+
+/// d = 3(k − 1), the polynomial degree of det J (0 for k = 1).
+int jacobian_degree(int order);
+
+/// m × 4 barycentric multi-indices β (|β| = d) of the degree-d lattice, point ξ = (β1, β2, β3)/d,
+/// in the canonical order of lagrange_nodes.hpp at degree d (k = 1: one row of zeros). The same
+/// rows label the Bernstein coefficients: B_β(λ) = d!/(β0!β1!β2!β3!) λ^β.
+Eigen::MatrixXi jacobian_lattice(int order);
+
+/// Floating-point Bernstein coefficients of det J (m entries, rows of jacobian_lattice): an
+/// estimate for inspection and tests; the certificate uses the enclosures internally.
+Eigen::VectorXd jacobian_bernstein_coefficients(int order,
+                                                const Eigen::Ref<const Eigen::MatrixXd>& nodes);
+
+/// Sampled quality ESTIMATE, not a certificate: the minimum over the degree-d lattice points
+/// (k = 1: the one constant J) and over the four corner frames of the reference tet of
+///   √2 · det(J T_v) / (‖J t_v1‖ ‖J t_v2‖ ‖J t_v3‖),
+/// T_v = (t_v1, t_v2, t_v3) the reference edge vectors leaving vertex v, ordered so det T_v = 1.
+/// For a straight tet this is Knupp's minimum corner scaled Jacobian: 1 for the regular tet,
+/// ≤ 0 iff inverted or flat. A zero tangent counts as 0.
+double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
+
+/// Curved MIPS in the thesis convention (reference-notes §3.9): the mean over the 56 points of the
+/// uniform level-5 lattice of ‖J‖²_F ‖J⁻¹‖²_F, J taken with respect to the RIGHT reference tet, so
+/// the reference tet itself scores 9 (a regular tet scores more; the thesis threshold 100 refers
+/// to this convention). +∞ when det J ≤ 0 at a sample. An estimate, not a certificate.
+double curved_mips(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
+
+}  // namespace curvefem::meshing::curved

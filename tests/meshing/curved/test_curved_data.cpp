@@ -1,0 +1,56 @@
+// Real meshes (data label): curved meshes of small dev meshes pass the independent validator.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "meshing/curved/curved_mesher.hpp"
+#include "meshing/curved/curved_validate.hpp"
+#include "meshing/curved/features.hpp"
+#include "meshing/io/surface_io.hpp"
+#include "tests/support/test_support.hpp"
+
+namespace cv = curvefem::meshing::curved;
+
+struct DataCase {
+  const char* file;
+  double max_face_ratio;  // boundary faces / input faces the coarsening must reach
+};
+class CurvedData : public ::testing::TestWithParam<DataCase> {};
+
+TEST_P(CurvedData, ValidatorAcceptsTheCurvedMesh) {
+  const auto dir = curvefem::test::shared_data_dir();
+  if (!dir) GTEST_SKIP() << "../shared/data not found: real-mesh curved test skipped";
+  const curvefem::SurfaceMesh input = curvefem::io::read_surface(*dir / "dev" / GetParam().file);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.eps_rel = 1e-2;
+  o.threads = 2;
+  o.feature_edges = cv::detect_feature_edges(input, 60);
+  cv::CurvedMeshStats stats;
+  const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
+  const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
+  EXPECT_TRUE(v.certified()) << v.non_positive_tets << " non-positive, " << v.undecided_tets
+                             << " undecided (first " << v.first_bad_tet << ")";
+  EXPECT_TRUE(v.boundary_ok()) << v.boundary_faces_missing << " missing, " << v.boundary_faces_extra
+                               << " extra, " << v.boundary_self_intersections
+                               << " self-intersections";
+  EXPECT_EQ(v.unmapped_vertices, 0);
+  EXPECT_EQ(v.flipped_input_faces, 0);
+  EXPECT_LE(v.max_distance_rel, 1e-2);
+  EXPECT_LT(stats.coarse_faces, GetParam().max_face_ratio * input.num_faces());
+  std::printf(
+      "%s: %d input faces -> %d boundary faces, %d tets (%d slab), distance %.3g, "
+      "min scaled J %.3g, MIPS mean %.0f max %.3g, thickened %d, curved/blended/linear "
+      "%d/%d/%d, shell section %s\n",
+      GetParam().file, input.num_faces(), stats.coarse_faces, v.tets, stats.slab_tets,
+      v.max_distance_rel, v.min_scaled_jacobian, v.mean_mips, v.max_mips, stats.thickened_vertices,
+      stats.faces_fully_curved, stats.faces_blended, stats.faces_linear,
+      stats.shell_section_verified ? "verified" : "NOT verified");
+}
+
+INSTANTIATE_TEST_SUITE_P(SmallDevMeshes, CurvedData,
+                         // knight_decimated is already coarse (1000 faces): ε = 1% leaves
+                         // little to remove under a bound on the linear middle surface.
+                         ::testing::Values(DataCase{"knight_decimated.obj", 0.9},
+                                           DataCase{"spot.obj", 0.2}, DataCase{"bunny.obj", 0.25}));

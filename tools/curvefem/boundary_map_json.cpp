@@ -1,0 +1,143 @@
+#include "tools/curvefem/boundary_map_json.hpp"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "meshing/core/atomic_file.hpp"
+#include "meshing/core/error.hpp"
+
+namespace curvefem::cli {
+
+namespace {
+nlohmann::ordered_json rows(const Eigen::MatrixXd& M) {
+  auto out = nlohmann::ordered_json::array();
+  for (int r = 0; r < M.rows(); ++r) out.push_back({M(r, 0), M(r, 1), M(r, 2)});
+  return out;
+}
+Eigen::MatrixXd read_rows(const nlohmann::json& j) {
+  Eigen::MatrixXd M(Eigen::Index(j.size()), 3);
+  for (std::size_t r = 0; r < j.size(); ++r)
+    for (int c = 0; c < 3; ++c) M(Eigen::Index(r), c) = j[r].at(c).get<double>();
+  return M;
+}
+}  // namespace
+
+void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& map,
+                        const std::string& input, const meshing::shell::Shell* shell) {
+  nlohmann::ordered_json j;
+  j["format"] = "curvefem-boundary-map";
+  j["version"] = 1;
+  j["input"] = input;
+  j["order"] = map.boundary.order;
+  j["input_vertices"] = map.num_input_vertices();
+  auto& nodes = j["boundary"]["nodes"] = nlohmann::ordered_json::array();
+  for (int n = 0; n < map.boundary.num_nodes(); ++n)
+    nodes.push_back({map.boundary.nodes(n, 0), map.boundary.nodes(n, 1), map.boundary.nodes(n, 2)});
+  auto& tris = j["boundary"]["triangles"] = nlohmann::ordered_json::array();
+  for (int f = 0; f < map.boundary.num_cells(); ++f) {
+    auto row = nlohmann::ordered_json::array();
+    for (int c = 0; c < map.boundary.cells.cols(); ++c) row.push_back(map.boundary.cells(f, c));
+    tris.push_back(row);
+  }
+  auto& vol = j["boundary"]["volume_node"] = nlohmann::ordered_json::array();
+  for (int n = 0; n < map.boundary_node_to_volume.size(); ++n)
+    vol.push_back(map.boundary_node_to_volume[n]);
+  auto& vf = j["vertex_face"] = nlohmann::ordered_json::array();
+  auto& uv = j["vertex_uv"] = nlohmann::ordered_json::array();
+  for (int v = 0; v < map.num_input_vertices(); ++v) {
+    vf.push_back(map.vertex_face[v]);
+    uv.push_back({map.vertex_uv(v, 0), map.vertex_uv(v, 1)});
+  }
+  if (shell) {
+    auto& s = j["shell"];
+    s["base"] = rows(shell->base);
+    s["mid"] = rows(shell->mid);
+    s["top"] = rows(shell->top);
+    auto& F = s["faces"] = nlohmann::ordered_json::array();
+    for (int f = 0; f < shell->F.rows(); ++f)
+      F.push_back({shell->F(f, 0), shell->F(f, 1), shell->F(f, 2)});
+    s["singular"] = std::vector<int>(shell->singular.begin(), shell->singular.end());
+    s["input_vertex"] = shell->input_vertex;
+    s["face_parent"] = shell->face_parent;
+  }
+  write_text_file_atomic(path, j.dump() + "\n");
+}
+
+SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
+  std::ifstream f(path);
+  if (!f) throw IoError(path.string() + ": cannot open");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(f);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path.string() + ": not valid JSON: " + e.what());
+  }
+  SavedBoundaryMap saved;
+  BoundaryMap& map = saved.map;
+  try {
+    saved.input = j.value("input", std::string());
+    if (j.at("format") != "curvefem-boundary-map")
+      throw InputError(path.string() + ": not a curvefem boundary map");
+    map.boundary.kind = CellKind::triangle;
+    map.boundary.order = j.at("order").get<int>();
+    if (map.boundary.order < 1 || map.boundary.order > k_max_order)
+      throw InputError(path.string() + ": order out of range");
+    const auto& nodes = j.at("boundary").at("nodes");
+    map.boundary.nodes.resize(Eigen::Index(nodes.size()), 3);
+    for (std::size_t n = 0; n < nodes.size(); ++n)
+      for (int d = 0; d < 3; ++d) map.boundary.nodes(Eigen::Index(n), d) = nodes[n].at(d);
+    const auto& tris = j.at("boundary").at("triangles");
+    const int per = num_lagrange_nodes(CellKind::triangle, map.boundary.order);
+    map.boundary.cells.resize(Eigen::Index(tris.size()), per);
+    for (std::size_t f = 0; f < tris.size(); ++f) {
+      if (int(tris[f].size()) != per)
+        throw InputError(path.string() + ": triangle " + std::to_string(f) + " has " +
+                         std::to_string(tris[f].size()) + " nodes, expected " +
+                         std::to_string(per));
+      for (int c = 0; c < per; ++c) map.boundary.cells(Eigen::Index(f), c) = tris[f][c];
+    }
+    const auto& vol = j.at("boundary").at("volume_node");
+    map.boundary_node_to_volume.resize(Eigen::Index(vol.size()));
+    for (std::size_t n = 0; n < vol.size(); ++n)
+      map.boundary_node_to_volume[Eigen::Index(n)] = vol[n];
+    const auto& vf = j.at("vertex_face");
+    const auto& uv = j.at("vertex_uv");
+    if (vf.size() != uv.size())
+      throw InputError(path.string() + ": vertex_face and vertex_uv differ in length");
+    map.vertex_face.resize(Eigen::Index(vf.size()));
+    map.vertex_uv.resize(Eigen::Index(vf.size()), 2);
+    for (std::size_t v = 0; v < vf.size(); ++v) {
+      map.vertex_face[Eigen::Index(v)] = vf[v];
+      map.vertex_uv(Eigen::Index(v), 0) = uv[v].at(0);
+      map.vertex_uv(Eigen::Index(v), 1) = uv[v].at(1);
+    }
+    if (j.contains("shell")) {
+      const auto& s = j.at("shell");
+      meshing::shell::Shell& sh = saved.shell;
+      sh.base = read_rows(s.at("base"));
+      sh.mid = read_rows(s.at("mid"));
+      sh.top = read_rows(s.at("top"));
+      const auto& F = s.at("faces");
+      sh.F.resize(Eigen::Index(F.size()), 3);
+      for (std::size_t f = 0; f < F.size(); ++f)
+        for (int c = 0; c < 3; ++c) sh.F(Eigen::Index(f), c) = F[f].at(c).get<int>();
+      for (int x : s.at("singular").get<std::vector<int>>()) sh.singular.push_back(char(x));
+      sh.input_vertex = s.at("input_vertex").get<std::vector<int>>();
+      sh.face_parent = s.at("face_parent").get<std::vector<int>>();
+      const Eigen::Index nv = sh.mid.rows();
+      if (sh.base.rows() != nv || sh.top.rows() != nv || Eigen::Index(sh.singular.size()) != nv ||
+          Eigen::Index(sh.input_vertex.size()) != nv ||
+          Eigen::Index(sh.face_parent.size()) != sh.F.rows() ||
+          (sh.F.size() && (sh.F.minCoeff() < 0 || sh.F.maxCoeff() >= nv)))
+        throw InputError(path.string() + ": inconsistent shell block");
+      saved.has_shell = true;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path.string() + ": malformed boundary map: " + e.what());
+  }
+  validate_structure(map);
+  return saved;
+}
+
+}  // namespace curvefem::cli

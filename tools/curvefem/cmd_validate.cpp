@@ -1,0 +1,127 @@
+// `curvefem validate DIR [--json]`: re-checks a `mesh` output directory against its input with
+// code paths separate from the mesher (meshing/curved/curved_validate.hpp): reads mesh.vtu,
+// boundary_map.json and the input named in report.json, and prints what holds. Exit 3 naming the
+// first failing tet / face / vertex if any guarantee fails.
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <tuple>
+
+#include "meshing/core/error.hpp"
+#include "meshing/curved/curved_validate.hpp"
+#include "meshing/io/surface_io.hpp"
+#include "meshing/io/vtu_io.hpp"
+#include "tools/curvefem/boundary_map_json.hpp"
+#include "tools/curvefem/cli_common.hpp"
+#include "tools/curvefem/commands.hpp"
+
+namespace curvefem::cli {
+
+nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
+                                              double eps_rel);  // cmd_mesh.cpp
+std::pair<double, int> map_roundtrip(const BoundaryMap& map, const meshing::shell::Shell& shell,
+                                     const SurfaceMesh& input);  // cmd_mesh.cpp
+
+namespace {
+
+struct ValidateArgs {
+  std::string dir, input;
+  double eps = -1;
+  int subdivision = 0;
+  bool json = false;
+  GlobalOptions global;
+};
+
+}  // namespace
+
+void register_validate(CLI::App& app) {
+  auto args = std::make_shared<ValidateArgs>();
+  CLI::App* sub =
+      app.add_subcommand("validate", "independently re-check a `curvefem mesh` output directory");
+  sub->add_option("dir", args->dir, "output folder of `curvefem mesh`")->required();
+  sub->add_option("--input", args->input, "input surface (default: the one in report.json)");
+  sub->add_option("--eps", args->eps, "distance bound (default: eps_rel of report.json)");
+  sub->add_option("--subdivision", args->subdivision,
+                  "flat triangles per curved edge for the embedding check (default 2K)");
+  sub->add_flag("--json", args->json, "print the result as JSON");
+  add_global_options(*sub, args->global);
+  add_command(sub, [args]() {
+    auto progress = apply_global_options(args->global);
+    const std::filesystem::path dir(args->dir);
+    const std::filesystem::path report_path = dir / "report.json";
+    std::ifstream rf(report_path);
+    if (!rf) throw IoError(report_path.string() + ": cannot open (is this a mesh output?)");
+    nlohmann::json report;
+    try {
+      report = nlohmann::json::parse(rf);
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(report_path.string() + ": not valid JSON: " + e.what());
+    }
+    std::string input_path = args->input;
+    double eps = args->eps;
+    try {
+      if (input_path.empty()) input_path = report.at("input").get<std::string>();
+      if (eps <= 0) eps = report.at("eps_rel").get<double>();
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(report_path.string() + ": missing input or eps_rel: " + e.what());
+    }
+    const SurfaceMesh input = io::read_surface(input_path);
+    const io::VtuContent vtu = io::read_vtu(dir / "mesh.vtu");
+    if (vtu.mesh.kind != CellKind::tetrahedron)
+      throw InputError((dir / "mesh.vtu").string() + ": not a tetrahedral mesh");
+    const SavedBoundaryMap saved = read_boundary_map(dir / "boundary_map.json");
+    const BoundaryMap& map = saved.map;
+    if (map.boundary.order != vtu.mesh.order)
+      throw InputError((dir / "boundary_map.json").string() + ": order " +
+                       std::to_string(map.boundary.order) + " differs from mesh.vtu's " +
+                       std::to_string(vtu.mesh.order));
+    const auto v = meshing::curved::validate_curved_mesh(vtu.mesh, map, input, args->subdivision);
+    double roundtrip = 0;
+    int roundtrip_failures = 0;
+    if (saved.has_shell)
+      std::tie(roundtrip, roundtrip_failures) = map_roundtrip(map, saved.shell, input);
+    const bool ok = v.valid(eps) && roundtrip_failures == 0 && roundtrip <= 1e-6;
+    progress.reset();
+    if (args->json) {
+      auto j = curved_validation_json(v, eps);
+      j["map_roundtrip_checked"] = saved.has_shell;
+      j["map_roundtrip_max_error_rel"] = roundtrip;
+      j["map_roundtrip_failures"] = roundtrip_failures;
+      j["valid"] = ok;
+      std::printf("%s\n", j.dump(2).c_str());
+    } else {
+      std::printf("validate %s (input %s)\n", args->dir.c_str(), input_path.c_str());
+      std::printf("  tets                 %d of order %d\n", v.tets, vtu.mesh.order);
+      std::printf(
+          "  det J certified      %s (%d non-positive, %d undecided%s)\n",
+          v.certified() ? "yes" : "NO", v.non_positive_tets, v.undecided_tets,
+          v.first_bad_tet >= 0 ? (", first tet " + std::to_string(v.first_bad_tet)).c_str() : "");
+      std::printf("  min scaled Jacobian  %.4g, MIPS mean %.4g max %.4g\n", v.min_scaled_jacobian,
+                  v.mean_mips, v.max_mips);
+      std::printf("  boundary             %d faces, %d missing, %d extra, %d node mismatches\n",
+                  v.boundary_faces, v.boundary_faces_missing, v.boundary_faces_extra,
+                  v.boundary_node_mismatches);
+      std::printf("  boundary embedded    %s (%d self-intersections at %d per edge)\n",
+                  v.boundary_self_intersections == 0 ? "yes" : "NO", v.boundary_self_intersections,
+                  v.subdivision);
+      std::printf("  distance             max %.4g (eps %.4g) at input vertex %d%s\n",
+                  v.max_distance_rel, eps, v.max_distance_vertex,
+                  v.max_distance_rel <= eps ? "" : "  EXCEEDS eps");
+      std::printf("  unmapped vertices    %d\n", v.unmapped_vertices);
+      std::printf("  phi orientation      %d flipped of %d input faces inside one boundary face\n",
+                  v.flipped_input_faces, v.input_faces_checked);
+      if (saved.has_shell)
+        std::printf("  phi roundtrip        max %.3g, %d failures\n", roundtrip,
+                    roundtrip_failures);
+      else
+        std::printf("  phi roundtrip        not checked (no shell in boundary_map.json)\n");
+      std::printf("  result               %s (%.2f s)\n", ok ? "valid" : "INVALID", v.seconds);
+    }
+    std::fflush(stdout);
+    return ok ? 0 : 3;
+  });
+}
+
+}  // namespace curvefem::cli
