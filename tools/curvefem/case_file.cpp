@@ -1,6 +1,7 @@
 #include "tools/curvefem/case_file.hpp"
 
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -83,9 +84,16 @@ struct Reader {
   }
 };
 
+Eigen::Vector3d nonzero_vector(const Reader& r, const json& j, const std::string& path) {
+  const Eigen::Vector3d d = r.point(j, path);
+  if (!(d.norm() > 0)) fail(path, "must be a non-zero vector", r.file);
+  return d;
+}
+
 Selection read_selection(const Reader& r, const json& j, const std::string& path) {
-  r.only_keys(j, path, {"all", "tag", "box"});
-  if (j.size() != 1) fail(path, "a selection has exactly one of: all, tag, box", r.file);
+  const char* k_kinds = "all, tag, box, plane, normal, and, or, not";
+  r.only_keys(j, path, {"all", "tag", "box", "plane", "normal", "and", "or", "not"});
+  if (j.size() != 1) fail(path, std::string("a selection has exactly one of: ") + k_kinds, r.file);
   Selection s;
   s.where = path;
   if (const json* v = r.get(j, "all")) {
@@ -102,8 +110,65 @@ Selection read_selection(const Reader& r, const json& j, const std::string& path
     s.hi = r.point((*v)[1], path + "/box/1");
     if ((s.lo.array() > s.hi.array()).any())
       fail(path + "/box", "lower corner above upper corner", r.file);
+  } else if (const json* v = r.get(j, "plane")) {
+    s.kind = Selection::Kind::plane;
+    const std::string p = path + "/plane";
+    r.only_keys(*v, p, {"point", "normal"});
+    const json* point = r.get(*v, "point");
+    const json* normal = r.get(*v, "normal");
+    if (!point) fail(p + "/point", "missing ([x, y, z] on the plane)", r.file);
+    if (!normal) fail(p + "/normal", "missing ([nx, ny, nz], towards the selected side)", r.file);
+    s.point = r.point(*point, p + "/point");
+    s.direction = nonzero_vector(r, *normal, p + "/normal");
+  } else if (const json* v = r.get(j, "normal")) {
+    s.kind = Selection::Kind::normal;
+    const std::string p = path + "/normal";
+    r.only_keys(*v, p, {"direction", "angle"});
+    const json* dir = r.get(*v, "direction");
+    if (!dir) fail(p + "/direction", "missing ([dx, dy, dz])", r.file);
+    s.direction = nonzero_vector(r, *dir, p + "/direction");
+    if (const json* a = r.get(*v, "angle")) s.angle_deg = r.number(*a, p + "/angle");
+    if (!(s.angle_deg >= 0 && s.angle_deg <= 180))
+      fail(p + "/angle", "must be in [0, 180]", r.file);
+  } else if (const json* v = r.get(j, "not")) {
+    s.kind = Selection::Kind::none_of;
+    s.children.push_back(read_selection(r, *v, path + "/not"));
+  } else {
+    const bool is_and = r.get(j, "and") != nullptr;
+    const std::string key = is_and ? "and" : "or";
+    const json& list = *r.get(j, key);
+    s.kind = is_and ? Selection::Kind::all_of : Selection::Kind::any_of;
+    if (!list.is_array() || list.empty())
+      fail(path + "/" + key, "expected a non-empty array of selections", r.file);
+    for (std::size_t i = 0; i < list.size(); ++i)
+      s.children.push_back(read_selection(r, list[i], path + "/" + key + "/" + std::to_string(i)));
   }
   return s;
+}
+
+json selection_json(const Selection& s) {
+  auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
+  switch (s.kind) {
+    case Selection::Kind::all:
+      return {{"all", true}};
+    case Selection::Kind::tag:
+      return {{"tag", s.tag}};
+    case Selection::Kind::box:
+      return {{"box", json::array({vec(s.lo), vec(s.hi)})}};
+    case Selection::Kind::plane:
+      return {{"plane", {{"point", vec(s.point)}, {"normal", vec(s.direction)}}}};
+    case Selection::Kind::normal:
+      return {{"normal", {{"direction", vec(s.direction)}, {"angle", s.angle_deg}}}};
+    case Selection::Kind::none_of:
+      return {{"not", selection_json(s.children.at(0))}};
+    case Selection::Kind::all_of:
+    case Selection::Kind::any_of: {
+      json list = json::array();
+      for (const auto& c : s.children) list.push_back(selection_json(c));
+      return {{s.kind == Selection::Kind::all_of ? "and" : "or", list}};
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -129,12 +194,20 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
   };
 
   const json* geometry = r.get(j, "geometry");
-  if (!geometry) fail("/geometry", "missing (e.g. {\"mesh\": \"part.msh\"})", r.file);
-  r.only_keys(*geometry, "/geometry", {"mesh", "builtin"});
+  if (!geometry) fail("/geometry", "missing (e.g. {\"surface\": \"part.obj\"})", r.file);
+  r.only_keys(*geometry, "/geometry",
+              {"mesh", "builtin", "surface", "builtin_surface", "features"});
   const json* mesh = r.get(*geometry, "mesh");
   const json* builtin = r.get(*geometry, "builtin");
-  if ((mesh == nullptr) == (builtin == nullptr))
-    fail("/geometry", "give exactly one of \"mesh\" (a .msh/.vtu file) or \"builtin\"", r.file);
+  const json* surface = r.get(*geometry, "surface");
+  const json* builtin_surface = r.get(*geometry, "builtin_surface");
+  if ((mesh != nullptr) + (builtin != nullptr) + (surface != nullptr) +
+          (builtin_surface != nullptr) !=
+      1)
+    fail("/geometry",
+         "give exactly one of \"surface\" (a dense triangle surface), \"builtin_surface\", "
+         "\"mesh\" (a .msh/.vtu tet mesh) or \"builtin\"",
+         r.file);
   if (mesh) c.mesh = resolve(r.string(*mesh, "/geometry/mesh"));
   if (builtin) {
     r.only_keys(*builtin, "/geometry/builtin", {"shape", "size", "divisions", "order"});
@@ -156,13 +229,102 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
     if (const json* v = r.get(*builtin, "order"))
       c.builtin_order = r.integer(*v, "/geometry/builtin/order", 1, 4);
   }
+  if (surface) {
+    c.surface = resolve(r.string(*surface, "/geometry/surface"));
+    if (!std::filesystem::is_regular_file(c.surface))
+      fail("/geometry/surface", "file not found: " + c.surface.string(), r.file);
+  }
+  if (builtin_surface) {
+    const std::string p = "/geometry/builtin_surface";
+    const json& b = *builtin_surface;
+    r.only_keys(b, p, {"shape", "level", "radius", "R", "r", "nu", "nv", "lo", "hi", "divisions"});
+    const json* shape = r.get(b, "shape");
+    if (!shape) fail(p + "/shape", "missing (sphere, torus or box)", r.file);
+    c.builtin_surface = r.string(*shape, p + "/shape");
+    const std::map<std::string, std::set<std::string>> keys = {{"sphere", {"level", "radius"}},
+                                                               {"torus", {"R", "r", "nu", "nv"}},
+                                                               {"box", {"lo", "hi", "divisions"}}};
+    if (!keys.count(c.builtin_surface))
+      fail(p + "/shape", "'" + c.builtin_surface + "': expected sphere, torus or box", r.file);
+    for (const auto& [key, value] : b.items())
+      if (key != "shape" && !keys.at(c.builtin_surface).count(key))
+        fail(p + "/" + key, "not a parameter of the " + c.builtin_surface, r.file);
+    if (const json* v = r.get(b, "level")) c.sphere_level = r.integer(*v, p + "/level", 0, 7);
+    if (const json* v = r.get(b, "radius")) c.radius = r.number(*v, p + "/radius");
+    if (!(c.radius > 0)) fail(p + "/radius", "must be positive", r.file);
+    if (const json* v = r.get(b, "R")) c.torus_R = r.number(*v, p + "/R");
+    if (const json* v = r.get(b, "r")) c.torus_r = r.number(*v, p + "/r");
+    if (!(c.torus_r > 0 && c.torus_R > c.torus_r)) fail(p + "/r", "need 0 < r < R", r.file);
+    if (const json* v = r.get(b, "nu")) c.torus_nu = r.integer(*v, p + "/nu", 3, 2000);
+    if (const json* v = r.get(b, "nv")) c.torus_nv = r.integer(*v, p + "/nv", 3, 2000);
+    if (const json* v = r.get(b, "lo")) c.box_lo = r.point(*v, p + "/lo");
+    if (const json* v = r.get(b, "hi")) c.box_hi = r.point(*v, p + "/hi");
+    if (!(c.box_lo.array() < c.box_hi.array()).all())
+      fail(p + "/hi", "must be above lo in every coordinate", r.file);
+    if (const json* v = r.get(b, "divisions"))
+      c.box_divisions = r.integer(*v, p + "/divisions", 1, 500);
+  }
+  if (const json* f = r.get(*geometry, "features")) {
+    const std::string p = "/geometry/features";
+    if (!surface && !builtin_surface)
+      fail(p, "only with a dense surface (geometry.surface or geometry.builtin_surface)", r.file);
+    if (f->is_string()) {
+      c.features = f->get<std::string>();
+      if (c.features != "auto" && c.features != "none")
+        fail(p,
+             "'" + c.features + "': expected \"auto\", \"none\", {\"angle\": DEG} or " +
+                 "{\"file\": \"edges.json\"}",
+             r.file);
+    } else {
+      r.only_keys(*f, p, {"angle", "file"});
+      if (f->size() != 1) fail(p, "give exactly one of angle, file", r.file);
+      if (const json* v = r.get(*f, "angle")) {
+        c.features = "angle";
+        c.feature_angle = r.number(*v, p + "/angle");
+        if (!(c.feature_angle > 0 && c.feature_angle < 180))
+          fail(p + "/angle", "must be in (0, 180)", r.file);
+      } else {
+        c.features = "file";
+        c.feature_file = resolve(r.string(*r.get(*f, "file"), p + "/file"));
+        if (!std::filesystem::is_regular_file(c.feature_file))
+          fail(p + "/file", "file not found: " + c.feature_file.string(), r.file);
+      }
+    }
+  }
+  const bool dense_input = surface || builtin_surface;
+  c.method = dense_input ? "curved" : "given";
 
   if (const json* m = r.get(j, "meshing")) {
-    r.only_keys(*m, "/meshing", {"method"});
+    r.only_keys(*m, "/meshing", {"method", "order", "eps", "thickness", "validate"});
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
+    if (c.method != "given" && c.method != "curved" && c.method != "dense")
+      fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
+    if (c.method == "given" && dense_input)
+      fail("/meshing/method",
+           "\"given\" takes a tet mesh (geometry.mesh or geometry.builtin), not a surface", r.file);
+    if (c.method != "given" && !dense_input)
+      fail("/meshing/method",
+           "\"" + c.method +
+               "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
+           r.file);
+    for (const char* key : {"order", "eps", "thickness", "validate"})
+      if (r.get(*m, key) && c.method != "curved")
+        fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
+    if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
+    if (const json* v = r.get(*m, "eps")) {
+      c.eps = r.number(*v, "/meshing/eps");
+      if (!(c.eps > 0 && c.eps <= 0.5)) fail("/meshing/eps", "must be in (0, 0.5]", r.file);
+    }
+    if (const json* v = r.get(*m, "thickness")) {
+      c.thickness = r.number(*v, "/meshing/thickness");
+      if (!(c.thickness > 0 && c.thickness <= 0.5))
+        fail("/meshing/thickness", "must be in (0, 0.5]", r.file);
+    }
+    if (const json* v = r.get(*m, "validate")) {
+      if (!v->is_boolean()) fail("/meshing/validate", "expected true/false", r.file);
+      c.validate = v->get<bool>();
+    }
   }
-  if (c.method != "given")
-    fail("/meshing/method", "'" + c.method + "' is not available yet (only \"given\")", r.file);
 
   if (const json* p = r.get(j, "physics")) {
     r.only_keys(*p, "/physics", {"type", "kappa", "E", "nu", "load_steps"});
@@ -193,8 +355,11 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
     r.only_keys(*d, "/discretization", {"degree", "quadrature"});
     if (const json* v = r.get(*d, "degree"))
       c.degree = r.integer(*v, "/discretization/degree", 1, 4);
-    if (const json* v = r.get(*d, "quadrature"))
-      c.quadrature = r.integer(*v, "/discretization/quadrature", 0, 30);
+    if (const json* v = r.get(*d, "quadrature")) {
+      // "default" is what resolved_case.json writes, so a resolved case runs again unchanged.
+      if (!(v->is_string() && v->get<std::string>() == "default"))
+        c.quadrature = r.integer(*v, "/discretization/quadrature", 0, 30);
+    }
   }
   const int comps = c.components();
   if (const json* v = r.get(j, "rhs")) c.rhs = r.expressions(*v, "/rhs", comps);
@@ -216,6 +381,15 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
       const json* select = r.get(b, "select");
       if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
       bc.select = read_selection(r, *select, p + "/select");
+      if (!c.dense_surface()) {
+        const auto k = bc.select.kind;
+        if (k != Selection::Kind::all && k != Selection::Kind::tag && k != Selection::Kind::box &&
+            k != Selection::Kind::plane)
+          fail(p + "/select",
+               "normal, and, or, not are evaluated on a dense input surface: they need "
+               "meshing.method curved or dense",
+               r.file);
+      }
       const json* value = r.get(b, "value");
       if (!value) fail(p + "/value", "missing", r.file);
       bc.value = r.expressions(*value, p + "/value", comps);
@@ -258,16 +432,49 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
     return a;
   };
   json res;
-  if (c.builtin.empty())
+  auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
+  if (!c.mesh.empty())
     res["geometry"] = {{"mesh", c.mesh.string()}};
   else if (c.builtin == "ball")
     res["geometry"] = {
         {"builtin", {{"shape", "ball"}, {"size", c.builtin_size}, {"order", c.builtin_order}}}};
-  else
+  else if (c.builtin == "cube")
     res["geometry"] = {
         {"builtin",
          {{"shape", "cube"}, {"divisions", c.builtin_divisions}, {"order", c.builtin_order}}}};
+  else if (!c.surface.empty())
+    res["geometry"] = {{"surface", c.surface.string()}};
+  else if (c.builtin_surface == "sphere")
+    res["geometry"] = {{"builtin_surface",
+                        {{"shape", "sphere"}, {"level", c.sphere_level}, {"radius", c.radius}}}};
+  else if (c.builtin_surface == "torus")
+    res["geometry"] = {{"builtin_surface",
+                        {{"shape", "torus"},
+                         {"R", c.torus_R},
+                         {"r", c.torus_r},
+                         {"nu", c.torus_nu},
+                         {"nv", c.torus_nv}}}};
+  else
+    res["geometry"] = {{"builtin_surface",
+                        {{"shape", "box"},
+                         {"lo", vec(c.box_lo)},
+                         {"hi", vec(c.box_hi)},
+                         {"divisions", c.box_divisions}}}};
+  if (c.dense_surface()) {
+    if (c.features == "angle")
+      res["geometry"]["features"] = {{"angle", c.feature_angle}};
+    else if (c.features == "file")
+      res["geometry"]["features"] = {{"file", c.feature_file.string()}};
+    else
+      res["geometry"]["features"] = c.features;
+  }
   res["meshing"] = {{"method", c.method}};
+  if (c.method == "curved") {
+    res["meshing"]["order"] = c.order;
+    res["meshing"]["eps"] = c.eps;
+    res["meshing"]["thickness"] = c.thickness;
+    res["meshing"]["validate"] = c.validate;
+  }
   res["physics"] = {{"type", c.physics}};
   if (c.physics == "poisson")
     res["physics"]["kappa"] = c.kappa.text();
@@ -280,19 +487,7 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
   res["boundary_conditions"] = json::array();
   for (const auto& bc : c.boundary_conditions) {
     json b = {{"type", bc.type}, {"value", exprs(bc.value)}};
-    switch (bc.select.kind) {
-      case Selection::Kind::all:
-        b["select"] = {{"all", true}};
-        break;
-      case Selection::Kind::tag:
-        b["select"] = {{"tag", bc.select.tag}};
-        break;
-      case Selection::Kind::box:
-        b["select"] = {{"box",
-                        {{bc.select.lo[0], bc.select.lo[1], bc.select.lo[2]},
-                         {bc.select.hi[0], bc.select.hi[1], bc.select.hi[2]}}}};
-        break;
-    }
+    b["select"] = selection_json(bc.select);
     if (comps == 3 && bc.type == "dirichlet") b["components"] = bc.components;
     res["boundary_conditions"].push_back(b);
   }

@@ -12,17 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "mapping/selection.hpp"
 #include "tools/curvefem/expression.hpp"
 
 namespace curvefem::cli {
 
-struct Selection {
-  enum class Kind { all, tag, box };
-  Kind kind = Kind::all;
-  int tag = 0;
-  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
-  std::string where;  ///< JSON path, for messages
-};
+using Selection = mapping::Selection;
 
 struct BoundaryConditionSpec {
   std::string type;  ///< dirichlet | neumann
@@ -38,7 +33,24 @@ struct CaseSpec {
   double builtin_size = 0.3;   ///< ball: target edge length (radius 1)
   int builtin_divisions = 4;   ///< cube: n³ cubes of 6 tets on [0,1]³
   int builtin_order = 1;       ///< geometric order k of the built-in mesh
-  std::string method = "given";
+  // Dense-surface pipelines (meshing.method curved | dense):
+  std::filesystem::path surface;  ///< geometry.surface, resolved (empty for a built-in surface)
+  std::string builtin_surface;    ///< geometry.builtin_surface.shape: "" | sphere | torus | box
+  int sphere_level = 3;           ///< icosphere subdivisions (20·4^level faces)
+  double radius = 1.0;            ///< sphere radius
+  double torus_R = 1.0, torus_r = 0.4;
+  int torus_nu = 48, torus_nv = 24;
+  Eigen::Vector3d box_lo = Eigen::Vector3d::Zero(), box_hi = Eigen::Vector3d::Ones();
+  int box_divisions = 4;
+  std::string features = "auto";  ///< auto | none | angle | file
+  double feature_angle = 60.0;
+  std::filesystem::path feature_file;
+  std::string method = "given";  ///< given | curved | dense
+  int order = 3;                 ///< curved: geometric order k
+  double eps = 1e-2;             ///< curved: distance bound, relative to the bbox edge
+  double thickness = 0.02;       ///< curved: shell half-thickness cap (relative)
+  bool validate = true;          ///< curved: independent validation of the mesh (report.json)
+  bool dense_surface() const { return method == "curved" || method == "dense"; }
   std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
   Expression kappa;                 ///< poisson
   double E = 1.0, nu = 0.3;         ///< elasticity

@@ -1,32 +1,59 @@
-// `curvefem run CASE.json [-o DIR]`: p-FEM on a given curved tetrahedral mesh (meshing.method
-// "given"; the dense-surface pipelines arrive with the curved mesher). Writes volume.vtu (Lagrange
-// cells of order max(p, k) with the solution), resolved_case.json and report.json (last).
+// `curvefem run CASE.json [-o DIR]`: the whole pipeline of DESIGN.md §1.
+//   meshing.method "curved": dense surface → coarse curved tet mesh of order k with the boundary
+//   map
+//     φ (meshing/curved); boundary conditions painted on the dense input are evaluated at φ⁻¹(x)
+//     (mapping/); the solution is read at φ(v) for every input vertex.
+//   meshing.method "dense": the classical baseline — the input itself is tetrahedralized (tetfill,
+//     boundary unchanged, φ = identity), same physics, same outputs.
+//   meshing.method "given": p-FEM on a given curved tet mesh (boundary data on the mesh).
+// Writes volume.vtu (Lagrange cells of order max(p, k) with the solution), surface.vtu (the dense
+// input with the solution, exact solution, error and selection coverage; dense-surface methods),
+// result.pvd, resolved_case.json and report.json (last). Nothing is written before the solve
+// succeeds; a failed run leaves no output directory it created.
 #include <cstring>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <unordered_map>
 
+#include "fem/assembly/face_integration.hpp"
 #include "fem/problems/constraints.hpp"
 #include "fem/problems/elasticity.hpp"
 #include "fem/problems/error_norms.hpp"
 #include "fem/problems/interpolation.hpp"
 #include "fem/problems/poisson.hpp"
 #include "fem/space/function_space.hpp"
+#include "mapping/boundary_inverse.hpp"
+#include "mapping/selection.hpp"
+#include "mapping/surface_transfer.hpp"
+#include "meshing/check/check_surface.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/core/timer.hpp"
+#include "meshing/curved/curved_mesher.hpp"
+#include "meshing/curved/curved_validate.hpp"
+#include "meshing/curved/features.hpp"
 #include "meshing/io/cad_part.hpp"
 #include "meshing/io/msh_io.hpp"
+#include "meshing/io/pvd.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "meshing/tetfill/tetfill.hpp"
 #include "tools/curvefem/case_file.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 #include "tools/curvefem/report_json.hpp"
 
 namespace curvefem::cli {
+
+// cmd_mesh.cpp
+nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
+                                              double eps_rel);
+
 namespace {
+namespace cv = meshing::curved;
 
 using json = nlohmann::json;
 
@@ -143,12 +170,10 @@ Selected select_faces(const Selection& s, const std::vector<int>& face_tags,
     out.faces[f] = take;
     count += take;
   }
-  if (s.kind == Selection::Kind::box) {
-    const Eigen::Vector3d lo = s.lo, hi = s.hi;
-    out.where = [lo, hi](const Eigen::Vector3d& x) {
-      return (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
-    };
-    // A box acts point-wise: it selects something only if a boundary DOF lies inside it.
+  const bool pointwise = s.kind == Selection::Kind::box || s.kind == Selection::Kind::plane;
+  if (pointwise) {
+    out.where = [s](const Eigen::Vector3d& x) { return mapping::selects(s, {.x = x}); };
+    // A region acts point-wise: it selects something only if a boundary DOF lies inside it.
     count = 0;
     fem::for_each_boundary_dof(space, out.faces, out.where, [&](int) { ++count; });
   }
@@ -156,12 +181,183 @@ Selected select_faces(const Selection& s, const std::vector<int>& face_tags,
     throw InputError(
         s.where + ": selects no boundary face" +
             (s.kind == Selection::Kind::box ? std::string(" (no boundary node inside the box)")
-                                            : std::string()) +
+             : s.kind == Selection::Kind::plane
+                 ? std::string(" (no boundary node on the selected side of the plane)")
+                 : std::string()) +
             (s.kind == Selection::Kind::tag
                  ? " (no boundary triangle has tag " + std::to_string(s.tag) + ")"
                  : ""),
         {.file = file});
   return out;
+}
+
+// ---- dense-surface pipelines (meshing.method curved | dense) --------------------------------
+
+SurfaceMesh load_input_surface(const CaseSpec& spec) {
+  SurfaceMesh input;
+  if (spec.builtin_surface == "sphere")
+    input = make_icosphere(spec.sphere_level, spec.radius);
+  else if (spec.builtin_surface == "torus")
+    input = make_torus(spec.torus_R, spec.torus_r, spec.torus_nu, spec.torus_nv);
+  else if (spec.builtin_surface == "box")
+    input = make_box(spec.box_lo, spec.box_hi, spec.box_divisions);
+  else
+    input = io::read_surface(spec.surface);
+  const std::string where =
+      spec.builtin_surface.empty() ? "/geometry/surface" : "/geometry/builtin_surface";
+  const check::CheckReport report = check::check_surface(input, {});
+  if (!report.acceptable)
+    throw InputError(where + ": not a valid meshing input: " +
+                         (report.defects.empty() ? std::string("empty surface")
+                                                 : report.defects.front().message) +
+                         (spec.surface.empty() ? std::string()
+                                               : " (curvefem check " + spec.surface.string() +
+                                                     " gives the full diagnosis)"),
+                     {.file = spec.case_file.string()});
+  return input;
+}
+
+std::vector<std::array<int, 2>> feature_edges(const CaseSpec& spec, const SurfaceMesh& input) {
+  if (spec.features == "none") return {};
+  if (spec.features != "file")
+    return cv::detect_feature_edges(input, spec.features == "angle" ? spec.feature_angle : 60.0);
+  const std::string where = "/geometry/features/file";
+  std::ifstream f(spec.feature_file);
+  if (!f) throw InputError(where + ": cannot open " + spec.feature_file.string());
+  std::vector<std::array<int, 2>> edges;
+  try {
+    const json j = json::parse(f);
+    const json& list = j.is_object() ? j.at("edges") : j;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      if (!list[i].is_array() || list[i].size() != 2)
+        throw InputError(where + ": feature edge " + std::to_string(i) +
+                         " is not a pair of vertex ids");
+      edges.push_back({list[i][0].get<int>(), list[i][1].get<int>()});
+    }
+  } catch (const json::exception& e) {
+    throw InputError(where + ": not a JSON list of vertex-index pairs: " + e.what());
+  }
+  try {
+    return cv::validate_feature_edges(input, edges);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what());
+  }
+}
+
+/// Fails early (before meshing) when a selection covers no point of the input surface.
+void check_selection_on_input(const Selection& s, const SurfaceMesh& input,
+                              const std::string& file) {
+  for (int f = 0; f < input.num_faces(); ++f)
+    if (mapping::face_coverage(s, input, f) > 0) return;
+  throw InputError(s.where +
+                       ": selects nothing on the input surface (no corner or centroid of an "
+                       "input face is selected)",
+                   {.file = file});
+}
+
+/// Selection and value of a boundary condition at φ⁻¹(x) on the dense input. All boundary faces
+/// are flagged; the point filter does the selecting, point-wise on the input.
+Selected select_on_input(const BoundaryConditionSpec& bc, const SurfaceMesh& input,
+                         const mapping::BoundaryInverse& inverse, const LagrangeMesh& mesh,
+                         const fem::FunctionSpace& space, const std::string& file) {
+  Selected out;
+  out.faces.assign(space.boundary_faces.size(), 1);
+  const Selection s = bc.select;
+  if (s.kind != Selection::Kind::all)
+    out.where = [s, &input, &inverse](const Eigen::Vector3d& x) {
+      return mapping::selects(s, mapping::site_of(input, inverse.at(x)));
+    };
+  long long count = 0;
+  fem::for_each_boundary_dof(space, out.faces, out.where, [&](int) { ++count; });
+  if (count == 0 && bc.type == "neumann")
+    fem::for_each_face_point(
+        mesh, space, out.faces, 2 * space.degree,
+        [&](int, int, const fem::FacePoint& p) { count += !out.where || out.where(p.x); });
+  if (count == 0)
+    throw InputError(s.where + ": selects no boundary " +
+                         (bc.type == "neumann" ? "point" : "node") +
+                         " of the mesh (the selected part of the input is smaller than the "
+                         "mesh resolution)",
+                     {.file = file});
+  return out;
+}
+
+/// The mesh of a dense-surface pipeline and what maps between it and the input.
+struct SurfacePipeline {
+  SurfaceMesh input;
+  std::optional<cv::CurvedMesh> curved;  // method curved
+  BoundaryMap identity_map;              // method dense
+  std::optional<mapping::BoundaryInverse> inverse;
+  json report;
+  bool valid = true;
+  const BoundaryMap& map() const { return curved ? curved->map : identity_map; }
+};
+
+void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
+                            TerminalProgress& progress, Timings& timings, LagrangeMesh& mesh,
+                            SurfacePipeline& p) {
+  {
+    ScopedTimer t(timings, "load_surface");
+    progress.update("load surface", 0.0);
+    p.input = load_input_surface(spec);
+    for (const auto& bc : spec.boundary_conditions)
+      check_selection_on_input(bc.select, p.input, spec.case_file.string());
+    progress.end_stage();
+  }
+  p.report["input_vertices"] = p.input.num_vertices();
+  p.report["input_faces"] = p.input.num_faces();
+  if (spec.method == "curved") {
+    ScopedTimer t(timings, "meshing");
+    cv::CurvedMeshOptions options;
+    options.order = spec.order;
+    options.eps_rel = spec.eps;
+    options.thickness_rel = spec.thickness;
+    options.threads = global.threads;
+    options.feature_edges = feature_edges(spec, p.input);
+    cv::CurvedMeshStats stats;
+    p.curved = cv::build_curved_mesh(p.input, options, stats, progress.callback());
+    progress.end_stage();
+    mesh = p.curved->mesh;
+    json stages = json::object();
+    for (const auto& [name, sec] : stats.stage_seconds) stages[name] = sec;
+    p.report["feature_edges"] = stats.feature_edges;
+    p.report["coarse_faces"] = stats.coarse_faces;
+    p.report["slab_tets"] = stats.slab_tets;
+    p.report["interior_tets"] = stats.interior_tets;
+    p.report["faces_fully_curved"] = stats.faces_fully_curved;
+    p.report["faces_blended"] = stats.faces_blended;
+    p.report["faces_linear"] = stats.faces_linear;
+    p.report["fiber_misses"] = stats.fiber_misses;
+    p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
+    p.report["stage_s"] = stages;
+    if (spec.validate) {
+      progress.update("validate mesh", 0.0);
+      const cv::CurvedValidation v = cv::validate_curved_mesh(mesh, p.curved->map, p.input);
+      p.report["validation"] = json::parse(curved_validation_json(v, spec.eps).dump());
+      p.report["max_distance_rel"] = v.max_distance_rel;
+      p.report["min_jacobian_certified"] = v.certified();
+      p.valid = v.valid(spec.eps);
+      progress.end_stage();
+    }
+    p.inverse = mapping::BoundaryInverse::through_shell(p.curved->map, p.curved->shell, p.input);
+  } else {
+    ScopedTimer t(timings, "meshing");
+    progress.update("tetrahedralize input", 0.0);
+    meshing::tetfill::TetFillOptions options;
+    options.threads = std::max(global.threads, 1);
+    const meshing::tetfill::TetFillResult fill =
+        meshing::tetfill::fill_interior(p.input.V, p.input.F, options);
+    progress.end_stage();
+    mesh = LagrangeMesh{};
+    mesh.kind = CellKind::tetrahedron;
+    mesh.order = 1;
+    mesh.nodes = fill.V;
+    mesh.cells = fill.T;
+    p.identity_map = mapping::make_identity_boundary_map(p.input);
+    p.inverse = mapping::BoundaryInverse::identity(p.input);
+    p.report["interior_vertices"] = fill.V.rows() - fill.boundary_vertices;
+    p.report["tetfill_s"] = fill.seconds;
+  }
 }
 
 int run_case(const RunOptions& o) {
@@ -170,12 +366,16 @@ int run_case(const RunOptions& o) {
   Stopwatch total;
   const CaseSpec spec = read_case(o.case_file, o.output);
   const std::string case_name = spec.case_file.string();
-  StagedOutputDir out(spec.output_dir);
 
   LagrangeMesh mesh;
   fem::FunctionSpace space;
   std::vector<int> face_tags;
-  {
+  SurfacePipeline pipeline;  // dense-surface methods only
+  if (spec.dense_surface()) {
+    build_surface_pipeline(spec, o.global, *progress, timings, mesh, pipeline);
+    ScopedTimer t(timings, "build_space");
+    space = fem::build_function_space(mesh, spec.degree);
+  } else {
     ScopedTimer t(timings, "load_mesh");
     progress->update("load mesh", 0.0);
     if (spec.builtin == "ball")
@@ -189,8 +389,19 @@ int run_case(const RunOptions& o) {
     space = fem::build_function_space(mesh, spec.degree);
     face_tags = spec.builtin == "cube" ? cube_face_tags(mesh, space)
                                        : boundary_face_tags(spec.mesh, mesh, space);
+    progress->end_stage();
   }
-  progress->end_stage();
+  // Boundary data: on the mesh (given) or on the dense input through φ⁻¹ (curved, dense).
+  auto select = [&](const BoundaryConditionSpec& bc) {
+    return spec.dense_surface()
+               ? select_on_input(bc, pipeline.input, *pipeline.inverse, mesh, space, case_name)
+               : select_faces(bc.select, face_tags, space, case_name);
+  };
+  auto at_input = [&](const Expression& e) -> std::function<double(const Eigen::Vector3d&)> {
+    if (!spec.dense_surface()) return [e](const Eigen::Vector3d& x) { return e(x); };
+    const mapping::BoundaryInverse* inv = &*pipeline.inverse;
+    return [e, inv](const Eigen::Vector3d& x) { return e(inv->at(x).position); };
+  };
   log::info("mesh: ", mesh.num_cells(), " tetrahedra of order ", mesh.order, "; degree ",
             spec.degree, ": ", space.num_dofs, " nodes, ", space.boundary_faces.size(),
             " boundary faces");
@@ -214,9 +425,8 @@ int run_case(const RunOptions& o) {
     }
     problem.quadrature_degree = spec.quadrature;
     for (const auto& bc : spec.boundary_conditions) {
-      Selected sel = select_faces(bc.select, face_tags, space, case_name);
-      const Expression v = bc.value[0];
-      auto value = [v](const Eigen::Vector3d& x) { return v(x); };
+      Selected sel = select(bc);
+      auto value = at_input(bc.value[0]);
       if (bc.type == "dirichlet")
         problem.dirichlet.push_back({sel.faces, value, sel.where});
       else
@@ -234,13 +444,22 @@ int run_case(const RunOptions& o) {
     auto vector_field = [](const std::vector<Expression>& e) {
       return [e](const Eigen::Vector3d& x) { return Eigen::Vector3d(e[0](x), e[1](x), e[2](x)); };
     };
+    auto boundary_field = [&](const std::vector<Expression>& e) -> fem::VectorField {
+      if (!spec.dense_surface()) return vector_field(e);
+      const mapping::BoundaryInverse* inv = &*pipeline.inverse;
+      return [e, inv](const Eigen::Vector3d& x) {
+        const Eigen::Vector3d y = inv->at(x).position;
+        return Eigen::Vector3d(e[0](y), e[1](y), e[2](y));
+      };
+    };
     if (!spec.rhs.empty()) problem.body_force = vector_field(spec.rhs);
     for (const auto& bc : spec.boundary_conditions) {
-      Selected sel = select_faces(bc.select, face_tags, space, case_name);
+      Selected sel = select(bc);
       if (bc.type == "dirichlet")
-        problem.dirichlet.push_back({sel.faces, bc.components, vector_field(bc.value), sel.where});
+        problem.dirichlet.push_back(
+            {sel.faces, bc.components, boundary_field(bc.value), sel.where});
       else
-        problem.traction.push_back({sel.faces, vector_field(bc.value), sel.where});
+        problem.traction.push_back({sel.faces, boundary_field(bc.value), sel.where});
     }
     fem::ElasticitySolution sol;
     if (spec.physics == "linear_elasticity") {
@@ -290,72 +509,157 @@ int run_case(const RunOptions& o) {
     report["exact_gradient"] = "4th-order central differences of the exact expression, h = 1e-3";
   }
 
-  {
-    ScopedTimer t(timings, "output");
-    progress->update("write output", 0.0);
-    const int m = std::max(spec.degree, mesh.order);
-    const fem::FunctionSpace out_space =
-        m == spec.degree ? space : fem::build_function_space(mesh, m);
-    const Eigen::MatrixXd values = fem::interpolate_field(space, u, c, out_space);
-    MeshFields fields;
-    Field uf{c == 1 ? "u" : "displacement", c, {}};
-    uf.values.resize(values.size());
-    for (int r = 0; r < values.rows(); ++r)
-      for (int i = 0; i < c; ++i) uf.values[static_cast<std::size_t>(r) * c + i] = values(r, i);
-    fields.point_data.push_back(uf);
+  // Solution on the dense input: u_h at φ(v) for every input vertex v.
+  MeshFields surface_fields;
+  if (spec.dense_surface()) {
+    ScopedTimer t(timings, "surface_transfer");
+    const SurfaceMesh& input = pipeline.input;
+    const mapping::SurfaceSamples samples = mapping::locate_input_vertices(mesh, pipeline.map());
+    const Eigen::MatrixXd values = mapping::evaluate_on_surface(space, u, c, samples);
+    const Eigen::MatrixXd images = mapping::sample_positions(mesh, samples);
+    auto field = [](const std::string& name, const Eigen::MatrixXd& m) {
+      Field f{name, int(m.cols()), {}};
+      f.values.reserve(m.size());
+      for (Eigen::Index r = 0; r < m.rows(); ++r)
+        for (Eigen::Index i = 0; i < m.cols(); ++i) f.values.push_back(m(r, i));
+      return f;
+    };
+    surface_fields.point_data.push_back(field(c == 1 ? "u" : "displacement", values));
+    surface_fields.point_data.push_back(field("phi_offset", images - input.V));
     if (!spec.exact.empty()) {
-      Field ef{"exact", c, {}}, err{"error", c, {}};
-      for (int r = 0; r < out_space.num_dofs; ++r)
-        for (int i = 0; i < c; ++i) {
-          const double ex = spec.exact[i](out_space.dof_points.row(r).transpose());
-          ef.values.push_back(ex);
-          err.values.push_back(values(r, i) - ex);
-        }
-      fields.point_data.push_back(ef);
-      fields.point_data.push_back(err);
+      const auto exact = spec.exact;
+      const mapping::SurfaceErrors e =
+          mapping::surface_errors(input, values, [exact](const Eigen::Vector3d& x, double* v) {
+            for (std::size_t i = 0; i < exact.size(); ++i) v[i] = exact[i](x);
+          });
+      surface_fields.point_data.push_back(field("exact", e.exact));
+      surface_fields.point_data.push_back(field("error", e.error));
+      report["surface_l2_error"] = e.l2;
+      report["surface_l2_norm_exact"] = e.l2_exact;
+      report["surface_max_error"] = e.max;
     }
-    if (spec.physics == "linear_elasticity") {
-      const Eigen::VectorXd vm =
-          fem::von_mises_at_dofs(mesh, out_space, {spec.E, spec.nu}, values.transpose().reshaped());
-      fields.point_data.push_back(
-          {"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
+    report["surface_vertices"] = input.num_vertices();
+    long long unmapped = 0;
+    for (Eigen::Index v = 0; v < samples.cell.size(); ++v) unmapped += samples.cell[v] < 0;
+    report["surface_unmapped_vertices"] = unmapped;
+    for (std::size_t i = 0; i < spec.boundary_conditions.size(); ++i) {
+      const auto& bc = spec.boundary_conditions[i];
+      Field f{"bc" + std::to_string(i) + "_" + bc.type, 1, {}};
+      for (int k = 0; k < input.num_faces(); ++k)
+        f.values.push_back(mapping::face_coverage(bc.select, input, k));
+      surface_fields.cell_data.push_back(f);
     }
-    io::write_vtu(out.path("volume.vtu"), fem::lagrange_mesh_of_space(mesh, out_space), fields);
-    write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
   }
-  progress->end_stage();
 
-  report["command"] = "run";
-  report["case"] = spec.case_file.string();
-  report["mesh"] = spec.builtin.empty() ? spec.mesh.string() : "builtin " + spec.builtin;
-  report["tets"] = mesh.num_cells();
-  report["order"] = mesh.order;
-  report["degree"] = spec.degree;
-  report["physics"] = spec.physics;
-  report["dofs"] = static_cast<long long>(space.num_dofs) * c;
-  report["nodes"] = space.num_dofs;
-  report["physics_details"] = physics_report;
-  report["solver"] = {{"method", solve_info.method},
-                      {"iterations", solve_info.iterations},
-                      {"relative_residual", solve_info.relative_residual},
-                      {"setup_s", solve_info.setup_s},
-                      {"solve_s", solve_info.solve_s}};
-  timings.add("total", total.seconds());
-  report["time_s"] = timings_json(timings);
-  report["peak_rss_mb"] = peak_rss_mb();
-  report["threads"] = o.global.threads;
-  write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
-  out.commit();
+  // Output: nothing is written before this point; a failure while writing removes what was made.
+  const bool existed = std::filesystem::exists(spec.output_dir);
+  std::optional<StagedOutputDir> staged;
+  try {
+    staged.emplace(spec.output_dir);
+    StagedOutputDir& out = *staged;
+    {
+      ScopedTimer t(timings, "output");
+      progress->update("write output", 0.0);
+      const int m = std::max(spec.degree, mesh.order);
+      const fem::FunctionSpace out_space =
+          m == spec.degree ? space : fem::build_function_space(mesh, m);
+      const Eigen::MatrixXd values = fem::interpolate_field(space, u, c, out_space);
+      MeshFields fields;
+      Field uf{c == 1 ? "u" : "displacement", c, {}};
+      uf.values.resize(values.size());
+      for (int r = 0; r < values.rows(); ++r)
+        for (int i = 0; i < c; ++i) uf.values[static_cast<std::size_t>(r) * c + i] = values(r, i);
+      fields.point_data.push_back(uf);
+      if (!spec.exact.empty()) {
+        Field ef{"exact", c, {}}, err{"error", c, {}};
+        for (int r = 0; r < out_space.num_dofs; ++r)
+          for (int i = 0; i < c; ++i) {
+            const double ex = spec.exact[i](out_space.dof_points.row(r).transpose());
+            ef.values.push_back(ex);
+            err.values.push_back(values(r, i) - ex);
+          }
+        fields.point_data.push_back(ef);
+        fields.point_data.push_back(err);
+      }
+      if (spec.physics == "linear_elasticity") {
+        const Eigen::VectorXd vm = fem::von_mises_at_dofs(mesh, out_space, {spec.E, spec.nu},
+                                                          values.transpose().reshaped());
+        fields.point_data.push_back(
+            {"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
+      }
+      io::write_vtu(out.path("volume.vtu"), fem::lagrange_mesh_of_space(mesh, out_space), fields);
+      write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
+    }
+    progress->end_stage();
+
+    std::vector<io::PvdEntry> parts{{"volume.vtu", 0, 0.0, "volume"}};
+    if (spec.dense_surface()) {
+      LagrangeMesh surface;
+      surface.kind = CellKind::triangle;
+      surface.order = 1;
+      surface.nodes = pipeline.input.V;
+      surface.cells = pipeline.input.F;
+      if (pipeline.input.has_tags()) surface.cell_tags = pipeline.input.tags;
+      io::write_vtu(out.path("surface.vtu"), surface, surface_fields);
+      parts.push_back({"surface.vtu", 1, 0.0, "surface"});
+    }
+    io::write_pvd(out.path("result.pvd"), parts);
+
+    report["command"] = "run";
+    report["case"] = spec.case_file.string();
+    report["method"] = spec.method;
+    if (spec.dense_surface()) {
+      report["surface"] =
+          spec.surface.empty() ? "builtin " + spec.builtin_surface : spec.surface.string();
+      report["meshing"] = pipeline.report;
+      report["mesh_valid"] = pipeline.valid;
+    } else {
+      report["mesh"] = spec.builtin.empty() ? spec.mesh.string() : "builtin " + spec.builtin;
+    }
+    report["tets"] = mesh.num_cells();
+    report["order"] = mesh.order;
+    report["degree"] = spec.degree;
+    report["physics"] = spec.physics;
+    report["dofs"] = static_cast<long long>(space.num_dofs) * c;
+    report["nodes"] = space.num_dofs;
+    report["physics_details"] = physics_report;
+    report["solver"] = {{"method", solve_info.method},
+                        {"iterations", solve_info.iterations},
+                        {"relative_residual", solve_info.relative_residual},
+                        {"setup_s", solve_info.setup_s},
+                        {"solve_s", solve_info.solve_s}};
+    timings.add("total", total.seconds());
+    report["time_s"] = timings_json(timings);
+    report["peak_rss_mb"] = peak_rss_mb();
+    report["threads"] = o.global.threads;
+    write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
+    out.commit();
+  } catch (...) {
+    staged.reset();  // removes the staging folder
+    std::error_code ec;
+    if (!existed) std::filesystem::remove(spec.output_dir, ec);  // only if empty
+    throw;
+  }
   if (!o.global.quiet) {
-    std::printf("curvefem run: %s, degree %d on %d tets of order %d: %lld unknowns\n",
-                spec.physics.c_str(), spec.degree, mesh.num_cells(), mesh.order,
-                static_cast<long long>(space.num_dofs) * c);
+    std::printf("curvefem run: %s (%s), degree %d on %d tets of order %d: %lld unknowns\n",
+                spec.physics.c_str(), spec.method.c_str(), spec.degree, mesh.num_cells(),
+                mesh.order, static_cast<long long>(space.num_dofs) * c);
     if (report.contains("l2_error"))
       std::printf("  L2 error %.3e   H1-semi error %.3e\n", report["l2_error"].get<double>(),
                   report["h1_semi_error"].get<double>());
-    for (const auto& [stage, s] : timings.stages())
-      std::printf("  %-12s %8.3f s\n", stage.c_str(), s);
-    std::printf("  results in %s\n", out.dir().c_str());
+    if (report.contains("surface_l2_error"))
+      std::printf("  on the input surface (%d vertices): L2 error %.3e   max error %.3e\n",
+                  pipeline.input.num_vertices(), report["surface_l2_error"].get<double>(),
+                  report["surface_max_error"].get<double>());
+    for (const auto& [stage, sec] : timings.stages())
+      std::printf("  %-16s %8.3f s\n", stage.c_str(), sec);
+    std::printf("  results in %s\n", staged->dir().c_str());
+  }
+  if (!pipeline.valid) {
+    std::fprintf(stderr,
+                 "curvefem run: the curved mesh failed its validation (see meshing.validation "
+                 "in report.json)\n");
+    return 3;
   }
   return 0;
 }

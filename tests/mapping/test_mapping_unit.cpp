@@ -1,0 +1,166 @@
+// mapping/ on tiny meshes built in code: point location on curved triangles, φ = identity,
+// selections, and the exact transfer of a FE field to the input vertices.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <random>
+
+#include "fem/space/function_space.hpp"
+#include "mapping/boundary_inverse.hpp"
+#include "mapping/selection.hpp"
+#include "mapping/surface_transfer.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
+
+using namespace curvefem;
+using namespace curvefem::mapping;
+
+namespace {
+/// The icosphere as order-k triangles with every node pushed onto the unit sphere.
+LagrangeMesh curved_sphere_triangles(int level, int k) {
+  const SurfaceMesh s = make_icosphere(level);
+  const auto& lattice = lagrange_lattice(CellKind::triangle, k);
+  LagrangeMesh t;
+  t.kind = CellKind::triangle;
+  t.order = k;
+  t.cells.resize(s.num_faces(), Eigen::Index(lattice.size()));
+  std::vector<Eigen::Vector3d> nodes;
+  for (int f = 0; f < s.num_faces(); ++f)
+    for (std::size_t n = 0; n < lattice.size(); ++n) {  // nodes duplicated per face: fine here
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      for (int j = 0; j < 3; ++j) p += lattice[n][j] * s.V.row(s.F(f, j)).transpose() / k;
+      t.cells(f, Eigen::Index(n)) = int(nodes.size());
+      nodes.push_back(p.normalized());
+    }
+  t.nodes.resize(Eigen::Index(nodes.size()), 3);
+  for (std::size_t i = 0; i < nodes.size(); ++i) t.nodes.row(Eigen::Index(i)) = nodes[i];
+  return t;
+}
+}  // namespace
+
+TEST(TriangleLocator, InvertsCurvedTrianglesAndRejectsPointsOffTheSurface) {
+  const LagrangeMesh t = curved_sphere_triangles(1, 3);
+  const TriangleLocator locator(t);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int i = 0; i < 200; ++i) {
+    const int f = int(rng() % t.num_cells());
+    double u = U(rng), v = U(rng);
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const Eigen::Vector3d x = t.map(f, {u, v, 0});
+    const auto p = locator.locate(x);
+    ASSERT_TRUE(p.has_value()) << i;
+    EXPECT_LT((t.map(p->face, {p->u, p->v, 0}) - x).norm(), 1e-12);
+    if (p->face == f) {
+      EXPECT_NEAR(std::abs(p->u - u) + std::abs(p->v - v), 0.0, 1e-10);
+    }
+  }
+  EXPECT_FALSE(locator.locate(Eigen::Vector3d(0.3, 0.2, 0.1)).has_value());   // inside
+  EXPECT_FALSE(locator.locate(Eigen::Vector3d(0.0, 0.0, 1.01)).has_value());  // outside
+}
+
+TEST(BoundaryInverse, IdentityReturnsThePointOnItsInputFace) {
+  const SurfaceMesh box = make_box({0, 0, 0}, {1, 2, 3}, 3);
+  const BoundaryInverse inv = BoundaryInverse::identity(box);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int i = 0; i < 100; ++i) {
+    const int f = int(rng() % box.num_faces());
+    Eigen::Vector3d b(U(rng), U(rng), U(rng));
+    b /= b.sum();
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    for (int j = 0; j < 3; ++j) x += b[j] * box.V.row(box.F(f, j)).transpose();
+    const InputPoint p = inv.at(x);
+    EXPECT_LT((p.position - x).norm(), 1e-14);
+    // The face found lies in the same side plane (same tag) as the face the point came from.
+    EXPECT_EQ(box.tags[p.face], box.tags[f]);
+  }
+  EXPECT_THROW(inv.at(Eigen::Vector3d(0.5, 1, 1.5)), MeshingError);
+}
+
+TEST(Selection, KindsAndCombinationsArePointwise) {
+  const SurfaceMesh box = make_box({0, 0, 0}, {1, 1, 1}, 2);
+  Selection plane{.kind = Selection::Kind::plane};
+  plane.point = {0.5, 0, 0};
+  plane.direction = {1, 0, 0};
+  Selection cone{.kind = Selection::Kind::normal};
+  cone.direction = {0, 0, 2};  // not normalized on purpose
+  cone.angle_deg = 10;
+  Selection tag{.kind = Selection::Kind::tag, .tag = 6};  // +z side
+  Selection both{.kind = Selection::Kind::all_of, .children = {plane, cone}};
+  Selection either{.kind = Selection::Kind::any_of, .children = {plane, cone}};
+  Selection neither{.kind = Selection::Kind::none_of, .children = {either}};
+  int checked = 0;
+  for (int f = 0; f < box.num_faces(); ++f) {
+    InputPoint p;
+    p.face = f;
+    p.bary = Eigen::Vector3d::Constant(1.0 / 3);
+    for (int j = 0; j < 3; ++j) p.position += p.bary[j] * box.V.row(box.F(f, j)).transpose();
+    const SelectionSite s = site_of(box, p);
+    const bool top = box.tags[f] == 6, right = p.position.x() >= 0.5;
+    EXPECT_EQ(selects(plane, s), right);
+    EXPECT_EQ(selects(cone, s), top);
+    EXPECT_EQ(selects(tag, s), top);
+    EXPECT_EQ(selects(both, s), top && right);
+    EXPECT_EQ(selects(either, s), top || right);
+    EXPECT_EQ(selects(neither, s), !(top || right));
+    ++checked;
+  }
+  EXPECT_EQ(checked, 48);
+  // A face straddling the plane x = 0.25 is partly covered: 2 of its 4 samples or similar.
+  Selection cut{.kind = Selection::Kind::plane};
+  cut.point = {0.25, 0, 0};
+  cut.direction = {1, 0, 0};
+  int partial = 0;
+  for (int f = 0; f < box.num_faces(); ++f) {
+    const double c = face_coverage(cut, box, f);
+    partial += c > 0 && c < 1;
+  }
+  EXPECT_GT(partial, 0);
+  EXPECT_TRUE(uses_face_data(neither));
+  EXPECT_FALSE(uses_face_data(plane));
+}
+
+TEST(SurfaceTransfer, LinearFieldIsExactAtEveryInputVertexOfTheDenseBaseline) {
+  // Dense pipeline on the unit cube: volume nodes first = input vertices, φ = identity.
+  const LagrangeMesh mesh = make_cube_tets(2);
+  const fem::FunctionSpace space1 = fem::build_function_space(mesh, 1);
+  SurfaceMesh input;
+  input.V = mesh.nodes;  // includes the interior node: unreferenced, no image
+  input.F.resize(Eigen::Index(space1.boundary_faces.size()), 3);
+  for (std::size_t f = 0; f < space1.boundary_faces.size(); ++f) {
+    const auto [c, j] = space1.boundary_faces[f];
+    int n = 0;
+    for (int i = 0; i < 4; ++i)
+      if (i != j) input.F(Eigen::Index(f), n++) = mesh.cells(c, i);
+  }
+  const BoundaryMap map = make_identity_boundary_map(input);
+  const SurfaceSamples s = locate_input_vertices(mesh, map);
+  const auto ell = [](const Eigen::Vector3d& x) {
+    return 1.5 - 2 * x.x() + 0.5 * x.y() + 3 * x.z();
+  };
+  for (int p : {1, 3}) {
+    const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+    Eigen::VectorXd u(space.num_dofs);
+    for (int d = 0; d < space.num_dofs; ++d) u[d] = ell(space.dof_points.row(d).transpose());
+    const Eigen::MatrixXd values = evaluate_on_surface(space, u, 1, s);
+    int mapped = 0;
+    for (int v = 0; v < input.num_vertices(); ++v) {
+      if (map.vertex_face[v] < 0) {
+        EXPECT_TRUE(std::isnan(values(v, 0)));
+        continue;
+      }
+      ++mapped;
+      EXPECT_NEAR(values(v, 0), ell(input.V.row(v).transpose()), 1e-12) << v;
+    }
+    EXPECT_EQ(mapped, 26);  // 3³ nodes, one interior
+    const SurfaceErrors e = surface_errors(
+        input, values, [&](const Eigen::Vector3d& x, double* out) { out[0] = ell(x); });
+    EXPECT_LT(e.l2, 1e-12);
+    EXPECT_EQ(e.vertices, 26);
+    // A wrong exact solution gives a visible error.
+    const SurfaceErrors off = surface_errors(
+        input, values, [&](const Eigen::Vector3d& x, double* out) { out[0] = ell(x) + 1; });
+    EXPECT_NEAR(off.l2, std::sqrt(6.0), 1e-12);  // area 6, error 1
+  }
+}
