@@ -1,23 +1,15 @@
 #include "meshing/shell/projection.hpp"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
+#include "meshing/shell/prism_location.hpp"
 #include "meshing/shell/shell_geometry.hpp"
 #include "meshing/shell/shell_intersection.hpp"
 
 namespace curvefem::meshing::shell {
-
-namespace {
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-K::Point_3 pt(const Eigen::Vector3d& p) { return K::Point_3(p.x(), p.y(), p.z()); }
-// (u, v) of local corner i mod 3 of the rotated face.
-constexpr double k_xy[3][2] = {{0, 0}, {1, 0}, {0, 1}};
-}  // namespace
 
 struct ShellProjection::Impl {
   const Shell& shell;
@@ -77,43 +69,15 @@ std::optional<PrismPoint> ShellProjection::locate(const Eigen::Vector3d& p) cons
   const Impl& m = *m_impl;
   auto it = m.grid.find(m.key(p));
   if (it == m.grid.end()) return std::nullopt;
-  const K::Point_3 q = pt(p);
   for (int f : it->second) {
-    const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(f)));
-    for (int half = 0; half < 2; ++half)
-      for (const auto& tet : split_tets(type_a)) {
-        K::Point_3 c[4];
-        Eigen::Vector3d e[4];
-        for (int k = 0; k < 4; ++k) {
-          e[k] = m.corner(f, half, tet[k]);
-          c[k] = pt(e[k]);
-        }
-        const auto o = CGAL::orientation(c[0], c[1], c[2], c[3]);
-        if (o == CGAL::COPLANAR) continue;  // a pinched (singular) tet
-        // Inside or on the boundary: q on the same side as the opposite corner for each face.
-        bool inside = true;
-        const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-        for (int i = 0; i < 4 && inside; ++i) {
-          const auto& fc = faces[i];
-          const auto side = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], q);
-          const auto ref = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], c[i]);
-          inside = side == CGAL::COPLANAR || side == ref;
-        }
-        if (!inside) continue;
-        // Barycentric coordinates (double solve), then canonical (u, v, h).
-        Eigen::Matrix3d A;
-        A << e[1] - e[0], e[2] - e[0], e[3] - e[0];
-        const Eigen::Vector3d l = A.colPivHouseholderQr().solve(p - e[0]);
-        const double w[4] = {1 - l.sum(), l[0], l[1], l[2]};
-        PrismPoint r;
-        r.face = f;
-        for (int k = 0; k < 4; ++k) {
-          r.u += w[k] * k_xy[tet[k] % 3][0];
-          r.v += w[k] * k_xy[tet[k] % 3][1];
-          r.h += w[k] * ((tet[k] < 3 ? -1.0 : 0.0) + half);
-        }
-        return r;
-      }
+    const Eigen::Vector3i F = m.shell.F.row(f);
+    std::array<Eigen::Vector3d, 3> b, mid, t;
+    for (int k = 0; k < 3; ++k) {
+      b[k] = m.shell.base.row(F[k]);
+      mid[k] = m.shell.mid.row(F[k]);
+      t[k] = m.shell.top.row(F[k]);
+    }
+    if (const auto q = locate_in_prism(F, b, mid, t, p)) return PrismPoint{f, q->u, q->v, q->h};
   }
   return std::nullopt;
 }

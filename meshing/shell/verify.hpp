@@ -4,7 +4,9 @@
 //   positive      every half-prism passes the exact 12-tet test (24 per face)
 //   separated     no input triangle intersects a base or top triangle (queried from the input
 //                 side against an index of the base/top triangles; contact at pinch points only)
-//   section       for every prism, every input triangle touching its canonical split tets has a
+//   section       for every prism, every input triangle in section contact with its canonical
+//                 split tets (meets an open tet, or lies in a tet facet and meets its relative
+//                 interior; shell_intersection.hpp) has a
 //                 normal making a positive dot product with every non-singular pillar, so every
 //                 fiber crosses the input transversally and at most once (thesis §4.4, I2)
 //   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge
