@@ -110,8 +110,10 @@ void register_validate(CLI::App& app) {
                   v.max_distance_rel, eps, v.max_distance_vertex,
                   v.max_distance_rel <= eps ? "" : "  EXCEEDS eps");
       std::printf("  unmapped vertices    %d\n", v.unmapped_vertices);
-      std::printf("  phi orientation      %d flipped of %d input faces inside one boundary face\n",
-                  v.flipped_input_faces, v.input_faces_checked);
+      std::printf(
+          "  phi chart (diag.)    %d of %d input faces inside one boundary face have a "
+          "non-positive straight (u, v) image\n",
+          v.flipped_input_faces, v.input_faces_checked);
       if (saved.has_shell)
         std::printf("  phi roundtrip        max %.3g, %d failures\n", roundtrip,
                     roundtrip_failures);

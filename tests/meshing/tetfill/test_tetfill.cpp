@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
 #include "meshing/tetfill/tetfill.hpp"
 
 namespace tf = curvefem::meshing::tetfill;
@@ -113,57 +114,15 @@ Surface cube() {
   return voxel_surface(1, [](int, int, int) { return true; });
 }
 
+// Procedural shapes from meshing/core (closed, outward).
 Surface icosphere(int levels) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
-                                    {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
-                                    {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                    {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  for (auto& p : v) p.normalize();
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto [it, inserted] = mid.emplace(key, static_cast<int>(v.size()));
-      if (inserted) v.push_back((v[a] + v[b]).normalized());
-      return it->second;
-    };
-    std::vector<Eigen::Vector3i> g;
-    for (const auto& x : f) {
-      const int a = midpoint(x[0], x[1]), b = midpoint(x[1], x[2]), c = midpoint(x[2], x[0]);
-      g.emplace_back(x[0], a, c);
-      g.emplace_back(x[1], b, a);
-      g.emplace_back(x[2], c, b);
-      g.emplace_back(a, b, c);
-    }
-    f = g;
-  }
-  Surface s = from_lists(v, f);
-  orient_outward(s);
-  return s;
+  const curvefem::SurfaceMesh m = curvefem::make_icosphere(levels);
+  return {m.V, m.F};
 }
 
 Surface torus(int nu, int nv, double R, double r) {
-  std::vector<Eigen::Vector3d> v;
-  std::vector<Eigen::Vector3i> f;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * M_PI * i / nu, w = 2 * M_PI * j / nv;
-      v.emplace_back((R + r * std::cos(w)) * std::cos(u), (R + r * std::cos(w)) * std::sin(u),
-                     r * std::sin(w));
-    }
-  auto id = [&](int i, int j) { return (i % nu) * nv + (j % nv); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      f.emplace_back(id(i, j), id(i + 1, j), id(i + 1, j + 1));
-      f.emplace_back(id(i, j), id(i + 1, j + 1), id(i, j + 1));
-    }
-  Surface s = from_lists(v, f);
-  orient_outward(s);
-  return s;
+  const curvefem::SurfaceMesh m = curvefem::make_torus(R, r, nu, nv);
+  return {m.V, m.F};
 }
 
 /// Runs fill_interior and checks every guarantee of the header with code of its own.
