@@ -478,26 +478,30 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   }
   stats.stage_seconds.emplace_back("curve", watch.seconds());
 
-  // 4. Thicken the slab layer, then fill the inside of its inner surface.
-  watch = Stopwatch();
-  stats.thickened_vertices = b.thicken(std::max(options.slab_depth, 0.0), eps);
-  stats.stage_seconds.emplace_back("thicken", watch.seconds());
-  watch = Stopwatch();
-  if (progress) progress("fill interior", 0.0);
+  // 4. Thicken the slab layer, then fill the inside of its inner surface. Gmsh's boundary
+  // recovery can refuse an inner surface our exact check accepts (near-contacts): retry with a
+  // shallower layer, down to the repaired shell base.
   tetfill::TetFillOptions fill_options;
   fill_options.threads = options.threads;
   tetfill::TetFillResult fill;
-  try {
-    fill = tetfill::fill_interior(b.inner, shell.F, fill_options);
-  } catch (const MeshingError& e) {
-    if (stats.thickened_vertices == 0) throw;
-    log::warn("mesh: filling the thickened inner surface failed (", e.what(),
-              "); using the shell's base");
-    b.inner = shell.base;
-    stats.thickened_vertices = 0;
-    fill = tetfill::fill_interior(b.inner, shell.F, fill_options);
+  double depth = std::max(options.slab_depth, 0.0);
+  for (int attempt = 0;; ++attempt) {
+    watch = Stopwatch();
+    stats.thickened_vertices = b.thicken(depth, eps);
+    stats.stage_seconds.emplace_back(attempt ? "thicken (retry)" : "thicken", watch.seconds());
+    watch = Stopwatch();
+    if (progress) progress("fill interior", 0.0);
+    try {
+      fill = tetfill::fill_interior(b.inner, shell.F, fill_options);
+      stats.stage_seconds.emplace_back("fill interior", watch.seconds());
+      break;
+    } catch (const MeshingError& e) {
+      if (depth == 0) throw;
+      log::warn("mesh: filling the inner surface at slab depth ", depth, " failed (", e.what(),
+                ")");
+      depth = depth > 0.1 ? depth / 2 : 0.0;
+    }
   }
-  stats.stage_seconds.emplace_back("fill interior", watch.seconds());
 
   // 5. Stitch.
   watch = Stopwatch();
