@@ -72,7 +72,7 @@ def run(cmd, timeout):
 
 def dense_baseline(path):
     tool = args.tetfill_tool or os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
-        args.exe))), "meshing/tetfill/tetfill_tool")
+        args.exe))), "benchmarks/tetfill_tool")
     if not os.path.exists(tool):
         return None
     code, secs, out, err, _ = run([tool, path], args.timeout)

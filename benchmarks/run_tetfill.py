@@ -4,7 +4,7 @@
 binary (`gmsh -3`) on the same surface for comparison.
 
 For every mesh of /work/shared/data/dev/MANIFEST.tsv (column `file`):
-  tetfill   BUILD_DIR/meshing/tetfill/tetfill_tool INPUT  -> one JSON line (tets, boundary faces,
+  tetfill   BUILD_DIR/benchmarks/tetfill_tool INPUT  -> one JSON line (tets, boundary faces,
             seconds, exact verification, peak RSS); exit 0 valid, 2 bad input, 3 meshing failed
   gmsh -3   the surface written as MSH 2.2 (one discrete surface, same nodes), a .geo with
             `Merge; Surface Loop; Volume`, `gmsh -3 -nt 1`; tets counted in the output file, time
@@ -146,7 +146,7 @@ def gmsh_binary(path, workdir):
 
 
 def collect():
-    exe = args.exe or os.path.join(build, "meshing/tetfill/tetfill_tool")
+    exe = args.exe or os.path.join(build, "benchmarks/tetfill_tool")
     if not args.exe:
         subprocess.run(["cmake", "-S", root, "-B", build, "-G", "Ninja",
                         "-DCMAKE_BUILD_TYPE=RelWithDebInfo"], check=True,
@@ -192,7 +192,7 @@ def render():
     L = []
     L.append("# Dense-linear baseline: boundary-preserving tet fill (`meshing/tetfill`)\n")
     L.append("- Command: `%s` (from the repository root)" % command_line)
-    L.append("- Per mesh: `BUILD/meshing/tetfill/tetfill_tool INPUT` = `fill_interior` (gmsh 4.8.4 "
+    L.append("- Per mesh: `BUILD/benchmarks/tetfill_tool INPUT` = `fill_interior` (gmsh 4.8.4 "
              "C++ API, 3D Delaunay `Mesh.Algorithm3D=1`, default sizes extended from the boundary, "
              "`Mesh.Optimize=1`, 1 thread) + `verify_tetfill` (exact orient3d, oriented boundary "
              "faces vs input, volume); timeout %d s" % args.timeout)
