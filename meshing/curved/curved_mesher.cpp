@@ -99,7 +99,6 @@ class Builder {
   std::vector<double> alpha;
   std::vector<std::vector<Owned>> owned;
   int fiber_misses = 0;
-  int below_failures = 0;
 
   int rotated(int f, int local) const {
     const int r = sh::min_rotation(Eigen::Vector3i(s.F.row(f)));
@@ -165,6 +164,9 @@ class Builder {
     }
     if (progress) progress("curve: locate input", 1.0);
   }
+
+  // The blend schedule of a face: 1, 1/2, ..., 1/64, then 0 (linear).
+  void lower_alpha(int f) { alpha[f] = alpha[f] > 1.0 / 64 ? alpha[f] / 2 : 0.0; }
 
   double edge_alpha(int a, int b) const {
     double out = 1;
@@ -326,12 +328,7 @@ class Builder {
         bool any = false;
         for (int c = 0; c < 3; ++c)
           if (depth[F(f, c)] > base_depth[F(f, c)]) any = shrink[F(f, c)] = 1;
-        if (!any) {
-          alpha[f] = alpha[f] > 1.0 / 64 ? alpha[f] / 2 : 0.0;
-          if (depth[F(f, 0)] < base_depth[F(f, 0)] || depth[F(f, 1)] < base_depth[F(f, 1)] ||
-              depth[F(f, 2)] < base_depth[F(f, 2)])
-            ++below_failures;
-        }
+        if (!any) lower_alpha(f);
       }
       const auto si = check::find_self_intersections(inner, F, degenerate, true,
                                                      check::SelfIntersectionEngine::soup);
@@ -456,7 +453,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       if (b.alpha[f] == 0)
         throw MeshingError("curve: the linear bottom slab of coarse face " + std::to_string(f) +
                            " is not certified positive");
-      b.alpha[f] = b.alpha[f] > 1.0 / 64 ? b.alpha[f] / 2 : 0.0;
+      b.lower_alpha(f);
       next.push_back(f);
       for (int e = 0; e < 3; ++e) {
         const int p = shell.F(f, e), q = shell.F(f, (e + 1) % 3);
