@@ -402,7 +402,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   // 2. Coarsen under the distance bound.
   watch = Stopwatch();
   sh::SimplifyOptions simplify_options;
-  simplify_options.threads = options.threads > 0 ? options.threads : 2;
+  simplify_options.threads = options.deterministic ? 1 : options.threads > 0 ? options.threads : 2;
   simplify_options.rounds = options.simplify_rounds;
   simplify_options.max_distance = eps;
   simplify_options.max_mips = options.max_triangle_mips;

@@ -295,7 +295,8 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
   c.method = dense_input ? "curved" : "given";
 
   if (const json* m = r.get(j, "meshing")) {
-    r.only_keys(*m, "/meshing", {"method", "order", "eps", "thickness", "validate"});
+    r.only_keys(*m, "/meshing",
+                {"method", "order", "eps", "thickness", "validate", "deterministic"});
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
     if (c.method != "given" && c.method != "curved" && c.method != "dense")
       fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
@@ -307,7 +308,7 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
            "\"" + c.method +
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
-    for (const char* key : {"order", "eps", "thickness", "validate"})
+    for (const char* key : {"order", "eps", "thickness", "validate", "deterministic"})
       if (r.get(*m, key) && c.method != "curved")
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
@@ -323,6 +324,10 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
     if (const json* v = r.get(*m, "validate")) {
       if (!v->is_boolean()) fail("/meshing/validate", "expected true/false", r.file);
       c.validate = v->get<bool>();
+    }
+    if (const json* v = r.get(*m, "deterministic")) {
+      if (!v->is_boolean()) fail("/meshing/deterministic", "expected true/false", r.file);
+      c.deterministic = v->get<bool>();
     }
   }
 
@@ -474,6 +479,7 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
     res["meshing"]["eps"] = c.eps;
     res["meshing"]["thickness"] = c.thickness;
     res["meshing"]["validate"] = c.validate;
+    res["meshing"]["deterministic"] = c.deterministic;
   }
   res["physics"] = {{"type", c.physics}};
   if (c.physics == "poisson")

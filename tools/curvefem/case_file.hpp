@@ -50,6 +50,7 @@ struct CaseSpec {
   double eps = 1e-2;             ///< curved: distance bound, relative to the bbox edge
   double thickness = 0.02;       ///< curved: shell half-thickness cap (relative)
   bool validate = true;          ///< curved: independent validation of the mesh (report.json)
+  bool deterministic = true;     ///< curved: single-threaded coarsening, bit-identical output
   bool dense_surface() const { return method == "curved" || method == "dense"; }
   std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
   Expression kappa;                 ///< poisson

@@ -92,7 +92,7 @@ struct MeshArgs {
   std::string input, output, features;
   int order = 3;
   double eps = 1e-2, thickness = 0.02, feature_angle = 60;
-  bool no_features = false, exterior = false;
+  bool no_features = false, exterior = false, nondeterministic = false;
   GlobalOptions global;
 };
 
@@ -136,6 +136,8 @@ void register_mesh(CLI::App& app) {
   auto* fn = sub->add_flag("--no-features", args->no_features, "no feature edges");
   ff->excludes(fa)->excludes(fn);
   fa->excludes(fn);
+  sub->add_flag("--nondeterministic", args->nondeterministic,
+                "coarsen on all --threads workers: faster, but the mesh varies from run to run");
   sub->add_flag("--exterior", args->exterior,
                 "also mesh the space between the surface and a padded box (not implemented)");
   add_global_options(*sub, args->global);
@@ -158,6 +160,7 @@ void register_mesh(CLI::App& app) {
     options.eps_rel = args->eps;
     options.thickness_rel = args->thickness;
     options.threads = args->global.threads;
+    options.deterministic = !args->nondeterministic;
     std::string feature_source = "none";
     if (!args->features.empty()) {
       options.feature_edges = cv::validate_feature_edges(input, read_feature_file(args->features));
@@ -227,6 +230,7 @@ void register_mesh(CLI::App& app) {
         {"validation", curved_validation_json(check, args->eps)},
         {"valid", ok},
         {"threads", args->global.threads},
+        {"deterministic", !args->nondeterministic},
         {"time_s", stages},
         {"peak_rss_mb", peak_rss_mb()}};
     j["time_s"]["total"] = total.seconds();

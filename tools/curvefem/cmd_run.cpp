@@ -313,6 +313,7 @@ void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
     options.eps_rel = spec.eps;
     options.thickness_rel = spec.thickness;
     options.threads = global.threads;
+    options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);
     cv::CurvedMeshStats stats;
     p.curved = cv::build_curved_mesh(p.input, options, stats, progress.callback());
