@@ -553,6 +553,17 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     out.mesh.cell_tags[Eigen::Index(c)] = tags[c];
   }
   stats.nodes = int(nodes.size());
+  stats.stage_seconds.emplace_back("stitch", watch.seconds());
+
+  // 6. Optimize the inner surface and the interior (boundary nodes never move).
+  watch = Stopwatch();
+  if (options.optimize.sweeps > 0) {
+    stats.optimize = optimize_vertices(out.mesh, options.optimize, progress);
+    for (std::size_t n = 0; n < nodes.size(); ++n)
+      nodes[n] = out.mesh.nodes.row(Eigen::Index(n)).transpose();
+  }
+  stats.stage_seconds.emplace_back("optimize", watch.seconds());
+  watch = Stopwatch();
 
   // Boundary map: the curved middle triangles (rotated to their smallest shell id, so (u, v) of
   // the shell projection are their reference coordinates) and every input vertex's place.
@@ -592,7 +603,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       map.vertex_uv(o.vertex, 1) = o.v;
     }
   out.shell = std::move(shell);
-  stats.stage_seconds.emplace_back("stitch", watch.seconds());
+  stats.stage_seconds.emplace_back("boundary map", watch.seconds());
   log::info("mesh: ", stats.slab_tets, " slab + ", stats.interior_tets, " interior tets of order ",
             k, "; faces curved/blended/linear ", stats.faces_fully_curved, "/", stats.faces_blended,
             "/", stats.faces_linear);

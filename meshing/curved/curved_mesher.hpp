@@ -32,6 +32,7 @@
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/progress.hpp"
 #include "meshing/core/surface_mesh.hpp"
+#include "meshing/curved/optimize.hpp"
 #include "meshing/shell/shell.hpp"
 
 namespace curvefem::meshing::curved {
@@ -53,6 +54,9 @@ struct CurvedMeshOptions {
   // options give a bit-identical mesh; false coarsens on `threads` workers (about 1.6x faster on
   // two cores, the mesh varies from run to run).
   bool deterministic = true;
+  // Vertex smoothing of the slab layer's inner surface and of the interior under certified
+  // positivity, boundary frozen (optimize.hpp); 0 sweeps: off.
+  OptimizeOptions optimize;
 };
 
 struct CurvedMeshStats {
@@ -67,6 +71,7 @@ struct CurvedMeshStats {
   int slab_tets = 0, interior_tets = 0, nodes = 0;
   int thickened_vertices = 0;
   double linear_max_distance_rel = 0;
+  OptimizeStats optimize;
   std::vector<std::pair<std::string, double>> stage_seconds;
 };
 

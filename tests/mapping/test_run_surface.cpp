@@ -89,15 +89,42 @@ TEST(RunSurface, CurvedPoissonOnSphereMatchesExactSolutionOnTheInput) {
   EXPECT_GT(r["dofs"].get<int>(), 0);
   EXPECT_LT(r["tets"].get<int>(), 2000);
   EXPECT_EQ(r["meshing"]["input_vertices"], sphere.num_vertices());
-  // u is quadratic and p = 2: what remains is the geometric error — the curved boundary is within
-  // ε of the faceted input, and Dirichlet data are read on the input (whose face centres lie ~1%
-  // inside the sphere). Measured: l2 8.8e-3, surface l2 3.3e-2, surface max 5.0e-2. A wrong φ⁻¹
+  // u is quadratic and p = k = 2, so what remains is (a) the geometric error — the curved boundary
+  // is within ε of the faceted input and Dirichlet data are read on the input — and (b) the
+  // point-wise Dirichlet/Neumann interface at z = 0.7 cutting through coarse faces: a free DOF just
+  // above the plane has a test function that is non-zero on the Dirichlet side, where the flux
+  // term is missing from the weak form. (b) dominates: the largest errors sit at input vertices
+  // with z ≈ 0.70, and they depend on how the coarse faces meet the plane. Measured (deterministic
+  // coarsening): l2 1.3e-2, surface l2 4.2e-2, surface max 9.8e-2; the parallel coarsening gave
+  // surface max 0.058..0.114 over 10 runs. The all-Dirichlet case below isolates (a). A wrong φ⁻¹
   // or transfer gives O(1) errors.
   EXPECT_LT(r["l2_error"].get<double>(), 2e-2);
   EXPECT_LT(r["surface_l2_error"].get<double>(), 6e-2);
-  EXPECT_LT(r["surface_max_error"].get<double>(), 8e-2);
+  EXPECT_LT(r["surface_max_error"].get<double>(), 0.15);
   EXPECT_EQ(r["surface_unmapped_vertices"], 0);
   expect_surface_output(dir / "out", sphere.num_vertices());
+}
+
+TEST(RunSurface, CurvedDirichletPoissonIsoparametricIsWithinTheGeometricError) {
+  const auto dir = test::scratch_dir("run_surface_curved_dirichlet");
+  const SurfaceMesh sphere = make_icosphere(3);
+  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  std::string text = poisson_case(R"({"method": "curved", "order": 2, "eps": 0.01})");
+  text = text.substr(0, text.find("\"boundary_conditions\"")) +
+         R"("boundary_conditions": [{"type": "dirichlet", "select": {"all": true},
+                               "value": "x*x+y*y+z*z"}],
+  "exact": "x*x+y*y+z*z"
+})";
+  const auto file = write_case(dir, "case.json", text);
+  std::string log;
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  const auto r = read_json(dir / "out" / "report.json");
+  // p = k = 2: every boundary DOF is a fiber hit on the input, so the Dirichlet data are exact at
+  // the DOFs and u = r² is in the space up to the geometric error. Measured: l2 4.7e-4, h1 1.5e-2,
+  // surface max 9.1e-3 (≈ the 1.8e-3 boundary distance times |∇u| = 2, plus interpolation).
+  EXPECT_LT(r["l2_error"].get<double>(), 2e-3);
+  EXPECT_LT(r["h1_error"].get<double>(), 5e-2);
+  EXPECT_LT(r["surface_max_error"].get<double>(), 3e-2);
 }
 
 TEST(RunSurface, DensePoissonOnSphereMatchesExactSolutionOnTheInput) {

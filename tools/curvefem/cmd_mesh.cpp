@@ -28,6 +28,18 @@
 
 namespace curvefem::cli {
 
+nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
+  return {{"sweeps", s.sweeps},
+          {"movable_vertices", s.movable_vertices},
+          {"visits", s.visits},
+          {"moves", s.moves},
+          {"rejected_by_certificate", s.rejected_by_certificate},
+          {"energy_before", {{"mean", s.mean_energy_before}, {"max", s.max_energy_before}}},
+          {"energy_after", {{"mean", s.mean_energy_after}, {"max", s.max_energy_after}}},
+          {"energy", "conformal AMIPS against the regular tet, mean over the order-k lattice"},
+          {"seconds", s.seconds}};
+}
+
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
                                               double eps_rel) {
   nlohmann::ordered_json by_tag = nlohmann::ordered_json::object();
@@ -93,6 +105,7 @@ struct MeshArgs {
   int order = 3;
   double eps = 1e-2, thickness = 0.02, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false;
+  int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   GlobalOptions global;
 };
 
@@ -136,6 +149,9 @@ void register_mesh(CLI::App& app) {
   auto* fn = sub->add_flag("--no-features", args->no_features, "no feature edges");
   ff->excludes(fa)->excludes(fn);
   fa->excludes(fn);
+  sub->add_option("--optimize-sweeps", args->optimize_sweeps,
+                  "vertex-smoothing sweeps of the inner surface and interior (0: off)")
+      ->check(CLI::Range(0, 100));
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
   sub->add_flag("--exterior", args->exterior,
@@ -161,6 +177,7 @@ void register_mesh(CLI::App& app) {
     options.thickness_rel = args->thickness;
     options.threads = args->global.threads;
     options.deterministic = !args->nondeterministic;
+    options.optimize.sweeps = args->optimize_sweeps;
     std::string feature_source = "none";
     if (!args->features.empty()) {
       options.feature_edges = cv::validate_feature_edges(input, read_feature_file(args->features));
@@ -213,6 +230,7 @@ void register_mesh(CLI::App& app) {
         {"faces_linear", stats.faces_linear},
         {"fiber_misses", stats.fiber_misses},
         {"linear_max_distance_rel", stats.linear_max_distance_rel},
+        {"optimize", optimize_json(stats.optimize)},
         {"max_distance_rel", check.max_distance_rel},
         {"min_jacobian_certified", check.certified()},
         {"min_scaled_jacobian", check.min_scaled_jacobian},

@@ -1,0 +1,45 @@
+// Quality optimization of a curved tet mesh with its boundary frozen: vertex smoothing of every
+// corner vertex that is not on the boundary, under certified positivity.
+//
+// Moving a corner x_v by Δ moves every node of its star by λ_v(node)·Δ (λ_v the barycentric
+// weight of v at the node's lattice point), so straight tets stay straight and the curved
+// displacement of a slab tet's nodes is kept. The geometric map of each star cell then changes
+// by λ_v(ξ)·Δ and its Jacobian by Δ ⊗ ∇λ_v — a rank-one update, which makes the energy and its
+// gradient cheap.
+//
+// Energy of a cell: the mean over the order-k lattice points of the conformal AMIPS energy
+// tr(JᵀJ) / (3 det(J)^(2/3)) with J measured against the REGULAR tet (1 for a regular straight
+// tet, +∞ when det J ≤ 0). A move is accepted only if every cell of the star is certified
+// positive (certify_tet_jacobian) and the worst energy of the star does not grow, so a mesh
+// whose tets are all certified stays certified and, its boundary untouched, stays an embedding.
+#pragma once
+
+#include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/progress.hpp"
+
+namespace curvefem::meshing::curved {
+
+struct OptimizeOptions {
+  int sweeps = 8;           // passes over the vertices whose star changed
+  int iterations = 4;       // gradient steps per vertex visit
+  double tolerance = 1e-3;  // a visit stops when the star energy drops by less (relative)
+};
+
+struct OptimizeStats {
+  int movable_vertices = 0;
+  int sweeps = 0;
+  long long visits = 0, moves = 0, rejected_by_certificate = 0;
+  double max_energy_before = 0, max_energy_after = 0;
+  double mean_energy_before = 0, mean_energy_after = 0;
+  double seconds = 0;
+};
+
+/// Energy of one cell as defined above (order from the node count).
+double cell_energy(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
+
+/// Smooths the free corner vertices of a tetrahedral LagrangeMesh in place. Cells must already
+/// be certified positive (a cell that is not keeps its vertices: its star never improves).
+OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& options = {},
+                                const ProgressFn& progress = {});
+
+}  // namespace curvefem::meshing::curved
