@@ -57,8 +57,8 @@ void TerminalProgress::update(std::string_view stage, double fraction) {
     std::snprintf(buf, sizeof buf, "  ETA %.0f s", remaining);
     eta = buf;
   }
-  std::fprintf(m_out, "\r\033[K%-24s [%s] %3d%%%s", m_stage.c_str(), bar.c_str(),
-               static_cast<int>(m_fraction * 100.0 + 0.5), eta.c_str());
+  std::fprintf(m_out, "\r\033[K%s%-24s [%s] %3d%%%s", m_prefix.c_str(), m_stage.c_str(),
+               bar.c_str(), static_cast<int>(m_fraction * 100.0 + 0.5), eta.c_str());
   std::fflush(m_out);
 }
 
@@ -69,7 +69,8 @@ void TerminalProgress::end_stage() {
   }
   const double t = m_stage_watch.seconds();
   if (m_mode == ProgressMode::bar) std::fprintf(m_out, "\r\033[K");
-  std::fprintf(m_out, "%-24s done in %.2f s\n", m_stage.c_str(), t);
+  if (m_mode != ProgressMode::bar || !m_transient)
+    std::fprintf(m_out, "%s%-24s done in %.2f s\n", m_prefix.c_str(), m_stage.c_str(), t);
   std::fflush(m_out);
   m_stage.clear();
 }

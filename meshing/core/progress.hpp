@@ -11,6 +11,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "meshing/core/timer.hpp"
 
@@ -44,10 +45,17 @@ class TerminalProgress {
   /// Ends the current stage (prints its line in `lines` mode, finishes the bar in `bar` mode).
   void end_stage();
   ProgressFn callback();
+  /// Text drawn before the stage name, e.g. "[3/6] p=2  " for one run of many.
+  void set_prefix(std::string prefix) { m_prefix = std::move(prefix); }
+  /// Bar mode: a finished stage is erased instead of leaving a "done" line (a bar nested in an
+  /// outer display that prints its own lines).
+  void set_transient(bool transient) { m_transient = transient; }
 
  private:
   ProgressMode m_mode;
   std::FILE* m_out;
+  std::string m_prefix;
+  bool m_transient = false;
   std::string m_stage;
   Stopwatch m_stage_watch;
   double m_last_draw = -1.0;

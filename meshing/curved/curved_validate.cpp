@@ -108,6 +108,13 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
     }
   }
   for (auto& [tag, q] : r.quality_by_tag) q.mean_mips /= std::max(q.tets, 1);
+  r.cell_certificate.resize(nt);
+  for (int c = 0; c < nt; ++c)
+    r.cell_certificate[c] = verdict[c] == JacobianVerdict::positive       ? 1
+                            : verdict[c] == JacobianVerdict::non_positive ? -1
+                                                                          : 0;
+  r.cell_scaled_jacobian = std::move(sj);
+  r.cell_mips = std::move(mips);
 
   // Boundary faces of the volume (by corner nodes) against the map's triangles.
   {

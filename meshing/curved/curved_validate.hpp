@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <map>
+#include <vector>
 
 #include "meshing/core/boundary_map.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
@@ -33,6 +34,10 @@ struct CurvedValidation {
     double min_scaled_jacobian = HUGE_VAL, mean_mips = 0, max_mips = 0;
   };
   std::map<int, Quality> quality_by_tag;  // by LagrangeMesh::cell_tags (1 slab, 2 interior)
+  // Per tet: certificate (1 positive, 0 undecided, -1 not positive), sampled min scaled Jacobian
+  // and curved MIPS (estimates, see jacobian_certificate.hpp).
+  std::vector<int> cell_certificate;
+  std::vector<double> cell_scaled_jacobian, cell_mips;
   int boundary_faces = 0, boundary_faces_missing = 0, boundary_faces_extra = 0;
   int boundary_node_mismatches = 0;
   int subdivision = 0, boundary_self_intersections = 0;

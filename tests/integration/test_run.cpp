@@ -47,6 +47,7 @@ TEST(Run, BallPoissonP3OnCurvedMesh) {
   ASSERT_EQ(vtu.fields.point_data.size(), 3u);  // u, exact, error
   EXPECT_EQ(vtu.fields.point_data[0].name, "u");
   EXPECT_TRUE(std::filesystem::exists(out / "resolved_case.json"));
+  EXPECT_FALSE(std::filesystem::exists(out / "open_in_paraview.py"));  // only with --paraview
 }
 
 TEST(Run, CubeElasticityWritesDisplacementAndVonMises) {
@@ -148,4 +149,146 @@ TEST(Run, TagSelectionUsesPhysicalSurfacesOfAGmshFile) {
   // P L³ / (3 E I) = 1·8 / (3·1000·(1/12)) = 0.032; shear and 3-D effects add ~10–20%.
   EXPECT_LT(tip, -0.025);
   EXPECT_GT(tip, -0.05);
+}
+
+namespace {
+// A stand-in for paraview.simple (ParaView itself is not installed here: python3-paraview
+// conflicts with python3-vtk9, STYLE.md). It defines only the paraview.simple functions the script
+// may call — any other name is a NameError — returns recording proxies, and writes every call
+// and attribute assignment as JSON to $PV_STUB_LOG at exit.
+constexpr const char* k_paraview_stub = R"PY(import atexit, json, os
+_log = []
+
+
+def _record(name, args, kwargs):
+    _log.append({'call': name, 'args': [repr(a) for a in args],
+                 'kwargs': {k: repr(v) for k, v in kwargs.items()}})
+
+
+class _Proxy:
+    def __init__(self, name):
+        object.__setattr__(self, '_name', name)
+
+    def __getattr__(self, attr):
+        if attr.startswith('__'):
+            raise AttributeError(attr)
+        name = self._name + '.' + attr
+
+        def method(*args, **kwargs):
+            _record(name, args, kwargs)
+            return _Proxy(name + '()')
+        return method
+
+    def __setattr__(self, attr, value):
+        _record(self._name + '.' + attr + '=', [value], {})
+
+
+def _function(name):
+    def call(*args, **kwargs):
+        _record(name, args, kwargs)
+        return _Proxy(name + '()')
+    return call
+
+
+__all__ = ['CreateLayout', 'CreateView', 'XMLUnstructuredGridReader', 'Show', 'ColorBy',
+           'AddCameraLink', 'SetActiveView', 'Render']
+for _n in __all__:
+    globals()[_n] = _function(_n)
+atexit.register(lambda: open(os.environ['PV_STUB_LOG'], 'w').write(json.dumps(_log)))
+)PY";
+
+const char* k_python = "/usr/bin/python3";
+
+/// Byte-compiles the script (syntax check), then runs it against the stub; returns the calls.
+nlohmann::json run_paraview_script(const std::filesystem::path& script,
+                                   const std::filesystem::path& scratch) {
+  std::string log;
+  EXPECT_EQ(test::run_command("PYTHONPYCACHEPREFIX=" + (scratch / "pycache").string() + " " +
+                                  k_python + " -m py_compile " + script.string(),
+                              &log),
+            0)
+      << log;
+  std::filesystem::create_directories(scratch / "stub" / "paraview");
+  std::ofstream(scratch / "stub" / "paraview" / "__init__.py") << "";
+  std::ofstream(scratch / "stub" / "paraview" / "simple.py") << k_paraview_stub;
+  const auto calls = scratch / "calls.json";
+  // Run from elsewhere: the script must find the VTU files next to itself.
+  EXPECT_EQ(test::run_command(
+                "cd / && PYTHONDONTWRITEBYTECODE=1 PYTHONPATH=" + (scratch / "stub").string() +
+                    " PV_STUB_LOG=" + calls.string() + " " + k_python + " " + script.string(),
+                &log),
+            0)
+      << log;
+  std::ifstream in(calls);
+  if (!in) return nlohmann::json::array();
+  return nlohmann::json::parse(in);
+}
+
+/// The arguments (as Python reprs, joined) of every call named `name`.
+std::vector<std::string> calls_named(const nlohmann::json& calls, const std::string& name) {
+  std::vector<std::string> out;
+  for (const auto& c : calls)
+    if (c["call"] == name) out.push_back(c["args"].dump() + c["kwargs"].dump());
+  return out;
+}
+
+bool any_contains(const std::vector<std::string>& texts, const std::string& part) {
+  for (const auto& t : texts)
+    if (t.find(part) != std::string::npos) return true;
+  return false;
+}
+}  // namespace
+
+TEST(Run, ParaviewScriptOpensVolumeAndSurfaceAndColoursBySolutionAndError) {
+  if (!std::filesystem::exists(k_python)) GTEST_SKIP() << k_python << " is absent";
+  const auto dir = test::scratch_dir("run_paraview_surface");
+  // The dense baseline on an icosphere (320 faces): surface.vtu with u, exact and error.
+  const auto file = write_case(dir, R"({
+    "geometry": {"builtin_surface": {"shape": "sphere", "level": 2}, "features": "none"},
+    "meshing": {"method": "dense"},
+    "rhs": "-6",
+    "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x*x+y*y+z*z"}],
+    "exact": "x*x+y*y+z*z"})");
+  const auto out = dir / "out";
+  std::string log;
+  ASSERT_EQ(test::run_command(cli() + " run -q --paraview " + file.string() + " -o " + out.string(),
+                              &log),
+            0)
+      << log;
+  const auto script = out / "open_in_paraview.py";
+  ASSERT_TRUE(std::filesystem::exists(script));
+  const auto calls = run_paraview_script(script, dir);
+  const auto readers = calls_named(calls, "XMLUnstructuredGridReader");
+  ASSERT_EQ(readers.size(), 2u) << calls.dump(1);
+  EXPECT_TRUE(any_contains(readers, (std::filesystem::absolute(out) / "volume.vtu").string()));
+  EXPECT_TRUE(any_contains(readers, (std::filesystem::absolute(out) / "surface.vtu").string()));
+  const auto colours = calls_named(calls, "ColorBy");
+  EXPECT_TRUE(any_contains(colours, "('POINTS', 'u')")) << calls.dump(1);
+  EXPECT_TRUE(any_contains(colours, "('POINTS', 'error')")) << calls.dump(1);
+  EXPECT_EQ(calls_named(calls, "AddCameraLink").size(), 1u);
+  EXPECT_EQ(calls_named(calls, "CreateView().ResetCamera").size(), 2u) << calls.dump(1);
+}
+
+TEST(Run, ParaviewScriptColoursDisplacementByMagnitude) {
+  if (!std::filesystem::exists(k_python)) GTEST_SKIP() << k_python << " is absent";
+  const auto dir = test::scratch_dir("run_paraview_elastic");
+  const auto file = write_case(dir, R"({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 2}},
+    "physics": {"type": "linear_elasticity"},
+    "boundary_conditions": [{"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+                            {"type": "neumann", "select": {"tag": 2}, "value": [0, 0, -0.1]}]})");
+  const auto out = dir / "out";
+  std::string log;
+  ASSERT_EQ(test::run_command(cli() + " run -q --paraview " + file.string() + " -o " + out.string(),
+                              &log),
+            0)
+      << log;
+  const auto calls = run_paraview_script(out / "open_in_paraview.py", dir);
+  const auto readers = calls_named(calls, "XMLUnstructuredGridReader");
+  ASSERT_EQ(readers.size(), 1u) << calls.dump(1);  // no surface.vtu for a given mesh
+  EXPECT_TRUE(any_contains(readers, "volume.vtu"));
+  EXPECT_TRUE(
+      any_contains(calls_named(calls, "ColorBy"), "('POINTS', 'displacement', 'Magnitude')"))
+      << calls.dump(1);
+  EXPECT_EQ(calls_named(calls, "CreateView().ResetCamera").size(), 1u) << calls.dump(1);
 }

@@ -182,6 +182,11 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
   } catch (const json::parse_error& e) {
     throw InputError(std::string("invalid JSON: ") + e.what(), {.file = path.string()});
   }
+  return read_case_json(j, path, output_override);
+}
+
+CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& path,
+                        const std::string& output_override) {
   const Reader r{path.string()};
   r.only_keys(j, "",
               {"geometry", "meshing", "physics", "discretization", "rhs", "boundary_conditions",

@@ -72,4 +72,9 @@ struct CaseSpec {
 /// Reads and validates a case file; `output_override` replaces output.dir when non-empty.
 CaseSpec read_case(const std::filesystem::path& path, const std::string& output_override = {});
 
+/// Validates a case already parsed as JSON (e.g. one run of a study). `path` plays the role of the
+/// case file: errors name it and relative paths resolve against its folder.
+CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& path,
+                        const std::string& output_override = {});
+
 }  // namespace curvefem::cli

@@ -197,7 +197,13 @@ void register_mesh(CLI::App& app) {
 
     StagedOutputDir out(args->output);
     Stopwatch write;
-    io::write_vtu(out.path("mesh.vtu"), result.mesh);
+    MeshFields quality;  // per tet, from the independent validation (for ParaView)
+    quality.cell_data.push_back(
+        {"certified", 1,
+         std::vector<double>(check.cell_certificate.begin(), check.cell_certificate.end())});
+    quality.cell_data.push_back({"scaled_jacobian", 1, check.cell_scaled_jacobian});
+    quality.cell_data.push_back({"curved_mips", 1, check.cell_mips});
+    io::write_vtu(out.path("mesh.vtu"), result.mesh, quality);
     io::write_msh(out.path("mesh.msh"), result.mesh);
     const std::string input_abs = std::filesystem::absolute(args->input).string();
     write_boundary_map(out.path("boundary_map.json"), result.map, input_abs, &result.shell);

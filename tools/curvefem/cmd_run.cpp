@@ -8,8 +8,9 @@
 //   meshing.method "given": p-FEM on a given curved tet mesh (boundary data on the mesh).
 // Writes volume.vtu (Lagrange cells of order max(p, k) with the solution), surface.vtu (the dense
 // input with the solution, exact solution, error and selection coverage; dense-surface methods),
-// result.pvd, resolved_case.json and report.json (last). Nothing is written before the solve
-// succeeds; a failed run leaves no output directory it created.
+// result.pvd, resolved_case.json, open_in_paraview.py (--paraview) and report.json (last). Nothing
+// is written before the solve succeeds; a failed run leaves no output directory it created.
+// The pipeline itself (run_case, run_case.hpp) is shared with `curvefem study`.
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -44,13 +45,16 @@
 #include "tools/curvefem/case_file.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
+#include "tools/curvefem/paraview_script.hpp"
 #include "tools/curvefem/report_json.hpp"
+#include "tools/curvefem/run_case.hpp"
 
 namespace curvefem::cli {
 
 // cmd_mesh.cpp
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
                                               double eps_rel);
+nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s);
 
 namespace {
 namespace cv = meshing::curved;
@@ -61,6 +65,7 @@ struct RunOptions {
   GlobalOptions global;
   std::string case_file;
   std::string output;
+  bool paraview = false;
 };
 
 LagrangeMesh load_mesh(const std::filesystem::path& path) {
@@ -293,9 +298,8 @@ struct SurfacePipeline {
   const BoundaryMap& map() const { return curved ? curved->map : identity_map; }
 };
 
-void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
-                            TerminalProgress& progress, Timings& timings, LagrangeMesh& mesh,
-                            SurfacePipeline& p) {
+void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress& progress,
+                            Timings& timings, LagrangeMesh& mesh, SurfacePipeline& p) {
   {
     ScopedTimer t(timings, "load_surface");
     progress.update("load surface", 0.0);
@@ -312,7 +316,7 @@ void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
     options.order = spec.order;
     options.eps_rel = spec.eps;
     options.thickness_rel = spec.thickness;
-    options.threads = global.threads;
+    options.threads = threads;
     options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);
     cv::CurvedMeshStats stats;
@@ -330,6 +334,7 @@ void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
     p.report["faces_linear"] = stats.faces_linear;
     p.report["fiber_misses"] = stats.fiber_misses;
     p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
+    p.report["optimize"] = json::parse(optimize_json(stats.optimize).dump());
     p.report["stage_s"] = stages;
     if (spec.validate) {
       progress.update("validate mesh", 0.0);
@@ -345,7 +350,7 @@ void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
     ScopedTimer t(timings, "meshing");
     progress.update("tetrahedralize input", 0.0);
     meshing::tetfill::TetFillOptions options;
-    options.threads = std::max(global.threads, 1);
+    options.threads = std::max(threads, 1);
     const meshing::tetfill::TetFillResult fill =
         meshing::tetfill::fill_interior(p.input.V, p.input.F, options);
     progress.end_stage();
@@ -361,11 +366,11 @@ void build_surface_pipeline(const CaseSpec& spec, const GlobalOptions& global,
   }
 }
 
-int run_case(const RunOptions& o) {
-  auto progress = apply_global_options(o.global);
+}  // namespace
+
+RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalProgress& progress) {
   Timings timings;
   Stopwatch total;
-  const CaseSpec spec = read_case(o.case_file, o.output);
   const std::string case_name = spec.case_file.string();
 
   LagrangeMesh mesh;
@@ -373,12 +378,12 @@ int run_case(const RunOptions& o) {
   std::vector<int> face_tags;
   SurfacePipeline pipeline;  // dense-surface methods only
   if (spec.dense_surface()) {
-    build_surface_pipeline(spec, o.global, *progress, timings, mesh, pipeline);
+    build_surface_pipeline(spec, settings.threads, progress, timings, mesh, pipeline);
     ScopedTimer t(timings, "build_space");
     space = fem::build_function_space(mesh, spec.degree);
   } else {
     ScopedTimer t(timings, "load_mesh");
-    progress->update("load mesh", 0.0);
+    progress.update("load mesh", 0.0);
     if (spec.builtin == "ball")
       mesh = io::make_ball_mesh(1.0, spec.builtin_size, spec.builtin_order);
     else if (spec.builtin == "cube")
@@ -386,11 +391,11 @@ int run_case(const RunOptions& o) {
                            [](const Eigen::Vector3d& x) { return x; });
     else
       mesh = load_mesh(spec.mesh);
-    progress->update("build space", 0.5);
+    progress.update("build space", 0.5);
     space = fem::build_function_space(mesh, spec.degree);
     face_tags = spec.builtin == "cube" ? cube_face_tags(mesh, space)
                                        : boundary_face_tags(spec.mesh, mesh, space);
-    progress->end_stage();
+    progress.end_stage();
   }
   // Boundary data: on the mesh (given) or on the dense input through φ⁻¹ (curved, dense).
   auto select = [&](const BoundaryConditionSpec& bc) {
@@ -415,7 +420,7 @@ int run_case(const RunOptions& o) {
   Eigen::VectorXd u;
   json physics_report;
   fem::LinearSolveInfo solve_info;
-  progress->update("solve " + spec.physics, 0.0);
+  progress.update("solve " + spec.physics, 0.0);
   if (spec.physics == "poisson") {
     fem::PoissonProblem problem;
     const Expression kappa = spec.kappa;
@@ -485,7 +490,7 @@ int run_case(const RunOptions& o) {
     physics_report["E"] = spec.E;
     physics_report["nu"] = spec.nu;
   }
-  progress->end_stage();
+  progress.end_stage();
 
   json report;
   if (!spec.exact.empty()) {
@@ -560,7 +565,7 @@ int run_case(const RunOptions& o) {
     StagedOutputDir& out = *staged;
     {
       ScopedTimer t(timings, "output");
-      progress->update("write output", 0.0);
+      progress.update("write output", 0.0);
       const int m = std::max(spec.degree, mesh.order);
       const fem::FunctionSpace out_space =
           m == spec.degree ? space : fem::build_function_space(mesh, m);
@@ -591,7 +596,7 @@ int run_case(const RunOptions& o) {
       io::write_vtu(out.path("volume.vtu"), fem::lagrange_mesh_of_space(mesh, out_space), fields);
       write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
     }
-    progress->end_stage();
+    progress.end_stage();
 
     std::vector<io::PvdEntry> parts{{"volume.vtu", 0, 0.0, "volume"}};
     if (spec.dense_surface()) {
@@ -605,6 +610,15 @@ int run_case(const RunOptions& o) {
       parts.push_back({"surface.vtu", 1, 0.0, "surface"});
     }
     io::write_pvd(out.path("result.pvd"), parts);
+    if (settings.paraview) {
+      ParaviewScriptOptions script;
+      script.dir = std::filesystem::absolute(spec.output_dir);
+      script.field = c == 1 ? "u" : "displacement";
+      script.components = c;
+      script.surface = spec.dense_surface();
+      script.exact = !spec.exact.empty();
+      write_text_file_atomic(out.path("open_in_paraview.py"), paraview_state_script(script));
+    }
 
     report["command"] = "run";
     report["case"] = spec.case_file.string();
@@ -632,7 +646,7 @@ int run_case(const RunOptions& o) {
     timings.add("total", total.seconds());
     report["time_s"] = timings_json(timings);
     report["peak_rss_mb"] = peak_rss_mb();
-    report["threads"] = o.global.threads;
+    report["threads"] = settings.threads;
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
   } catch (...) {
@@ -641,28 +655,41 @@ int run_case(const RunOptions& o) {
     if (!existed) std::filesystem::remove(spec.output_dir, ec);  // only if empty
     throw;
   }
+  RunOutcome outcome;
+  outcome.report = std::move(report);
+  outcome.timings = std::move(timings);
+  outcome.exit_code = pipeline.valid ? 0 : 3;
+  return outcome;
+}
+
+namespace {
+
+int run_command(const RunOptions& o) {
+  auto progress = apply_global_options(o.global);
+  const CaseSpec spec = read_case(o.case_file, o.output);
+  const RunOutcome outcome =
+      run_case(spec, {.threads = o.global.threads, .paraview = o.paraview}, *progress);
+  const json& report = outcome.report;
   if (!o.global.quiet) {
     std::printf("curvefem run: %s (%s), degree %d on %d tets of order %d: %lld unknowns\n",
-                spec.physics.c_str(), spec.method.c_str(), spec.degree, mesh.num_cells(),
-                mesh.order, static_cast<long long>(space.num_dofs) * c);
+                spec.physics.c_str(), spec.method.c_str(), spec.degree, report["tets"].get<int>(),
+                report["order"].get<int>(), report["dofs"].get<long long>());
     if (report.contains("l2_error"))
       std::printf("  L2 error %.3e   H1-semi error %.3e\n", report["l2_error"].get<double>(),
                   report["h1_semi_error"].get<double>());
     if (report.contains("surface_l2_error"))
       std::printf("  on the input surface (%d vertices): L2 error %.3e   max error %.3e\n",
-                  pipeline.input.num_vertices(), report["surface_l2_error"].get<double>(),
+                  report["surface_vertices"].get<int>(), report["surface_l2_error"].get<double>(),
                   report["surface_max_error"].get<double>());
-    for (const auto& [stage, sec] : timings.stages())
+    for (const auto& [stage, sec] : outcome.timings.stages())
       std::printf("  %-16s %8.3f s\n", stage.c_str(), sec);
-    std::printf("  results in %s\n", staged->dir().c_str());
+    std::printf("  results in %s\n", spec.output_dir.c_str());
   }
-  if (!pipeline.valid) {
+  if (outcome.exit_code == 3)
     std::fprintf(stderr,
                  "curvefem run: the curved mesh failed its validation (see meshing.validation "
                  "in report.json)\n");
-    return 3;
-  }
-  return 0;
+  return outcome.exit_code;
 }
 
 }  // namespace
@@ -672,8 +699,10 @@ void register_run(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("run", "solve the case described by a JSON case file");
   sub->add_option("case", options->case_file, "case file (schema: cases/README.md)")->required();
   sub->add_option("-o,--output", options->output, "output directory (overrides output.dir)");
+  sub->add_flag("--paraview", options->paraview,
+                "also write open_in_paraview.py (a ParaView Python state script)");
   add_global_options(*sub, options->global);
-  add_command(sub, [options] { return run_case(*options); });
+  add_command(sub, [options] { return run_command(*options); });
 }
 
 }  // namespace curvefem::cli

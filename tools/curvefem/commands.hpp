@@ -18,6 +18,7 @@ void register_remesh(CLI::App& app);    // cmd_remesh.cpp
 void register_shell(CLI::App& app);     // cmd_shell.cpp
 void register_mesh(CLI::App& app);      // cmd_mesh.cpp
 void register_validate(CLI::App& app);  // cmd_validate.cpp
+void register_study(CLI::App& app);     // cmd_study.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
@@ -28,6 +29,7 @@ inline void register_commands(CLI::App& app) {
   register_shell(app);
   register_mesh(app);
   register_validate(app);
+  register_study(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.
