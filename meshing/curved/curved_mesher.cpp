@@ -19,6 +19,7 @@
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/editing/algorithms/tet_flips.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -500,7 +501,24 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     }
   }
 
-  // 5. Stitch.
+  // 5. Flip the straight interior toward better tets (its boundary, the inner surface, is kept).
+  if (options.optimize.sweeps > 0 && options.optimize.flips) {
+    watch = Stopwatch();
+    if (progress) progress("optimize: interior flips", 0.0);
+    editing::FlipOptions flip_options;
+    flip_options.threads = options.deterministic ? 1 : std::max(options.threads, 1);
+    const editing::FlipResult flipped = editing::flip_tets(fill.V, fill.T, flip_options);
+    fill.T = flipped.T;
+    stats.optimize.flips = (long long)flipped.pass.succeeded;
+    stats.optimize.flip_max_energy_before = flipped.max_energy_before;
+    stats.optimize.flip_max_energy_after = flipped.max_energy_after;
+    stats.optimize.flip_mean_energy_before = flipped.mean_energy_before;
+    stats.optimize.flip_mean_energy_after = flipped.mean_energy_after;
+    stats.optimize.flip_seconds = watch.seconds();
+    stats.stage_seconds.emplace_back("interior flips", watch.seconds());
+  }
+
+  // 6. Stitch.
   watch = Stopwatch();
   std::unordered_map<NodeKey, int, NodeKeyHash> node_id;
   std::vector<Eigen::Vector3d> nodes;
@@ -555,10 +573,17 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   stats.nodes = int(nodes.size());
   stats.stage_seconds.emplace_back("stitch", watch.seconds());
 
-  // 6. Optimize the inner surface and the interior (boundary nodes never move).
+  // 7. Smooth the inner surface and the interior (boundary nodes never move).
   watch = Stopwatch();
   if (options.optimize.sweeps > 0) {
+    const OptimizeStats flips = stats.optimize;
     stats.optimize = optimize_vertices(out.mesh, options.optimize, progress);
+    stats.optimize.flips = flips.flips;
+    stats.optimize.flip_max_energy_before = flips.flip_max_energy_before;
+    stats.optimize.flip_max_energy_after = flips.flip_max_energy_after;
+    stats.optimize.flip_mean_energy_before = flips.flip_mean_energy_before;
+    stats.optimize.flip_mean_energy_after = flips.flip_mean_energy_after;
+    stats.optimize.flip_seconds = flips.flip_seconds;
     for (std::size_t n = 0; n < nodes.size(); ++n)
       nodes[n] = out.mesh.nodes.row(Eigen::Index(n)).transpose();
   }

@@ -1,7 +1,10 @@
 #include "meshing/curved/optimize.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -179,13 +182,28 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       order.emplace_back(-worst, v);
     }
     std::sort(order.begin(), order.end());
-    std::vector<char> next(mesh.num_nodes(), 0);
-    for (std::size_t visit = 0; visit < order.size(); ++visit) {
-      const int v = order[visit].second;
-      ++stats.visits;
-      if (progress && visit % 256 == 0)
-        progress("optimize: sweep " + std::to_string(sweep + 1),
-                 double(visit) / double(order.size()));
+    // Vertices that share no tet have disjoint stars (a node moved by v lies only in tets
+    // holding v), so a colour class of the vertex graph is visited in parallel with the same
+    // result as serially, for any thread count.
+    std::vector<int> colour(mesh.num_nodes(), -1);
+    std::vector<std::vector<int>> classes;
+    for (const auto& [neg, v] : order) {
+      std::vector<char> used(classes.size() + 1, 0);
+      for (const auto& [c, j] : star[v])
+        for (int i = 0; i < 4; ++i) {
+          const int w = corner(c, i);
+          if (w != v && colour[w] >= 0) used[colour[w]] = 1;
+        }
+      int col = 0;
+      while (used[col]) ++col;
+      colour[v] = col;
+      if (col == int(classes.size())) classes.emplace_back();
+      classes[col].push_back(v);
+    }
+    std::vector<char> moved_vertex(mesh.num_nodes(), 0);
+    std::atomic<long long> visits{0}, moves{0}, rejected{0};
+    auto visit_vertex = [&](int v) {
+      ++visits;
       std::vector<StarCell> cells;
       double length = 0;
       int edges = 0;
@@ -202,7 +220,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       }
       length /= std::max(edges, 1);
       const StarEnergy start = star_energy(ref, cells, Eigen::Vector3d::Zero(), nullptr);
-      if (start.sum == k_inf) continue;  // an uncertifiable star: leave it alone
+      if (start.sum == k_inf) return;  // an uncertifiable star: leave it alone
       Eigen::Vector3d delta = Eigen::Vector3d::Zero();
       StarEnergy current = start;
       for (int it = 0; it < options.iterations; ++it) {
@@ -240,7 +258,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         }
         if (!stepped) break;
       }
-      if (!(current.sum < start.sum) || delta.isZero(0)) continue;
+      if (!(current.sum < start.sum) || delta.isZero(0)) return;
 
       // Apply, certify every star cell, undo on failure (halving the move a few times).
       std::vector<std::pair<int, double>> moved;  // node, barycentric weight of v
@@ -261,21 +279,34 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
             break;
           }
         if (!accepted) {
-          ++stats.rejected_by_certificate;
+          ++rejected;
           for (const auto& [node, a] : moved) mesh.nodes.row(node) -= (a / k) * delta.transpose();
           // A halved move must still improve.
           const StarEnergy half = star_energy(ref, cells, 0.5 * delta, nullptr);
           if (!(half.sum < start.sum && half.max <= start.max)) break;
         }
       }
-      if (!accepted) continue;
-      ++stats.moves;
-      for (const auto& [c, j] : star[v]) {
-        energy[c] = energy_of(ref, cell_nodes(mesh, c));
-        for (int i = 0; i < 4; ++i)
-          if (!fixed[corner(c, i)]) next[corner(c, i)] = 1;
-      }
+      if (!accepted) return;
+      ++moves;
+      moved_vertex[v] = 1;
+      for (const auto& [c, j] : star[v]) energy[c] = energy_of(ref, cell_nodes(mesh, c));
+    };
+    std::size_t done = 0;
+    for (const auto& cls : classes) {
+      tbb::parallel_for(std::size_t(0), cls.size(), [&](std::size_t i) { visit_vertex(cls[i]); });
+      done += cls.size();
+      if (progress)
+        progress("optimize: sweep " + std::to_string(sweep + 1), double(done) / order.size());
     }
+    stats.visits += visits;
+    stats.moves += moves;
+    stats.rejected_by_certificate += rejected;
+    std::vector<char> next(mesh.num_nodes(), 0);
+    for (int v = 0; v < mesh.num_nodes(); ++v)
+      if (moved_vertex[v])
+        for (const auto& [c, j] : star[v])
+          for (int i = 0; i < 4; ++i)
+            if (!fixed[corner(c, i)]) next[corner(c, i)] = 1;
     active.clear();
     for (int v = 0; v < mesh.num_nodes(); ++v)
       if (next[v]) active.push_back(v);

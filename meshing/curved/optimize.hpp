@@ -23,6 +23,7 @@ struct OptimizeOptions {
   int sweeps = 8;           // passes over the vertices whose star changed
   int iterations = 4;       // gradient steps per vertex visit
   double tolerance = 1e-3;  // a visit stops when the star energy drops by less (relative)
+  bool flips = true;        // 2-3 / 3-2 / 4-4 flips of the straight interior first (tet_flips)
 };
 
 struct OptimizeStats {
@@ -32,6 +33,11 @@ struct OptimizeStats {
   double max_energy_before = 0, max_energy_after = 0;
   double mean_energy_before = 0, mean_energy_after = 0;
   double seconds = 0;
+  // Interior flips (before the smoothing; energies of the straight interior tets only).
+  long long flips = 0;
+  double flip_max_energy_before = 0, flip_max_energy_after = 0;
+  double flip_mean_energy_before = 0, flip_mean_energy_after = 0;
+  double flip_seconds = 0;
 };
 
 /// Energy of one cell as defined above (order from the node count).

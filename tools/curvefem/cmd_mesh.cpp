@@ -29,15 +29,21 @@
 namespace curvefem::cli {
 
 nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
-  return {{"sweeps", s.sweeps},
-          {"movable_vertices", s.movable_vertices},
-          {"visits", s.visits},
-          {"moves", s.moves},
-          {"rejected_by_certificate", s.rejected_by_certificate},
-          {"energy_before", {{"mean", s.mean_energy_before}, {"max", s.max_energy_before}}},
-          {"energy_after", {{"mean", s.mean_energy_after}, {"max", s.max_energy_after}}},
-          {"energy", "conformal AMIPS against the regular tet, mean over the order-k lattice"},
-          {"seconds", s.seconds}};
+  return {
+      {"sweeps", s.sweeps},
+      {"movable_vertices", s.movable_vertices},
+      {"visits", s.visits},
+      {"moves", s.moves},
+      {"rejected_by_certificate", s.rejected_by_certificate},
+      {"energy_before", {{"mean", s.mean_energy_before}, {"max", s.max_energy_before}}},
+      {"energy_after", {{"mean", s.mean_energy_after}, {"max", s.max_energy_after}}},
+      {"energy", "conformal AMIPS against the regular tet, mean over the order-k lattice"},
+      {"seconds", s.seconds},
+      {"interior_flips",
+       {{"flips", s.flips},
+        {"energy_before", {{"mean", s.flip_mean_energy_before}, {"max", s.flip_max_energy_before}}},
+        {"energy_after", {{"mean", s.flip_mean_energy_after}, {"max", s.flip_max_energy_after}}},
+        {"seconds", s.flip_seconds}}}};
 }
 
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
