@@ -301,8 +301,15 @@ std::vector<int> InputSurfaceIndex::faces_touching_tet(
   std::vector<std::vector<Triangle>::const_iterator> hits;
   m_impl->tree.all_intersected_primitives(tet.bbox(), std::back_inserter(hits));
   std::vector<int> out;
-  for (const auto& it : hits)
-    if (CGAL::do_intersect(*it, tet)) out.push_back(m_impl->id(it));
+  for (const auto& it : hits) {
+    // A triangle corner that IS a tet corner touches the closed tet: decided without the exact
+    // fallback that CGAL's filtered predicate takes for such degenerate contacts (the shell's
+    // middle surface starts on the input vertices, so they are the common case).
+    bool shared = false;
+    for (int i = 0; i < 3 && !shared; ++i)
+      for (int j = 0; j < 4 && !shared; ++j) shared = it->vertex(i) == tet.vertex(j);
+    if (shared || CGAL::do_intersect(*it, tet)) out.push_back(m_impl->id(it));
+  }
   return out;
 }
 
