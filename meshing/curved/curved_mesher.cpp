@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -16,6 +17,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/core/primitives.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
@@ -107,6 +109,9 @@ class Builder {
   }
   int gid_base(int v) const { return s.singular[v] ? nv + v : v; }
   int gid_mid(int v) const { return nv + v; }
+  int gid_top(int v) const { return s.singular[v] ? nv + v : 2 * nv + v; }
+  Eigen::Vector3d top(int v) const { return s.top.row(v).transpose(); }
+  bool exterior = false;  // also the top half-prisms (outer slab layer)
   Eigen::Vector3d mid(int v) const { return s.mid.row(v).transpose(); }
   Eigen::Vector3d base(int v) const { return inner.row(v).transpose(); }
   Eigen::MatrixXd inner;  // the inner surface of the slab layer (starts as the shell's base)
@@ -199,20 +204,30 @@ class Builder {
     return out;
   }
 
-  // The bottom half-prism of face f as order-k tets (pinched tets dropped).
-  std::vector<TetNodes> slab_tets(int f, const std::vector<Eigen::Vector3d>& d) const {
+  // The bottom (or, with `upper`, the top) half-prism of face f as order-k tets (pinched tets
+  // dropped). A node is its linear point plus its share of the middle corners times the curved
+  // displacement, so both layers meet the curved middle surface node for node.
+  std::vector<TetNodes> slab_tets(int f, const std::vector<Eigen::Vector3d>& d,
+                                  bool upper = false) const {
     const bool type_a = sh::is_type_a(Eigen::Vector3i(s.F.row(f)));
     std::vector<TetNodes> out;
     for (const auto& tet : sh::split_tets(type_a)) {
       TetNodes t;
       Eigen::Vector3d P[4];
-      int lv[4], level[4];
+      int lv[4], on_mid[4];
       for (int j = 0; j < 4; ++j) {
         lv[j] = tet[j] % 3;
-        level[j] = tet[j] >= 3;
+        const bool high = tet[j] >= 3;
         const int v = rotated(f, lv[j]);
-        t.gid[j] = level[j] ? gid_mid(v) : gid_base(v);
-        P[j] = level[j] ? mid(v) : base(v);
+        if (!upper) {
+          t.gid[j] = high ? gid_mid(v) : gid_base(v);
+          P[j] = high ? mid(v) : base(v);
+          on_mid[j] = high;
+        } else {
+          t.gid[j] = high ? gid_top(v) : gid_mid(v);
+          P[j] = high ? top(v) : mid(v);
+          on_mid[j] = !high;
+        }
       }
       bool repeated = false;
       for (int i = 0; i < 4; ++i)
@@ -228,7 +243,7 @@ class Builder {
           L += l * P[j];
           u += l * k_xy[lv[j]][0];
           v += l * k_xy[lv[j]][1];
-          h += l * level[j];
+          h += l * on_mid[j];
         }
         t.nodes.row(Eigen::Index(n)) = (h > 0 ? L + h * evaluate(d, k, u, v) : L).transpose();
       }
@@ -239,8 +254,9 @@ class Builder {
 
   bool slabs_certified(int f) const {
     const auto d = node_displacements(f);
-    for (const auto& t : slab_tets(f, d))
-      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
+    for (int layer = 0; layer < (exterior ? 2 : 1); ++layer)
+      for (const auto& t : slab_tets(f, d, layer == 1))
+        if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
     return true;
   }
 
@@ -358,9 +374,8 @@ class Builder {
 
   // Certified slab tets and the distance bound at the face's input vertices.
   bool face_ok(int f, double eps) const {
+    if (!slabs_certified(f)) return false;
     const auto d = node_displacements(f);
-    for (const auto& t : slab_tets(f, d))
-      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
     if (alpha[f] == 0) return true;  // the linear shell's bound was enforced by simplification
     for (const Owned& o : owned[f]) {
       const Eigen::Vector3d p = linear_mid(f, o.u, o.v) + evaluate(d, k, o.u, o.v);
@@ -433,6 +448,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   watch = Stopwatch();
   const int k = options.order;
   Builder b(shell, input, k);
+  b.exterior = options.exterior;
   b.compute_targets(progress);
   b.locate_input(progress);
   stats.fiber_misses = b.fiber_misses;
@@ -502,20 +518,52 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   }
 
   // 5. Flip the straight interior toward better tets (its boundary, the inner surface, is kept).
-  if (options.optimize.sweeps > 0 && options.optimize.flips) {
+  auto flip = [&](tetfill::TetFillResult& part) {
+    if (options.optimize.sweeps <= 0 || !options.optimize.flips) return;
     watch = Stopwatch();
     if (progress) progress("optimize: interior flips", 0.0);
     editing::FlipOptions flip_options;
     flip_options.threads = options.deterministic ? 1 : std::max(options.threads, 1);
-    const editing::FlipResult flipped = editing::flip_tets(fill.V, fill.T, flip_options);
-    fill.T = flipped.T;
-    stats.optimize.flips = (long long)flipped.pass.succeeded;
-    stats.optimize.flip_max_energy_before = flipped.max_energy_before;
-    stats.optimize.flip_max_energy_after = flipped.max_energy_after;
+    const editing::FlipResult flipped = editing::flip_tets(part.V, part.T, flip_options);
+    part.T = flipped.T;
+    stats.optimize.flips += (long long)flipped.pass.succeeded;
+    stats.optimize.flip_max_energy_before =
+        std::max(stats.optimize.flip_max_energy_before, flipped.max_energy_before);
+    stats.optimize.flip_max_energy_after =
+        std::max(stats.optimize.flip_max_energy_after, flipped.max_energy_after);
     stats.optimize.flip_mean_energy_before = flipped.mean_energy_before;
     stats.optimize.flip_mean_energy_after = flipped.mean_energy_after;
-    stats.optimize.flip_seconds = watch.seconds();
-    stats.stage_seconds.emplace_back("interior flips", watch.seconds());
+    stats.optimize.flip_seconds += watch.seconds();
+    stats.stage_seconds.emplace_back("flips", watch.seconds());
+  };
+  flip(fill);
+
+  // 5b. Exterior: the region between the shell's top surface and a padded box, filled the same
+  // way (the top surface enters reversed, as the cavity of the box).
+  tetfill::TetFillResult outside;
+  int box_vertices = 0;
+  if (options.exterior) {
+    watch = Stopwatch();
+    if (progress) progress("fill exterior", 0.0);
+    const Eigen::Vector3d lo = shell.top.colwise().minCoeff().transpose();
+    const Eigen::Vector3d hi = shell.top.colwise().maxCoeff().transpose();
+    const double pad = options.exterior_padding * unit;
+    const SurfaceMesh box =
+        make_box(lo - Eigen::Vector3d::Constant(pad), hi + Eigen::Vector3d::Constant(pad), 4);
+    box_vertices = box.num_vertices();
+    Eigen::MatrixXd V(nv + box_vertices, 3);
+    V << shell.top, box.V;
+    Eigen::MatrixXi F(nf + box.num_faces(), 3);
+    for (int f = 0; f < nf; ++f) F.row(f) << shell.F(f, 0), shell.F(f, 2), shell.F(f, 1);
+    F.bottomRows(box.num_faces()) = box.F.array() + nv;
+    try {
+      outside = tetfill::fill_interior(V, F, fill_options);
+    } catch (const MeshingError& e) {
+      throw MeshingError(std::string("exterior: ") + e.what());
+    }
+    stats.stage_seconds.emplace_back("fill exterior", watch.seconds());
+    flip(outside);
+    stats.exterior_tets = int(outside.T.rows());
   }
 
   // 6. Stitch.
@@ -536,28 +584,45 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     cells.push_back(std::move(row));
     tags.push_back(tag);
   };
-  for (int f = 0; f < nf; ++f)
-    for (const auto& t : b.slab_tets(f, b.node_displacements(f))) {
+  auto add_straight = [&](const tetfill::TetFillResult& part, int tag,
+                          const std::function<int(int)>& gid_of) {
+    for (int c = 0; c < int(part.T.rows()); ++c) {
+      TetNodes t;
+      Eigen::Vector3d P[4];
+      for (int j = 0; j < 4; ++j) {
+        const int v = part.T(c, j);
+        t.gid[j] = gid_of(v);
+        P[j] = part.V.row(v).transpose();
+      }
+      t.nodes.resize(Eigen::Index(tet_lattice.size()), 3);
+      for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
+        Eigen::Vector3d x = Eigen::Vector3d::Zero();
+        for (int j = 0; j < 4; ++j) x += (double(tet_lattice[n][j]) / k) * P[j];
+        t.nodes.row(Eigen::Index(n)) = x.transpose();
+      }
+      add_tet(t, tag);
+    }
+  };
+  for (int f = 0; f < nf; ++f) {
+    const auto d = b.node_displacements(f);
+    for (const auto& t : b.slab_tets(f, d)) {
       add_tet(t, 1);
       ++stats.slab_tets;
     }
-  for (int c = 0; c < int(fill.T.rows()); ++c) {
-    TetNodes t;
-    Eigen::Vector3d P[4];
-    for (int j = 0; j < 4; ++j) {
-      const int v = fill.T(c, j);
-      t.gid[j] = v < nv ? b.gid_base(v) : 2 * nv + (v - nv);
-      P[j] = fill.V.row(v).transpose();
-    }
-    t.nodes.resize(Eigen::Index(tet_lattice.size()), 3);
-    for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
-      Eigen::Vector3d x = Eigen::Vector3d::Zero();
-      for (int j = 0; j < 4; ++j) x += (double(tet_lattice[n][j]) / k) * P[j];
-      t.nodes.row(Eigen::Index(n)) = x.transpose();
-    }
-    add_tet(t, 2);
-    ++stats.interior_tets;
+    if (options.exterior)
+      for (const auto& t : b.slab_tets(f, d, true)) {
+        add_tet(t, 3);
+        ++stats.outer_slab_tets;
+      }
   }
+  // Global corner ids: 0..nv base, nv..2nv middle, 2nv..3nv top, then the interior's Steiner
+  // points, the box corners and the exterior's Steiner points.
+  const int inner_steiner = int(fill.V.rows()) - nv;
+  add_straight(fill, 2, [&](int v) { return v < nv ? b.gid_base(v) : 3 * nv + (v - nv); });
+  stats.interior_tets = int(fill.T.rows());
+  if (options.exterior)
+    add_straight(outside, 4,
+                 [&](int v) { return v < nv ? b.gid_top(v) : 3 * nv + inner_steiner + (v - nv); });
   CurvedMesh out;
   out.mesh.kind = CellKind::tetrahedron;
   out.mesh.order = k;
@@ -573,25 +638,9 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   stats.nodes = int(nodes.size());
   stats.stage_seconds.emplace_back("stitch", watch.seconds());
 
-  // 7. Smooth the inner surface and the interior (boundary nodes never move).
-  watch = Stopwatch();
-  if (options.optimize.sweeps > 0) {
-    const OptimizeStats flips = stats.optimize;
-    stats.optimize = optimize_vertices(out.mesh, options.optimize, progress);
-    stats.optimize.flips = flips.flips;
-    stats.optimize.flip_max_energy_before = flips.flip_max_energy_before;
-    stats.optimize.flip_max_energy_after = flips.flip_max_energy_after;
-    stats.optimize.flip_mean_energy_before = flips.flip_mean_energy_before;
-    stats.optimize.flip_mean_energy_after = flips.flip_mean_energy_after;
-    stats.optimize.flip_seconds = flips.flip_seconds;
-    for (std::size_t n = 0; n < nodes.size(); ++n)
-      nodes[n] = out.mesh.nodes.row(Eigen::Index(n)).transpose();
-  }
-  stats.stage_seconds.emplace_back("optimize", watch.seconds());
-  watch = Stopwatch();
-
   // Boundary map: the curved middle triangles (rotated to their smallest shell id, so (u, v) of
   // the shell projection are their reference coordinates) and every input vertex's place.
+  watch = Stopwatch();
   const auto& tri_lattice = lagrange_lattice(CellKind::triangle, k);
   std::vector<int> local_of(nodes.size(), -1), volume_of;
   Eigen::MatrixXi bcells(nf, Eigen::Index(tri_lattice.size()));
@@ -627,10 +676,33 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       map.vertex_uv(o.vertex, 0) = o.u;
       map.vertex_uv(o.vertex, 1) = o.v;
     }
-  out.shell = std::move(shell);
   stats.stage_seconds.emplace_back("boundary map", watch.seconds());
-  log::info("mesh: ", stats.slab_tets, " slab + ", stats.interior_tets, " interior tets of order ",
-            k, "; faces curved/blended/linear ", stats.faces_fully_curved, "/", stats.faces_blended,
+
+  // 7. Smooth the inner surface, the interior (and the exterior); the curved surface's nodes are
+  // frozen (with an exterior they are not on the mesh boundary).
+  watch = Stopwatch();
+  if (options.optimize.sweeps > 0) {
+    std::vector<char> frozen(nodes.size(), 0);
+    for (int node : volume_of) frozen[std::size_t(node)] = 1;
+    const OptimizeStats flips = stats.optimize;
+    stats.optimize = optimize_vertices(out.mesh, options.optimize, progress, &frozen);
+    stats.optimize.flips = flips.flips;
+    stats.optimize.flip_max_energy_before = flips.flip_max_energy_before;
+    stats.optimize.flip_max_energy_after = flips.flip_max_energy_after;
+    stats.optimize.flip_mean_energy_before = flips.flip_mean_energy_before;
+    stats.optimize.flip_mean_energy_after = flips.flip_mean_energy_after;
+    stats.optimize.flip_seconds = flips.flip_seconds;
+    for (int node : volume_of)
+      CF_VERIFY((out.mesh.nodes.row(node) - map.boundary.nodes.row(local_of[node]))
+                        .cwiseAbs()
+                        .maxCoeff() == 0,
+                "optimize: a node of the curved surface moved");
+  }
+  stats.stage_seconds.emplace_back("optimize", watch.seconds());
+  out.shell = std::move(shell);
+  log::info("mesh: ", stats.slab_tets, " slab + ", stats.interior_tets, " interior + ",
+            stats.outer_slab_tets + stats.exterior_tets, " exterior tets of order ", k,
+            "; faces curved/blended/linear ", stats.faces_fully_curved, "/", stats.faces_blended,
             "/", stats.faces_linear);
   return out;
 }

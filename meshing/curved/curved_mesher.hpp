@@ -57,6 +57,11 @@ struct CurvedMeshOptions {
   // Vertex smoothing of the slab layer's inner surface and of the interior under certified
   // positivity, boundary frozen (optimize.hpp); 0 sweeps: off.
   OptimizeOptions optimize;
+  // Also mesh the region between the curved surface and a box padded by exterior_padding × the
+  // longest bbox edge (cell tags 3: outer slab layer, 4: the rest); the curved surface becomes an
+  // interface whose nodes are shared by both sides.
+  bool exterior = false;
+  double exterior_padding = 0.25;
 };
 
 struct CurvedMeshStats {
@@ -69,6 +74,7 @@ struct CurvedMeshStats {
   int fiber_misses = 0;  // curved nodes whose fiber found no input point (kept linear)
   int curving_rounds = 0;
   int slab_tets = 0, interior_tets = 0, nodes = 0;
+  int outer_slab_tets = 0, exterior_tets = 0;  // --exterior
   int thickened_vertices = 0;
   double linear_max_distance_rel = 0;
   OptimizeStats optimize;
@@ -76,7 +82,7 @@ struct CurvedMeshStats {
 };
 
 struct CurvedMesh {
-  LagrangeMesh mesh;  // tetrahedra of order k; cell_tags 1: boundary slab, 2: interior
+  LagrangeMesh mesh;  // order-k tets; cell_tags 1: slab, 2: interior, 3: outer slab, 4: exterior
   BoundaryMap map;    // φ for every input vertex
   // The coarse shell the boundary was curved in: boundary triangle f of `map` is shell face f
   // (rotated to its smallest vertex id), so φ⁻¹(f, u, v) is the shell projection P_T(f, u, v).

@@ -118,14 +118,37 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
 
   // Boundary faces of the volume (by corner nodes) against the map's triangles.
   {
-    std::map<std::array<int, 3>, int> count;
+    // With an exterior (cells tagged 3 and 4) the curved surface is the boundary of the inside
+    // (tags 1 and 2), and the whole mesh's boundary must be the box.
+    const bool has_tags = mesh.cell_tags.size() == nt;
+    for (int c = 0; c < nt && has_tags; ++c) r.exterior |= mesh.cell_tags[c] >= 3;
+    std::map<std::array<int, 3>, int> count, count_all;
     static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
     for (int c = 0; c < nt; ++c)
-      for (const auto& fc : faces)
-        ++count[sorted3(mesh.cells(c, fc[0]), mesh.cells(c, fc[1]), mesh.cells(c, fc[2]))];
+      for (const auto& fc : faces) {
+        const auto f = sorted3(mesh.cells(c, fc[0]), mesh.cells(c, fc[1]), mesh.cells(c, fc[2]));
+        ++count_all[f];
+        if (!r.exterior || mesh.cell_tags[c] <= 2) ++count[f];
+      }
     std::set<std::array<int, 3>> volume_boundary;
     for (const auto& [f, n] : count)
       if (n == 1) volume_boundary.insert(f);
+    if (r.exterior) {
+      const Eigen::RowVector3d lo = mesh.nodes.colwise().minCoeff(),
+                               hi = mesh.nodes.colwise().maxCoeff();
+      for (const auto& [f, n] : count_all) {
+        if (n != 1) continue;
+        ++r.exterior_boundary_faces;
+        bool on_box = false;
+        for (int axis = 0; axis < 3 && !on_box; ++axis)
+          for (double plane : {lo[axis], hi[axis]}) {
+            bool all = true;
+            for (int v : f) all &= mesh.nodes(v, axis) == plane;
+            on_box |= all;
+          }
+        if (!on_box) ++r.exterior_faces_off_box;
+      }
+    }
     const auto& vol = map.boundary_node_to_volume;
     std::set<std::array<int, 3>> map_boundary;
     for (int f = 0; f < map.boundary.num_cells(); ++f) {

@@ -40,6 +40,9 @@ struct CurvedValidation {
   std::vector<double> cell_scaled_jacobian, cell_mips;
   int boundary_faces = 0, boundary_faces_missing = 0, boundary_faces_extra = 0;
   int boundary_node_mismatches = 0;
+  // --exterior meshes: the boundary of the whole mesh must lie on its bounding box.
+  bool exterior = false;
+  int exterior_boundary_faces = 0, exterior_faces_off_box = 0;
   int subdivision = 0, boundary_self_intersections = 0;
   int unmapped_vertices = 0;
   double max_distance_rel = 0;
@@ -49,7 +52,8 @@ struct CurvedValidation {
   bool certified() const { return non_positive_tets == 0 && undecided_tets == 0; }
   bool boundary_ok() const {
     return boundary_faces_missing == 0 && boundary_faces_extra == 0 &&
-           boundary_node_mismatches == 0 && boundary_self_intersections == 0;
+           boundary_node_mismatches == 0 && boundary_self_intersections == 0 &&
+           exterior_faces_off_box == 0;
   }
   bool valid(double eps_rel) const {
     return certified() && boundary_ok() && unmapped_vertices == 0 && max_distance_rel <= eps_rel;

@@ -125,7 +125,7 @@ double cell_energy(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
 }
 
 OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& options,
-                                const ProgressFn& progress) {
+                                const ProgressFn& progress, const std::vector<char>* frozen) {
   Stopwatch watch;
   OptimizeStats stats;
   if (mesh.kind != CellKind::tetrahedron)
@@ -149,6 +149,11 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
   for (const auto& [f, count] : face_count)
     if (count == 1)
       for (int v : f) fixed[v] = 1;
+  if (frozen) {
+    CF_VERIFY(int(frozen->size()) == mesh.num_nodes(), "optimize_vertices: frozen has wrong size");
+    for (int v = 0; v < mesh.num_nodes(); ++v)
+      if ((*frozen)[std::size_t(v)]) fixed[v] = 1;
+  }
   std::vector<std::vector<std::pair<int, int>>> star(mesh.num_nodes());
   for (int c = 0; c < nc; ++c)
     for (int j = 0; j < 4; ++j) {

@@ -14,6 +14,8 @@
 // whose tets are all certified stays certified and, its boundary untouched, stays an embedding.
 #pragma once
 
+#include <vector>
+
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/progress.hpp"
 
@@ -43,9 +45,11 @@ struct OptimizeStats {
 /// Energy of one cell as defined above (order from the node count).
 double cell_energy(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
 
-/// Smooths the free corner vertices of a tetrahedral LagrangeMesh in place. Cells must already
+/// Smooths the free corner vertices of a tetrahedral LagrangeMesh in place: corners that are not
+/// on the mesh boundary and not flagged in `frozen` (per node; may be null). Cells must already
 /// be certified positive (a cell that is not keeps its vertices: its star never improves).
 OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& options = {},
-                                const ProgressFn& progress = {});
+                                const ProgressFn& progress = {},
+                                const std::vector<char>* frozen = nullptr);
 
 }  // namespace curvefem::meshing::curved

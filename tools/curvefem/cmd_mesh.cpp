@@ -52,6 +52,8 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
   for (const auto& [tag, q] : v.quality_by_tag)
     by_tag[tag == 1   ? "slab"
            : tag == 2 ? "interior"
+           : tag == 3 ? "outer_slab"
+           : tag == 4 ? "exterior"
                       : std::to_string(tag)] = {{"tets", q.tets},
                                                 {"min_scaled_jacobian", q.min_scaled_jacobian},
                                                 {"mean_mips", q.mean_mips},
@@ -70,6 +72,9 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"boundary_faces_missing", v.boundary_faces_missing},
           {"boundary_faces_extra", v.boundary_faces_extra},
           {"boundary_node_mismatches", v.boundary_node_mismatches},
+          {"exterior", v.exterior},
+          {"exterior_boundary_faces", v.exterior_boundary_faces},
+          {"exterior_faces_off_box", v.exterior_faces_off_box},
           {"boundary_subdivision", v.subdivision},
           {"boundary_self_intersections", v.boundary_self_intersections},
           {"unmapped_vertices", v.unmapped_vertices},
@@ -112,6 +117,7 @@ struct MeshArgs {
   double eps = 1e-2, thickness = 0.02, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
+  double padding = 0.25;
   GlobalOptions global;
 };
 
@@ -161,13 +167,12 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
   sub->add_flag("--exterior", args->exterior,
-                "also mesh the space between the surface and a padded box (not implemented)");
+                "also mesh the space between the surface and a padded box (tags 3, 4)");
+  sub->add_option("--padding", args->padding,
+                  "exterior box padding, relative to the longest bbox edge (default 0.25)")
+      ->check(CLI::PositiveNumber);
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
-    if (args->exterior) {
-      std::fprintf(stderr, "curvefem mesh: --exterior is not implemented yet\n");
-      return 1;
-    }
     auto progress = apply_global_options(args->global);
     Stopwatch total;
     const SurfaceMesh input = io::read_surface(args->input);
@@ -184,6 +189,8 @@ void register_mesh(CLI::App& app) {
     options.threads = args->global.threads;
     options.deterministic = !args->nondeterministic;
     options.optimize.sweeps = args->optimize_sweeps;
+    options.exterior = args->exterior;
+    options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {
       options.feature_edges = cv::validate_feature_edges(input, read_feature_file(args->features));
@@ -231,6 +238,11 @@ void register_mesh(CLI::App& app) {
         {"slab_tets", stats.slab_tets},
         {"thickened_vertices", stats.thickened_vertices},
         {"interior_tets", stats.interior_tets},
+        {"exterior", args->exterior},
+        {"exterior_padding_rel",
+         args->exterior ? nlohmann::ordered_json(args->padding) : nlohmann::ordered_json(nullptr)},
+        {"outer_slab_tets", stats.outer_slab_tets},
+        {"exterior_tets", stats.exterior_tets},
         {"output_nodes", result.mesh.num_nodes()},
         {"output_boundary_faces", result.map.boundary.num_cells()},
         {"shell_prisms", stats.shell_faces},

@@ -132,3 +132,33 @@ TEST(CurvedMesher, TorusIsValidAtOrders2To4) {
     EXPECT_LT(r.stats.coarse_faces, 1280 / 2);
   }
 }
+
+TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.4, 40, 16);
+  for (int k : {2, 3}) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    cv::CurvedMeshOptions o;
+    o.order = k;
+    o.exterior = true;
+    cv::CurvedMeshStats stats;
+    const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
+    const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+    // Valid: certified tets, the inside's boundary is exactly the map's curved triangles (so the
+    // curved surface is an interface shared node for node), ε holds, and every face of the whole
+    // mesh's boundary lies on one side of the padded box (4 × 4 squares × 2 triangles per side).
+    EXPECT_TRUE(check.valid(1e-2));
+    EXPECT_TRUE(check.exterior);
+    EXPECT_EQ(check.exterior_boundary_faces, 6 * 32);
+    EXPECT_EQ(check.exterior_faces_off_box, 0);
+    EXPECT_EQ(check.boundary_faces, m.map.boundary.num_cells());
+    // Three order-k tets per coarse face on each side (no pinched vertices on a torus).
+    EXPECT_EQ(stats.outer_slab_tets, 3 * stats.coarse_faces);
+    EXPECT_EQ(stats.slab_tets, 3 * stats.coarse_faces);
+    EXPECT_GT(stats.exterior_tets, 0);
+    EXPECT_EQ(m.mesh.num_cells(),
+              stats.slab_tets + stats.interior_tets + stats.outer_slab_tets + stats.exterior_tets);
+    // Both tags 3 and 4 present, and each side's quality is reported.
+    EXPECT_EQ(check.quality_by_tag.count(3), 1u);
+    EXPECT_EQ(check.quality_by_tag.count(4), 1u);
+  }
+}
