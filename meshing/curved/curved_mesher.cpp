@@ -467,9 +467,22 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     if (failing.empty()) break;
     std::vector<int> next;
     for (int f : failing) {
-      if (b.alpha[f] == 0)
-        throw MeshingError("curve: the linear bottom slab of coarse face " + std::to_string(f) +
-                           " is not certified positive");
+      if (b.alpha[f] == 0) {
+        std::string detail;
+        for (int layer = 0; layer < (b.exterior ? 2 : 1); ++layer)
+          for (const auto& t : b.slab_tets(f, b.node_displacements(f), layer == 1)) {
+            const auto c = certify_tet_jacobian(k, t.nodes);
+            detail += std::string(detail.empty() ? "" : "; ") + (layer ? "top" : "bottom") +
+                      " tet (" + std::to_string(t.gid[0]) + " " + std::to_string(t.gid[1]) + " " +
+                      std::to_string(t.gid[2]) + " " + std::to_string(t.gid[3]) + ") " +
+                      (c.verdict == JacobianVerdict::positive       ? "positive"
+                       : c.verdict == JacobianVerdict::non_positive ? "NOT positive"
+                                                                    : "undecided") +
+                      ", scaled Jacobian " + std::to_string(min_scaled_jacobian(k, t.nodes));
+          }
+        throw MeshingError("curve: the linear slab of coarse face " + std::to_string(f) +
+                           " is not certified positive: " + detail);
+      }
       b.lower_alpha(f);
       next.push_back(f);
       for (int e = 0; e < 3; ++e) {
