@@ -96,8 +96,8 @@ TEST(RunSurface, CurvedPoissonOnSphereMatchesExactSolutionOnTheInput) {
   // term is missing from the weak form. (b) dominates: the largest errors sit at input vertices
   // with z ≈ 0.70, and they depend on how the coarse faces meet the plane. Measured (deterministic
   // coarsening, flips + smoothing): l2 1.3e-2, surface l2 4.2e-2, surface max 0.102; the parallel
-  // coarsening gave surface max 0.058..0.114 over 10 runs. The all-Dirichlet case below isolates (a). A wrong φ⁻¹
-  // or transfer gives O(1) errors.
+  // coarsening gave surface max 0.058..0.114 over 10 runs. The all-Dirichlet case below isolates
+  // (a). A wrong φ⁻¹ or transfer gives O(1) errors.
   EXPECT_LT(r["l2_error"].get<double>(), 2e-2);
   EXPECT_LT(r["surface_l2_error"].get<double>(), 6e-2);
   EXPECT_LT(r["surface_max_error"].get<double>(), 0.15);
