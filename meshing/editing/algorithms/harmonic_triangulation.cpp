@@ -16,6 +16,7 @@
 #include <numbers>
 
 #include "meshing/core/error.hpp"
+#include "meshing/editing/algorithms/tet_flip_pass.hpp"
 
 namespace curvefem::meshing::editing {
 
@@ -41,12 +42,7 @@ class HarmonicMesh : public TetMesh {
 
   bool positive(Id t) const {
     const Cell& c = cell(t);
-    auto p = [&](int i) {
-      return Kernel::Point_3(position[c[i]].x(), position[c[i]].y(), position[c[i]].z());
-    };
-    // CGAL's orientation is positive when d lies on the positive side of (a, b, c), matching
-    // (b-a)x(c-a)·(d-a) > 0.
-    return CGAL::orientation(p(0), p(1), p(2), p(3)) == CGAL::POSITIVE;
+    return positively_oriented(position[c[0]], position[c[1]], position[c[2]], position[c[3]]);
   }
   double h(Id t) const {
     const Cell& c = cell(t);
@@ -148,42 +144,9 @@ HarmonicResult harmonic_triangulation(const Eigen::MatrixXd& points,
   }
 
   t0 = std::chrono::steady_clock::now();
-  ExecutePass<TetMesh> pass;
-  pass.num_threads = options.threads;
-  pass.position = [&mesh](Id v) { return mesh.position[v]; };
-  pass.operations["swap23"] = [&mesh](TetMesh&, const TetMesh::Tuple& t) {
-    return mesh.swap_face_23(t);
-  };
-  pass.operations["swap32"] = [&mesh](TetMesh&, const TetMesh::Tuple& t) {
-    return mesh.swap_edge_32(t);
-  };
-  pass.operations["swap44"] = [&mesh](TetMesh&, const TetMesh::Tuple& t) {
-    return mesh.swap_edge_44(t);
-  };
-  // 2-3 flips lock the three face vertices and their one-rings.
-  pass.lock_vertices = [&mesh](TetMesh&, const ExecutePass<TetMesh>::Work& w) {
-    if (w.first == "swap23") {
-      const auto f = mesh.face_vertices(w.second);
-      return mesh.try_lock_region(std::span<const Id>(f.data(), 3), 1);
-    }
-    const auto e = mesh.lock_seeds(w.second);
-    return mesh.try_lock_region(std::span<const Id>(e.data(), 2), 1);
-  };
-  auto work_of = [&mesh](const std::vector<Id>& tets) {
-    std::vector<ExecutePass<TetMesh>::Work> work;
-    for (const auto& f : mesh.faces_of_tets(tets)) work.emplace_back("swap23", f);
-    for (const auto& e : mesh.edges_of_tets(tets)) {
-      work.emplace_back("swap32", e);
-      work.emplace_back("swap44", e);
-      work.emplace_back("swap44", mesh.switch_face(e));  // the other diagonal
-    }
-    return work;
-  };
-  pass.renew_neighbor_tuples = [&mesh, work_of](const TetMesh&, const std::string&,
-                                                const TetMesh::Tuple&) {
-    return work_of(mesh.operation_record().new_cells);
-  };
-  result.passes.emplace_back("flips", pass.run(mesh, work_of(mesh.live_cells())));
+  result.passes.emplace_back(
+      "flips", run_flip_pass(
+                   mesh, [&mesh](Id v) { return mesh.position[v]; }, options.threads));
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   mesh.consolidate();
   export_mesh(result.V, result.T);

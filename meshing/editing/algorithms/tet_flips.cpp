@@ -1,19 +1,16 @@
 #include "meshing/editing/algorithms/tet_flips.hpp"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cmath>
 #include <limits>
 
 #include "meshing/core/error.hpp"
+#include "meshing/editing/algorithms/tet_flip_pass.hpp"
 
 namespace curvefem::meshing::editing {
 
 namespace {
-
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 const Eigen::Matrix3d& regular_inverse() {
   static const Eigen::Matrix3d inv = [] {
@@ -32,10 +29,7 @@ class FlipMesh : public TetMesh {
 
   bool positive(Id t) const {
     const Cell& c = cell(t);
-    auto p = [&](int i) {
-      return Kernel::Point_3(position[c[i]].x(), position[c[i]].y(), position[c[i]].z());
-    };
-    return CGAL::orientation(p(0), p(1), p(2), p(3)) == CGAL::POSITIVE;
+    return positively_oriented(position[c[0]], position[c[1]], position[c[2]], position[c[3]]);
   }
   double energy(Id t) const {
     const Cell& c = cell(t);
@@ -92,45 +86,10 @@ FlipResult flip_tets(const Eigen::MatrixXd& V, const Eigen::MatrixXi& T,
       throw MeshingError("flip_tets: tet " + std::to_string(t) + " is not positively oriented");
   summarize(mesh, result.mean_energy_before, result.max_energy_before);
 
-  ExecutePass<TetMesh> pass;
-  pass.num_threads = options.threads;
-  pass.position = [&mesh](Id v) { return mesh.position[v]; };
-  pass.operations["swap23"] = [&mesh](TetMesh&, const TetMesh::Tuple& t) {
-    return mesh.swap_face_23(t);
-  };
-  pass.operations["swap32"] = [&mesh](TetMesh&, const TetMesh::Tuple& t) {
-    return mesh.swap_edge_32(t);
-  };
-  pass.operations["swap44"] = [&mesh](TetMesh&, const TetMesh::Tuple& t) {
-    return mesh.swap_edge_44(t);
-  };
-  pass.lock_vertices = [&mesh](TetMesh&, const ExecutePass<TetMesh>::Work& w) {
-    if (w.first == "swap23") {
-      const auto f = mesh.face_vertices(w.second);
-      return mesh.try_lock_region(std::span<const Id>(f.data(), 3), 1);
-    }
-    const auto e = mesh.lock_seeds(w.second);
-    return mesh.try_lock_region(std::span<const Id>(e.data(), 2), 1);
-  };
-  // Worst tets first: the priority of a face or edge is the worst energy of a tet holding it.
-  pass.priority = [&mesh](const TetMesh&, const std::string&, const TetMesh::Tuple& t) {
-    return mesh.energy(t.tid);
-  };
-  auto work_of = [&mesh](const std::vector<Id>& tets) {
-    std::vector<ExecutePass<TetMesh>::Work> work;
-    for (const auto& f : mesh.faces_of_tets(tets)) work.emplace_back("swap23", f);
-    for (const auto& e : mesh.edges_of_tets(tets)) {
-      work.emplace_back("swap32", e);
-      work.emplace_back("swap44", e);
-      work.emplace_back("swap44", mesh.switch_face(e));  // the other diagonal
-    }
-    return work;
-  };
-  pass.renew_neighbor_tuples = [&mesh, work_of](const TetMesh&, const std::string&,
-                                                const TetMesh::Tuple&) {
-    return work_of(mesh.operation_record().new_cells);
-  };
-  result.pass = pass.run(mesh, work_of(mesh.live_cells()));
+  // Worst tets first: the priority of a face or edge is the energy of the tet holding it.
+  result.pass = run_flip_pass(
+      mesh, [&mesh](Id v) { return mesh.position[v]; }, options.threads,
+      [&mesh](const TetMesh::Tuple& t) { return mesh.energy(t.tid); });
   summarize(mesh, result.mean_energy_after, result.max_energy_after);
   const auto live = mesh.cells_array();
   result.T.resize(Eigen::Index(live.size()), 4);
