@@ -538,15 +538,21 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     editing::FlipOptions flip_options;
     flip_options.threads = options.deterministic ? 1 : std::max(options.threads, 1);
     const editing::FlipResult flipped = editing::flip_tets(part.V, part.T, flip_options);
+    auto& f = stats.optimize.flips;
+    const long long before = part.T.rows(), after = flipped.T.rows();
+    f.mean_energy_before = (f.mean_energy_before * double(f.tets_before) +
+                            flipped.mean_energy_before * double(before)) /
+                           double(f.tets_before + before);
+    f.mean_energy_after =
+        (f.mean_energy_after * double(f.tets_after) + flipped.mean_energy_after * double(after)) /
+        double(f.tets_after + after);
+    f.tets_before += before;
+    f.tets_after += after;
+    f.count += (long long)flipped.pass.succeeded;
+    f.max_energy_before = std::max(f.max_energy_before, flipped.max_energy_before);
+    f.max_energy_after = std::max(f.max_energy_after, flipped.max_energy_after);
+    f.seconds += watch.seconds();
     part.T = flipped.T;
-    stats.optimize.flips += (long long)flipped.pass.succeeded;
-    stats.optimize.flip_max_energy_before =
-        std::max(stats.optimize.flip_max_energy_before, flipped.max_energy_before);
-    stats.optimize.flip_max_energy_after =
-        std::max(stats.optimize.flip_max_energy_after, flipped.max_energy_after);
-    stats.optimize.flip_mean_energy_before = flipped.mean_energy_before;
-    stats.optimize.flip_mean_energy_after = flipped.mean_energy_after;
-    stats.optimize.flip_seconds += watch.seconds();
     stats.stage_seconds.emplace_back("flips", watch.seconds());
   };
   flip(fill);
@@ -697,14 +703,9 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   if (options.optimize.sweeps > 0) {
     std::vector<char> frozen(nodes.size(), 0);
     for (int node : volume_of) frozen[std::size_t(node)] = 1;
-    const OptimizeStats flips = stats.optimize;
+    const OptimizeStats::Flips flips = stats.optimize.flips;
     stats.optimize = optimize_vertices(out.mesh, options.optimize, progress, &frozen);
-    stats.optimize.flips = flips.flips;
-    stats.optimize.flip_max_energy_before = flips.flip_max_energy_before;
-    stats.optimize.flip_max_energy_after = flips.flip_max_energy_after;
-    stats.optimize.flip_mean_energy_before = flips.flip_mean_energy_before;
-    stats.optimize.flip_mean_energy_after = flips.flip_mean_energy_after;
-    stats.optimize.flip_seconds = flips.flip_seconds;
+    stats.optimize.flips = flips;
     for (int node : volume_of)
       CF_VERIFY((out.mesh.nodes.row(node) - map.boundary.nodes.row(local_of[node]))
                         .cwiseAbs()

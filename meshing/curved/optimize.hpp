@@ -35,11 +35,14 @@ struct OptimizeStats {
   double max_energy_before = 0, max_energy_after = 0;
   double mean_energy_before = 0, mean_energy_after = 0;
   double seconds = 0;
-  // Interior flips (before the smoothing; energies of the straight interior tets only).
-  long long flips = 0;
-  double flip_max_energy_before = 0, flip_max_energy_after = 0;
-  double flip_mean_energy_before = 0, flip_mean_energy_after = 0;
-  double flip_seconds = 0;
+  // Flips of the straight fills before the smoothing (set by the curved mesher; energies of the
+  // straight tets only, means weighted by tet count over the interior and exterior fills).
+  struct Flips {
+    long long count = 0, tets_before = 0, tets_after = 0;
+    double max_energy_before = 0, max_energy_after = 0;
+    double mean_energy_before = 0, mean_energy_after = 0;
+    double seconds = 0;
+  } flips;
 };
 
 /// Energy of one cell as defined above (order from the node count).

@@ -40,10 +40,12 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
       {"energy", "conformal AMIPS against the regular tet, mean over the order-k lattice"},
       {"seconds", s.seconds},
       {"interior_flips",
-       {{"flips", s.flips},
-        {"energy_before", {{"mean", s.flip_mean_energy_before}, {"max", s.flip_max_energy_before}}},
-        {"energy_after", {{"mean", s.flip_mean_energy_after}, {"max", s.flip_max_energy_after}}},
-        {"seconds", s.flip_seconds}}}};
+       {{"flips", s.flips.count},
+        {"tets", {{"before", s.flips.tets_before}, {"after", s.flips.tets_after}}},
+        {"energy_before",
+         {{"mean", s.flips.mean_energy_before}, {"max", s.flips.max_energy_before}}},
+        {"energy_after", {{"mean", s.flips.mean_energy_after}, {"max", s.flips.max_energy_after}}},
+        {"seconds", s.flips.seconds}}}};
 }
 
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
