@@ -22,6 +22,7 @@
 #include "meshing/curved/features.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/editing/algorithms/tet_flips.hpp"
+#include "meshing/shell/bevel.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -410,7 +411,14 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   shell_options.max_thickness_rel = options.thickness_rel;
   shell_options.threads = options.threads;
   sh::ShellStats shell_stats;
-  sh::Shell shell = sh::build_shell(input, shell_options, shell_stats, progress);
+  // Topological beveling where the input's own shell is not a section (meshing/shell/bevel.hpp):
+  // from here on the shell works on `surface`, the input refined without moving it, whose
+  // vertices 0..#V-1 are the input's; the map and the returned shell refer to the input again.
+  sh::BeveledShell beveled =
+      sh::build_beveled_shell(input, shell_options, shell_stats, {}, progress);
+  sh::Shell shell = std::move(beveled.shell);
+  const SurfaceMesh& surface = beveled.surface.mesh;
+  stats.beveled_faces = beveled.stats.beveled_faces;
   stats.singular_vertices = shell_stats.singular_vertices;
   stats.shell_faces = int(shell.F.rows());
   stats.stage_seconds.emplace_back("shell", watch.seconds());
@@ -422,19 +430,37 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   simplify_options.rounds = options.simplify_rounds;
   simplify_options.max_distance = eps;
   simplify_options.max_mips = options.max_triangle_mips;
+  simplify_options.flips = options.shell_flips;
+  simplify_options.rotate = options.shell_rotate;
+  simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
+  simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
   sh::SimplifyStats simplify_stats;
   if (progress) progress("coarsen", 0.0);
-  shell = sh::simplify_shell(shell, input, simplify_options, simplify_stats);
+  shell = sh::simplify_shell(shell, surface, simplify_options, simplify_stats);
   if (progress) progress("coarsen", 1.0);
   stats.coarse_faces = int(shell.F.rows());
+  stats.coarsen_collapses = simplify_stats.collapses;
+  stats.coarsen_flips = simplify_stats.flips;
+  stats.coarsen_rotations = simplify_stats.rotations;
+  stats.coarsen_zooms = simplify_stats.zooms;
+  for (const auto& [name, pass] : simplify_stats.passes) {
+    auto it = std::find_if(stats.coarsen_seconds.begin(), stats.coarsen_seconds.end(),
+                           [&](const auto& e) { return e.first == name; });
+    if (it == stats.coarsen_seconds.end())
+      stats.coarsen_seconds.emplace_back(name, pass.seconds);
+    else
+      it->second += pass.seconds;
+  }
+  stats.coarse_median_thickness_rel = simplify_stats.median_half_thickness / unit;
+  stats.coarse_min_thickness_rel = simplify_stats.min_half_thickness / unit;
   stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
   stats.stage_seconds.emplace_back("coarsen", watch.seconds());
   log::info("mesh: shell ", stats.shell_faces, " prisms coarsened to ", stats.coarse_faces,
             " (linear distance ", stats.linear_max_distance_rel, " of bbox)");
 
   watch = Stopwatch();
-  const sh::ShellVerification shell_check = sh::verify_shell(shell, input);
+  const sh::ShellVerification shell_check = sh::verify_shell(shell, surface);
   stats.shell_section_verified = shell_check.section();
   stats.shell_non_section_prisms = shell_check.non_section_faces;
   if (!shell_check.positive() || !shell_check.separated())
@@ -447,7 +473,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   // 3. Curve.
   watch = Stopwatch();
   const int k = options.order;
-  Builder b(shell, input, k);
+  Builder b(shell, surface, k);
   b.exterior = options.exterior;
   b.compute_targets(progress);
   b.locate_input(progress);
@@ -691,6 +717,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   map.vertex_uv = Eigen::MatrixXd::Zero(input.num_vertices(), 2);
   for (int f = 0; f < nf; ++f)
     for (const Owned& o : b.owned[f]) {
+      if (o.vertex >= input.num_vertices()) continue;  // added by beveling
       map.vertex_face[o.vertex] = f;
       map.vertex_uv(o.vertex, 0) = o.u;
       map.vertex_uv(o.vertex, 1) = o.v;
@@ -713,6 +740,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
                 "optimize: a node of the curved surface moved");
   }
   stats.stage_seconds.emplace_back("optimize", watch.seconds());
+  sh::restore_input_ids(shell, beveled.surface);
   out.shell = std::move(shell);
   log::info("mesh: ", stats.slab_tets, " slab + ", stats.interior_tets, " interior + ",
             stats.outer_slab_tets + stats.exterior_tets, " exterior tets of order ", k,

@@ -48,6 +48,12 @@ struct CurvedMeshOptions {
   double slab_depth = 0.4;
   // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
   double max_triangle_mips = 10;
+  // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
+  // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
+  // (0: off), so the coarsening is limited by ε rather than by the initial shell.
+  bool shell_flips = true;
+  bool shell_rotate = true;
+  double shell_zoom_rel = 0.1;
   int threads = 0;  // 0: oneTBB default
   // The coarsening is the only stage whose result depends on thread timing (the editing
   // scheduler's try-locks). Deterministic runs coarsen on one thread, so the same input and
@@ -67,7 +73,13 @@ struct CurvedMeshOptions {
 struct CurvedMeshStats {
   int input_vertices = 0, input_faces = 0, feature_edges = 0, frozen_vertices = 0;
   int singular_vertices = 0;
+  int beveled_faces = 0;  // input faces refined by topological beveling (0: not needed)
   int shell_faces = 0, coarse_faces = 0;
+  // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness
+  // (the smaller half-pillar per vertex) relative to the longest bbox edge.
+  int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0;
+  double coarse_median_thickness_rel = 0, coarse_min_thickness_rel = 0;
+  std::vector<std::pair<std::string, double>> coarsen_seconds;  // per operation kind
   bool shell_section_verified = false;
   int shell_non_section_prisms = 0;
   int faces_fully_curved = 0, faces_blended = 0, faces_linear = 0;

@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "meshing/shell/prism_location.hpp"
+#include "meshing/shell/section.hpp"
 #include "meshing/shell/shell_geometry.hpp"
 #include "meshing/shell/shell_intersection.hpp"
 
@@ -17,6 +18,7 @@ struct ShellProjection::Impl {
   double cell = 1;
   Eigen::Vector3d origin;
   std::unordered_map<std::int64_t, std::vector<int>> grid;
+  std::vector<Eigen::AlignedBox3d> boxes;  // per prism
 
   Impl(const Shell& s, const SurfaceMesh& in) : shell(s), input(in.V, in.F) {}
 
@@ -41,7 +43,8 @@ ShellProjection::ShellProjection(const Shell& shell, const SurfaceMesh& input)
     : m_impl(std::make_unique<Impl>(shell, input)) {
   Impl& m = *m_impl;
   const int nf = int(shell.F.rows());
-  std::vector<Eigen::AlignedBox3d> boxes(nf);
+  std::vector<Eigen::AlignedBox3d>& boxes = m.boxes;
+  boxes.resize(nf);
   double diag = 0;
   m.origin = shell.base.colwise().minCoeff().cwiseMin(shell.top.colwise().minCoeff()).transpose();
   for (int f = 0; f < nf; ++f) {
@@ -70,6 +73,7 @@ std::optional<PrismPoint> ShellProjection::locate(const Eigen::Vector3d& p) cons
   auto it = m.grid.find(m.key(p));
   if (it == m.grid.end()) return std::nullopt;
   for (int f : it->second) {
+    if (!m.boxes[f].contains(p)) continue;  // exact: the box of the corners holds the prism
     const Eigen::Vector3i F = m.shell.F.row(f);
     std::array<Eigen::Vector3d, 3> b, mid, t;
     for (int k = 0; k < 3; ++k) {
@@ -112,19 +116,26 @@ Eigen::Vector3d ShellProjection::point(const PrismPoint& q) const {
   return prev;
 }
 
-std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const {
+std::array<Eigen::Vector3d, 7> ShellProjection::fiber(int face, double u, double v) const {
   const Impl& m = *m_impl;
-  const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(q.face)));
-  const double w[3] = {1 - q.u - q.v, q.u, q.v};
-  std::vector<Eigen::Vector3d> fiber;
+  const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(face)));
+  const double w[3] = {1 - u - v, u, v};
+  std::array<Eigen::Vector3d, 7> out;
+  int n = 0;
   for (int half = 0; half < 2; ++half)
     for (int i = half; i < 4; ++i) {  // the mid facet of half 1 is the top facet of half 0
       std::array<int, 3> sorted = rising_facets(type_a)[i];
       std::sort(sorted.begin(), sorted.end(), [](int a, int b) { return a % 3 < b % 3; });
       Eigen::Vector3d x = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) x += w[k] * m.corner(q.face, half, sorted[k]);
-      fiber.push_back(x);
+      for (int k = 0; k < 3; ++k) x += w[k] * m.corner(face, half, sorted[k]);
+      out[n++] = x;
     }
+  return out;
+}
+
+std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const {
+  const Impl& m = *m_impl;
+  const auto fiber = this->fiber(q.face, q.u, q.v);
   // Walk the fiber from the middle outwards: the input crosses it near h = 0.
   const int mid = 3;
   for (int d = 0; d < 3; ++d)
@@ -152,6 +163,38 @@ std::optional<SurfacePoint> ShellProjection::project(const Eigen::Vector3d& p) c
 
 std::optional<PrismPoint> ShellProjection::unproject(const Eigen::Vector3d& x) const {
   return locate(x);
+}
+
+std::vector<int> ShellProjection::prisms_in_box(const Eigen::Vector3d& lo,
+                                                const Eigen::Vector3d& hi) const {
+  const Impl& m = *m_impl;
+  const Eigen::AlignedBox3d box(lo, hi);
+  std::vector<int> out;
+  const Eigen::Vector3d a = ((lo - m.origin) / m.cell).array().floor(),
+                        b = ((hi - m.origin) / m.cell).array().floor();
+  const double cells = (b - a + Eigen::Vector3d::Ones()).prod();
+  if (!(cells <= double(m.boxes.size()))) {  // a box larger than the shell's cells: scan
+    for (int f = 0; f < int(m.boxes.size()); ++f)
+      if (m.boxes[f].intersects(box)) out.push_back(f);
+    return out;
+  }
+  for (std::int64_t i = std::int64_t(a.x()); i <= std::int64_t(b.x()); ++i)
+    for (std::int64_t j = std::int64_t(a.y()); j <= std::int64_t(b.y()); ++j)
+      for (std::int64_t k = std::int64_t(a.z()); k <= std::int64_t(b.z()); ++k) {
+        auto it = m.grid.find((i & 0x1fffff) | ((j & 0x1fffff) << 21) | ((k & 0x1fffff) << 42));
+        if (it == m.grid.end()) continue;
+        for (int f : it->second)
+          if (m.boxes[f].intersects(box)) out.push_back(f);
+      }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+const Shell& ShellProjection::shell() const { return m_impl->shell; }
+
+bool ShellProjection::is_section(const SurfaceMesh& m) const {
+  return SectionChecker(*this).check(m).is_section();
 }
 
 }  // namespace curvefem::meshing::shell

@@ -9,10 +9,17 @@
 // on its fiber; P⁻¹ maps an input point to its prism coordinates. Point location uses exact
 // orientation predicates; intersections are decided by exact predicates and only then solved
 // for barycentric coordinates.
+//
+// P projects onto the surface given to the constructor, which need not be the shell's input: any
+// section of the shell will do (thesis Fig. 4.7). Two projections of one shell onto sections S1
+// and S2 compose to the bijection S1 → S2 (section_transfer.hpp). The surface is copied; the
+// shell must outlive the object. Queries are const and thread-safe.
 
 #include <Eigen/Core>
+#include <array>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/shell/shell.hpp"
@@ -46,6 +53,16 @@ class ShellProjection {
   std::optional<SurfacePoint> project(const Eigen::Vector3d& p) const;
   // P⁻¹: an input point to its prism coordinates (h tells where it sits between base and top).
   std::optional<PrismPoint> unproject(const Eigen::Vector3d& input_point) const;
+
+  // The fiber of (face, u, v) from base to top: its 7 corners on the rising facets of the two
+  // halves (index 3 is on the middle triangle). Straight between consecutive corners.
+  std::array<Eigen::Vector3d, 7> fiber(int face, double u, double v) const;
+  // Prisms whose bounding box meets the box [lo, hi] (a superset of the prisms meeting it).
+  std::vector<int> prisms_in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  const Shell& shell() const;
+  // is_section(T) of thesis §4.4: is the closed triangle mesh m a section of the shell (every
+  // fiber crosses it exactly once, transversally)? What is checked: section.hpp.
+  bool is_section(const SurfaceMesh& m) const;
 
  private:
   struct Impl;

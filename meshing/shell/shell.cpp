@@ -59,10 +59,8 @@ void require_closed_oriented_manifold(const SurfaceMesh& s) {
   }
 }
 
-}  // namespace
-
-Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellStats& stats,
-                  const ProgressFn& progress) {
+Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* given,
+                       const ShellOptions& options, ShellStats& stats, const ProgressFn& progress) {
   auto t0 = Clock::now();
   auto stage = [&](const char* name) {
     const auto now = Clock::now();
@@ -77,7 +75,12 @@ Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellSt
   const double unit = bbox_longest_edge(input.V);
 
   // 1. Directions.
-  ExtrusionDirections dirs = extrusion_directions(input.V, input.F, options.singularity_tolerance);
+  if (given &&
+      (given->N.rows() != input.V.rows() || given->singular.size() != std::size_t(input.V.rows())))
+    throw InputError("shell: " + std::to_string(given->N.rows()) + " directions for " +
+                     std::to_string(input.V.rows()) + " vertices");
+  const ExtrusionDirections dirs =
+      given ? *given : extrusion_directions(input.V, input.F, options.singularity_tolerance);
   stage("directions");
 
   // 2. Pinching.
@@ -259,6 +262,18 @@ Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellSt
     stats.max_thickness_rel = thick.back();
   }
   return shell;
+}
+
+}  // namespace
+
+Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellStats& stats,
+                  const ProgressFn& progress) {
+  return build_shell_impl(input, nullptr, options, stats, progress);
+}
+
+Shell build_shell(const SurfaceMesh& input, const ExtrusionDirections& directions,
+                  const ShellOptions& options, ShellStats& stats, const ProgressFn& progress) {
+  return build_shell_impl(input, &directions, options, stats, progress);
 }
 
 }  // namespace curvefem::meshing::shell

@@ -14,6 +14,7 @@
 
 #include "meshing/core/progress.hpp"
 #include "meshing/core/surface_mesh.hpp"
+#include "meshing/shell/extrusion_direction.hpp"
 
 namespace curvefem::meshing::shell {
 
@@ -45,5 +46,10 @@ struct ShellStats {
 // if a face has three singular vertices or a prism cannot be made positive.
 Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellStats& stats,
                   const ProgressFn& progress = {});
+
+// The same with given per-vertex directions instead of the QP's (#V rows, unit or zero; singular
+// vertices zero), e.g. those of a beveled surface (bevel.hpp). InputError on a size mismatch.
+Shell build_shell(const SurfaceMesh& input, const ExtrusionDirections& directions,
+                  const ShellOptions& options, ShellStats& stats, const ProgressFn& progress = {});
 
 }  // namespace curvefem::meshing::shell

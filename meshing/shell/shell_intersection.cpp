@@ -105,6 +105,24 @@ int sign_det(const V3& u1, const V3& u0, const V3& v1, const V3& v0, const V3& w
       same(v1, v0, w1, w0))
     return 0;
   {
+    // Static filter: Shewchuk's orient3d bound (7 + 56ε)ε · permanent holds for any three
+    // rounded differences, as in orient3d. Outside the safe range (tiny or huge magnitudes) the
+    // interval filter decides.
+    const V3 u = u1 - u0, v = v1 - v0, w = w1 - w0;
+    const double a = v.y() * w.z() - v.z() * w.y(), b = v.x() * w.z() - v.z() * w.x(),
+                 c = v.x() * w.y() - v.y() * w.x();
+    const double det = u.x() * a - u.y() * b + u.z() * c;
+    const double permanent = std::abs(u.x()) * (std::abs(v.y() * w.z()) + std::abs(v.z() * w.y())) +
+                             std::abs(u.y()) * (std::abs(v.x() * w.z()) + std::abs(v.z() * w.x())) +
+                             std::abs(u.z()) * (std::abs(v.x() * w.y()) + std::abs(v.y() * w.x()));
+    constexpr double eps = std::numeric_limits<double>::epsilon() / 2;
+    if (permanent > 1e-250 && permanent < 1e250) {
+      const double bound = (7.0 + 56.0 * eps) * eps * permanent;
+      if (det > bound) return 1;
+      if (det < -bound) return -1;
+    }
+  }
+  {
     CGAL::Protect_FPU_rounding<true> guard;
     const CGAL::Interval_nt<false> d =
         det_of_differences<CGAL::Interval_nt<false>>(u1, u0, v1, v0, w1, w0);
@@ -265,6 +283,18 @@ double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
   return 0.0;
 }
 
+bool triangles_meet_beyond_pinch(const std::array<V3, 3>& a, int ka, const std::array<V3, 3>& b,
+                                 int kb) {
+  const Triangle ta(pt(a[0]), pt(a[1]), pt(a[2])), tb(pt(b[0]), pt(b[1]), pt(b[2]));
+  if (ka < 0 || kb < 0) return CGAL::do_intersect(ta, tb);
+  // Contact at the shared point only: neither opposite edge touches the other triangle.
+  const Segment mine(ta[(ka + 1) % 3], ta[(ka + 2) % 3]),
+      theirs(tb[(kb + 1) % 3], tb[(kb + 2) % 3]);
+  if (CGAL::do_intersect(mine, tb) || CGAL::do_intersect(theirs, ta)) return true;
+  return CGAL::coplanar(ta[0], ta[1], ta[2], tb[0]) && CGAL::coplanar(ta[0], ta[1], ta[2], tb[1]) &&
+         CGAL::coplanar(ta[0], ta[1], ta[2], tb[2]);  // coplanar fans: conservatively meeting
+}
+
 bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>& c,
                                             const std::array<bool, 3>& singular,
                                             const Eigen::Vector3i& corner_ids) const {
@@ -274,23 +304,15 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   m_impl->tree.all_intersected_primitives(tri, std::back_inserter(hits));
   for (const auto& it : hits) {
     const int f = m_impl->id(it);
-    int pinch = -1;  // local corner of the triangle that is a singular input vertex of face f
+    int pinch = -1, shared = -1;  // the triangle's corner at a singular input vertex of face f
     for (int k = 0; k < 3; ++k)
       if (singular[k])
         for (int j = 0; j < 3; ++j)
-          if (m_impl->F(f, j) == corner_ids[k]) pinch = k;
-    if (pinch < 0) return true;
-    // Contact at the shared point only: neither opposite edge touches the other triangle.
-    const Segment mine(pt(c[(pinch + 1) % 3]), pt(c[(pinch + 2) % 3]));
-    int shared = 0;
-    while (m_impl->F(f, shared) != corner_ids[pinch]) ++shared;
-    const Segment theirs(pt(m_impl->V.row(m_impl->F(f, (shared + 1) % 3))),
-                         pt(m_impl->V.row(m_impl->F(f, (shared + 2) % 3))));
-    if (CGAL::do_intersect(mine, *it) || CGAL::do_intersect(theirs, tri)) return true;
-    if (CGAL::coplanar(tri[0], tri[1], tri[2], (*it)[0]) &&
-        CGAL::coplanar(tri[0], tri[1], tri[2], (*it)[1]) &&
-        CGAL::coplanar(tri[0], tri[1], tri[2], (*it)[2]))
-      return true;  // coplanar fans: conservatively an intersection
+          if (m_impl->F(f, j) == corner_ids[k]) {
+            pinch = k;
+            shared = j;
+          }
+    if (pinch < 0 || triangles_meet_beyond_pinch(c, pinch, face_triangle(f), shared)) return true;
   }
   return false;
 }

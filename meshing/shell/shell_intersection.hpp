@@ -36,6 +36,13 @@ bool triangle_meets_open_facet(const std::array<Eigen::Vector3d, 3>& tri,
 bool triangle_section_contact(const std::array<Eigen::Vector3d, 3>& tri,
                               const std::array<Eigen::Vector3d, 4>& tet);
 
+// Do the closed triangles a and b meet anywhere but at a pinch point, their common corner
+// a[ka] == b[kb] (ka = kb = -1: no such corner, any contact counts)? Contact at that point alone is
+// decided exactly with the opposite edges; coplanar triangles sharing it count as meeting
+// (conservative). Both triangles must be non-degenerate.
+bool triangles_meet_beyond_pinch(const std::array<Eigen::Vector3d, 3>& a, int ka,
+                                 const std::array<Eigen::Vector3d, 3>& b, int kb);
+
 class InputSurfaceIndex {
  public:
   InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);

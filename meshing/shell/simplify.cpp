@@ -2,12 +2,14 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <optional>
 #include <set>
 
 #include "meshing/editing/tri_mesh.hpp"
+#include "meshing/shell/extrusion_direction.hpp"
 #include "meshing/shell/prism_location.hpp"
 #include "meshing/shell/prism_positivity.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -36,6 +38,11 @@ class ShellMesh : public TriMesh {
   double max_distance = 0;
   double max_mips = 0;
   const std::vector<char>* frozen = nullptr;
+  enum class Smoothing { rotate, zoom };
+  Smoothing smoothing_mode = Smoothing::rotate;
+  double max_half_thickness = 0, zoom_ray_fraction = 0.45;
+  const std::vector<std::vector<int>>* vf = nullptr;  // input vertex -> incident input faces
+  std::array<std::vector<char>, 2> revisit;           // per smoothing kind: vertices to visit next
 
   double mips(Id f) const {
     const Cell& c = cell(f);
@@ -70,10 +77,12 @@ class ShellMesh : public TriMesh {
     return (p - x).norm();
   }
 
-  // Re-homes the input vertices owned by the old cells into the new ones under the bound.
+  // Re-homes the input vertices owned by the old cells (the changed cells of a smoothing) into
+  // the new ones under the bound.
   bool rehome_owned(const OperationRecord& r) {
+    const std::vector<Id>& from = r.old_cells.empty() ? r.new_cells : r.old_cells;
     std::vector<int> points;
-    for (Id f : r.old_cells) points.insert(points.end(), owned[f].begin(), owned[f].end());
+    for (Id f : from) points.insert(points.end(), owned[f].begin(), owned[f].end());
     std::vector<std::vector<int>> next(r.new_cells.size());
     for (int x : points) {
       const Eigen::Vector3d p = input->V().row(x);
@@ -149,20 +158,93 @@ class ShellMesh : public TriMesh {
   }
 
  protected:
-  bool collapse_edge_before(const Tuple& t) override {
-    if (singular[t.vid]) return false;
-    const int x = input_vertex[t.vid];
-    return !(frozen && x >= 0 && std::size_t(x) < frozen->size() && (*frozen)[x]);
+  bool frozen_vertex(Id v) const {
+    const int x = input_vertex[v];
+    return frozen && x >= 0 && std::size_t(x) < frozen->size() && (*frozen)[x];
   }
-  bool invariants(const OperationRecord& r) override {
+  bool collapse_edge_before(const Tuple& t) override {
+    return !singular[t.vid] && !frozen_vertex(t.vid);
+  }
+
+  // Flips: no singular vertex in the two faces (a face may hold one at most), no edge between two
+  // frozen vertices (it may be a feature edge), and a strictly lower worst MIPS.
+  bool swap_edge_before(const Tuple& t) override {
+    const Id a = t.vid, b = other_vertex(t);
+    if (frozen_vertex(a) && frozen_vertex(b)) return false;
+    for (Id f : vertex_cells(a))
+      for (Id v : cell(f))
+        if (singular[v]) return false;
+    for (Id f : vertex_cells(b))
+      for (Id v : cell(f))
+        if (singular[v]) return false;
+    return true;
+  }
+  bool swap_edge_after(const OperationRecord& r) override {
+    double before = 0, after = 0;
+    for (Id f : r.old_cells) before = std::max(before, mips(f));
+    for (Id f : r.new_cells) after = std::max(after, mips(f));
+    return after < (1 - 1e-3) * before;
+  }
+
+  // Smoothing is one of two moves of vertex r.v0's pillar, chosen by `smoothing_mode`.
+  bool smooth_before(const Tuple& t) override { return !singular[t.vid]; }
+  bool smooth_after(const OperationRecord& r) override {
+    const Id v = r.v0;
+    const Eigen::Vector3d m = mid[v];
+    const Eigen::Vector3d up = top[v] - m, down = m - base[v];
+    const double lt = up.norm(), lb = down.norm();
+    if (!(lt > 0) || !(lb > 0)) return false;
+    const Eigen::Vector3d d = up / lt;
+    if (smoothing_mode == Smoothing::rotate) {
+      std::vector<Eigen::Vector3d> normals;
+      for (Id f : r.new_cells) {
+        const Cell& c = cell(f);
+        const Eigen::Vector3d n = (mid[c[1]] - mid[c[0]]).cross(mid[c[2]] - mid[c[0]]);
+        if (!(n.norm() > 0)) return false;
+        normals.push_back(n.normalized());
+        for (int x : track[f]) {
+          const auto tri = input->face_triangle(x);
+          const Eigen::Vector3d nx = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+          if (nx.norm() > 0) normals.push_back(nx.normalized());
+        }
+      }
+      std::sort(normals.begin(), normals.end(), [](const auto& x, const auto& y) {
+        return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
+      });
+      normals.erase(std::unique(normals.begin(), normals.end()), normals.end());
+      Eigen::Vector3d e;
+      if (!most_visible_direction(normals, 1e-2, e)) return false;
+      if (e.dot(d) > std::cos(1e-3)) return false;  // already there
+      top.set(v, m + lt * e);
+      base.set(v, m - lb * e);
+      return true;
+    }
+    // Zoom: double both halves within the caps.
+    const int x = input_vertex[v];
+    if (x < 0) return false;
+    const double cap_t =
+        std::min(max_half_thickness, zoom_ray_fraction * input->ray_distance(m, d, (*vf)[x]));
+    const double cap_b =
+        std::min(max_half_thickness, zoom_ray_fraction * input->ray_distance(m, -d, (*vf)[x]));
+    const double nt = std::min(2 * lt, cap_t), nb = std::min(2 * lb, cap_b);
+    if (!(nt > 1.01 * lt) && !(nb > 1.01 * lb)) return false;
+    top.set(v, m + std::max(nt, lt) * d);
+    base.set(v, m - std::max(nb, lb) * d);
+    return true;
+  }
+
+  // Smoothing cannot change the middle surface's shape, so only the other failures ask for it.
+  enum class Check { ok, shape, shell };
+  Check check(const OperationRecord& r) {
     // The distance bound first: a few orientation tests per input vertex, far cheaper than the
     // prism checks, and the reason most collapses fail once the surface is coarse.
-    if (max_mips > 0 && !shape_ok(r)) return false;
-    if (max_distance > 0 && !rehome_owned(r)) return false;
+    if (max_mips > 0 && !r.old_cells.empty() && !shape_ok(r)) return Check::shape;
+    if (max_distance > 0 && !rehome_owned(r)) return Check::shell;
     std::vector<int> old_union, new_union, touching;
-    for (Id f : r.old_cells) old_union.insert(old_union.end(), track[f].begin(), track[f].end());
+    for (Id f : r.old_cells.empty() ? r.new_cells : r.old_cells)
+      old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     for (Id f : r.new_cells) {
-      if (!prism_ok(f, touching)) return false;
+      if (!prism_ok(f, touching)) return Check::shell;
       track.set(f, touching);
       new_union.insert(new_union.end(), touching.begin(), touching.end());
     }
@@ -171,7 +253,23 @@ class ShellMesh : public TriMesh {
     std::sort(new_union.begin(), new_union.end());
     new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
     // Every input face the removed prisms touched is still inside one of the new ones.
-    return std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end());
+    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end()))
+      return Check::shell;
+    return Check::ok;
+  }
+  bool invariants(const OperationRecord& r) override {
+    const Check c = check(r);
+    // Worth a smoothing visit: the vertices whose prisms changed, and those of a collapse or
+    // flip the shell refused (a thicker or re-aimed pillar may let it through next round). They
+    // are locked by this operation, so each flag is written by one thread.
+    const std::vector<Id>* cells = c == Check::ok                              ? &r.new_cells
+                                   : c == Check::shell && !r.old_cells.empty() ? &r.old_cells
+                                                                               : nullptr;
+    if (cells)
+      for (Id f : *cells)
+        for (Id v : cell(f))
+          for (auto& flags : revisit) flags[v] = 1;
+    return c == Check::ok;
   }
 };
 
@@ -218,14 +316,35 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (int f = 0; f < nf; ++f) m.owned.set(Id(f), own[f]);
   }
 
+  std::vector<std::vector<int>> vf(input.num_vertices());
+  for (int f = 0; f < input.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) vf[input.F(f, k)].push_back(f);
+  m.vf = &vf;
+  m.max_half_thickness = options.zoom;
+  m.zoom_ray_fraction = options.zoom_ray_fraction;
+
   using Pass = editing::ExecutePass<TriMesh>;
   auto length2 = [&m](const TriMesh::Tuple& t) {
     return (m.mid[t.vid] - m.mid[m.other_vertex(t)]).squaredNorm();
   };
-  for (int round = 0; round < options.rounds; ++round) {
-    Pass pass;
+  auto edge_work = [&m](const std::string& op, const std::vector<TriMesh::Tuple>& edges,
+                        bool both_ways) {
+    std::vector<Pass::Work> work;
+    for (const auto& e : edges) {
+      work.emplace_back(op, e);
+      if (both_ways) work.emplace_back(op, m.switch_vertex(e));
+    }
+    return work;
+  };
+  auto run = [&](const std::string& name, Pass& pass, const std::vector<Pass::Work>& work) {
     pass.num_threads = options.threads;
     pass.position = [&m](Id v) { return m.mid[v]; };
+    const editing::PassStats s = pass.run(m, work);
+    stats.passes.emplace_back(name, s);
+    return int(s.succeeded);
+  };
+  auto collapse_pass = [&] {
+    Pass pass;
     pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
       return m.collapse_edge(t);
     };
@@ -235,23 +354,71 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     pass.should_process = [length2](const TriMesh&, const Pass::Work& w, double p) {
       return -length2(w.second) == p;
     };
-    pass.renew_neighbor_tuples = [&m](const TriMesh&, const std::string&,
-                                      const TriMesh::Tuple& kept) {
-      std::vector<Pass::Work> work;
-      for (const auto& e : m.edges_of_faces(m.vertex_cells(kept.vid))) {
-        work.emplace_back("collapse", e);
-        work.emplace_back("collapse", m.switch_vertex(e));
-      }
-      return work;
+    pass.renew_neighbor_tuples = [&](const TriMesh&, const std::string&,
+                                     const TriMesh::Tuple& kept) {
+      return edge_work("collapse", m.edges_of_faces(m.vertex_cells(kept.vid)), true);
     };
+    return run("collapse", pass, edge_work("collapse", m.get_edges(), true));
+  };
+  // Flips, worst pair of faces first; a success renews the edges of the two new faces.
+  auto worst = [&m](const TriMesh::Tuple& t) {
+    double w = m.mips(t.fid);
+    if (const auto o = m.switch_face(t)) w = std::max(w, m.mips(o->fid));
+    return w;
+  };
+  auto flip_pass = [&] {
+    Pass pass;
+    pass.operations["flip"] = [&m](TriMesh&, const TriMesh::Tuple& t) { return m.swap_edge(t); };
+    pass.priority = [worst](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
+      return worst(t);
+    };
+    pass.should_process = [worst](const TriMesh&, const Pass::Work& w, double p) {
+      return worst(w.second) == p;
+    };
+    pass.renew_neighbor_tuples = [&](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
+      const Id e[2] = {t.vid, m.other_vertex(t)};
+      return edge_work("flip", m.edges_of_faces(m.cells_containing(std::span<const Id>(e, 2))),
+                       false);
+    };
+    return run("flip", pass, edge_work("flip", m.get_edges(), false));
+  };
+  // One smoothing move per vertex, no renewal (the next round re-seeds).
+  // Only vertices flagged since the last pass of this kind (see ShellMesh::invariants).
+  for (auto& flags : m.revisit) flags.assign(m.vertex_capacity(), 0);
+  auto smooth_pass = [&](const std::string& name, ShellMesh::Smoothing mode) {
+    m.smoothing_mode = mode;
+    std::vector<char>& flags = m.revisit[mode == ShellMesh::Smoothing::rotate ? 0 : 1];
+    Pass pass;
+    pass.operations[name] = [&m](TriMesh&, const TriMesh::Tuple& t) { return m.smooth_vertex(t); };
+    pass.priority = [](const TriMesh&, const std::string&, const TriMesh::Tuple&) { return 0.0; };
     std::vector<Pass::Work> work;
-    for (const auto& e : m.get_edges()) {
-      work.emplace_back("collapse", e);
-      work.emplace_back("collapse", m.switch_vertex(e));
+    for (const auto& v : m.get_vertices())
+      if (flags[v.vid]) work.emplace_back(name, v);
+    std::fill(flags.begin(), flags.end(), 0);
+    return run(name, pass, work);
+  };
+
+  for (int round = 0; round < options.rounds; ++round) {
+    int changed = 0;
+    const int collapsed = collapse_pass();
+    stats.collapses += collapsed;
+    changed += collapsed;
+    if (options.zoom > 0) {
+      const int z = smooth_pass("zoom", ShellMesh::Smoothing::zoom);
+      stats.zooms += z;
+      changed += z;
     }
-    const editing::PassStats s = pass.run(m, work);
-    stats.passes.push_back(s);
-    if (s.succeeded == 0) break;
+    if (options.rotate) {
+      const int r = smooth_pass("rotate", ShellMesh::Smoothing::rotate);
+      stats.rotations += r;
+      changed += r;
+    }
+    if (options.flips) {
+      const int f = flip_pass();
+      stats.flips += f;
+      changed += f;
+    }
+    if (collapsed == 0 && (round > 0 || changed == 0)) break;
   }
 
   m.consolidate();
@@ -278,6 +445,17 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     out.face_parent[f] = tr.empty() ? -1 : tr.front();
   }
   stats.faces_after = int(faces.size());
+  std::vector<double> thick;
+  for (int v = 0; v < mv; ++v)
+    if (!out.singular[v] && m.vertex_cells(Id(v)).size() > 0)
+      thick.push_back(std::min((out.top.row(v) - out.mid.row(v)).norm(),
+                               (out.mid.row(v) - out.base.row(v)).norm()));
+  if (!thick.empty()) {
+    std::sort(thick.begin(), thick.end());
+    stats.min_half_thickness = thick.front();
+    stats.median_half_thickness = thick[thick.size() / 2];
+    stats.max_half_thickness = thick.back();
+  }
   if (m.max_distance > 0)
     for (std::size_t f = 0; f < faces.size(); ++f)
       for (int x : m.owned[Id(f)]) {

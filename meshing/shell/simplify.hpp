@@ -1,7 +1,17 @@
 #pragma once
-// Shell simplification on meshing/editing (thesis §4.3.2; reference-notes §3.6): shortest-first
-// half-edge collapses of the middle surface that keep the kept vertex's pillar, accepted only if
-// every new prism
+// Shell simplification on meshing/editing (thesis §4.3.2; reference-notes §3.6): rounds of
+//   collapse  shortest-first half-edge collapses of the middle surface that keep the kept
+//             vertex's pillar,
+//   flip      edge swaps of the middle surface that lower the worst 2-D MIPS of the two faces,
+//   rotate    pillar re-orientation: a vertex's pillar turns to the most visible direction
+//             (extrusion_direction.hpp) of its coarse star faces and the input faces its prisms
+//             track, keeping both half-lengths, so the pillars follow the coarse surface,
+//   zoom      thickness growth: a vertex's base and top move away from the middle surface along
+//             the pillar (doubling each half, capped by max_half_thickness and by a fraction of
+//             the ray distance to the input), so a coarser middle surface still has the input
+//             inside its prisms.
+// The middle surface keeps the input's vertices (no tangential moves). Every operation is
+// accepted only if every new or changed prism
 //   I1  passes the exact 24-tet positivity test,
 //   I2  keeps the input a section: every input triangle touching its canonical split tets has a
 //       normal with cos(angle) > section_cos to each non-singular pillar,
@@ -30,11 +40,18 @@ struct SimplifyOptions {
   // 2-D MIPS energy (|e0|²+|e1|²+|e2|²)/(2√3·area), 2 for the equilateral triangle, than both
   // the removed ones and this bound is rejected.
   double max_mips = 0;
+  bool flips = true;   // flip passes between collapse rounds
+  bool rotate = true;  // pillar rotation passes
+  double zoom = 0;     // > 0: thickness growth passes, each half-pillar capped at this length
+  double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
 };
 
 struct SimplifyStats {
   int faces_before = 0, faces_after = 0;
-  std::vector<editing::PassStats> passes;
+  std::vector<std::pair<std::string, editing::PassStats>> passes;  // "collapse", "flip", ...
+  int collapses = 0, flips = 0, rotations = 0, zooms = 0;
+  // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
+  double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;
   double max_distance = 0;  // max |x - mid(u, v)| over owned input vertices at the end (if bounded)
   double seconds = 0;
 };

@@ -1,5 +1,7 @@
 #include "meshing/shell/verify.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
@@ -11,6 +13,68 @@
 #include "meshing/shell/shell_intersection.hpp"
 
 namespace curvefem::meshing::shell {
+
+std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input) {
+  // Section condition (the argument is in shell_intersection.cpp): every input face in section
+  // contact with a non-degenerate split tet (it meets the open tet, or lies in a facet plane and
+  // meets the facet's relative interior) must make a positive dot product, exact sign, with
+  // every non-singular half-pillar. Contact with the prism's boundary alone is not checked here:
+  // the fibers there belong to the neighbour as well, whose tets see that face. Faces passing
+  // the pillar test are skipped before the contact test.
+  const InputSurfaceIndex index(input.V, input.F);
+  const int nf = int(shell.F.rows());
+  auto row = [](const Eigen::MatrixXd& M, int v) { return Eigen::Vector3d(M.row(v)); };
+  std::vector<char> fails(std::size_t(nf), 0);
+  tbb::parallel_for(0, nf, [&](int f) {
+    const Eigen::Vector3i F = shell.F.row(f);
+    const int rot = min_rotation(F);
+    const bool type_a = is_type_a(F);
+    Eigen::AlignedBox3d box;
+    std::vector<std::array<Eigen::Vector3d, 4>> tets;
+    for (int half = 0; half < 2; ++half)
+      for (const auto& tet : split_tets(type_a)) {
+        std::array<Eigen::Vector3d, 4> c;
+        for (int k = 0; k < 4; ++k) {
+          const int v = F[(rot + tet[k] % 3) % 3];
+          const Eigen::MatrixXd& M = tet[k] < 3 ? (half == 0 ? shell.base : shell.mid)
+                                                : (half == 0 ? shell.mid : shell.top);
+          c[k] = row(M, v);
+          box.extend(c[k]);
+        }
+        if ((c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) == 0) continue;  // pinched
+        tets.push_back(c);
+      }
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> half_pillars;
+    for (int k = 0; k < 3; ++k) {
+      const int v = F[k];
+      if (shell.singular[v]) continue;
+      half_pillars.emplace_back(row(shell.base, v), row(shell.mid, v));
+      half_pillars.emplace_back(row(shell.mid, v), row(shell.top, v));
+    }
+    bool ok = true;
+    for (int t : index.faces_in_box(box.min(), box.max())) {
+      const auto tri = index.face_triangle(t);
+      bool transversal = true;
+      for (const auto& [from, to] : half_pillars)
+        if (normal_dot_sign(tri, from, to) <= 0) {
+          transversal = false;
+          break;
+        }
+      if (transversal) continue;
+      for (const auto& tet : tets)
+        if (index.face_section_contact(t, tet)) {
+          ok = false;
+          break;
+        }
+      if (!ok) break;
+    }
+    fails[std::size_t(f)] = !ok;
+  });
+  std::vector<int> out;
+  for (int f = 0; f < nf; ++f)
+    if (fails[std::size_t(f)]) out.push_back(f);
+  return out;
+}
 
 ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -68,68 +132,25 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     }
   }
 
-  // Section condition (the argument is in shell_intersection.cpp): every input face in section
-  // contact with a non-degenerate split tet (it meets the open tet, or lies in a facet plane and
-  // meets the facet's relative interior) must make a positive dot product, exact sign, with
-  // every non-singular half-pillar. Contact with the prism's boundary alone is not checked here:
-  // the fibers there belong to the neighbour as well, whose tets see that face. Faces passing
-  // the pillar test are skipped before the contact test.
-  {
-    const InputSurfaceIndex index(input.V, input.F);
-    for (int f = 0; f < nf; ++f) {
-      const Eigen::Vector3i F = shell.F.row(f);
-      const int rot = min_rotation(F);
-      const bool type_a = is_type_a(F);
-      Eigen::AlignedBox3d box;
-      std::vector<std::array<Eigen::Vector3d, 4>> tets;
-      for (int half = 0; half < 2; ++half)
-        for (const auto& tet : split_tets(type_a)) {
-          std::array<Eigen::Vector3d, 4> c;
-          for (int k = 0; k < 4; ++k) {
-            const int v = F[(rot + tet[k] % 3) % 3];
-            const Eigen::MatrixXd& M = tet[k] < 3 ? (half == 0 ? shell.base : shell.mid)
-                                                  : (half == 0 ? shell.mid : shell.top);
-            c[k] = row(M, v);
-            box.extend(c[k]);
-          }
-          if ((c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]) == 0) continue;  // pinched
-          tets.push_back(c);
-        }
-      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> half_pillars;
-      for (int k = 0; k < 3; ++k) {
-        const int v = F[k];
-        if (shell.singular[v]) continue;
-        half_pillars.emplace_back(row(shell.base, v), row(shell.mid, v));
-        half_pillars.emplace_back(row(shell.mid, v), row(shell.top, v));
-      }
-      bool ok = true;
-      for (int t : index.faces_in_box(box.min(), box.max())) {
-        const auto tri = index.face_triangle(t);
-        bool transversal = true;
-        for (const auto& [from, to] : half_pillars)
-          if (normal_dot_sign(tri, from, to) <= 0) {
-            transversal = false;
-            break;
-          }
-        if (transversal) continue;
-        for (const auto& tet : tets)
-          if (index.face_section_contact(t, tet)) {
-            ok = false;
-            break;
-          }
-        if (!ok) break;
-      }
-      if (!ok) ++r.non_section_faces;
-    }
-  }
+  // Section condition (the argument is in shell_intersection.cpp).
+  r.non_section_faces = int(non_section_prisms(shell, input).size());
 
-  // Roundtrip of every input vertex through P⁻¹ and P.
+  // Roundtrip of every input vertex through P⁻¹ and P. A pinch point (an input vertex that is
+  // a singular shell vertex, base = mid = top) is a zero-length fiber that P and P⁻¹ fix (thesis
+  // §4.2.5): it must be located, but its fiber is not searched for the input (its rounded (u, v)
+  // would give fiber segments of length ~1e-16 around the point itself).
   {
     const ShellProjection projection(shell, input);
     const double unit = bbox_longest_edge(input.V);
-    std::vector<char> referenced(input.num_vertices(), 0);
+    std::vector<char> referenced(input.num_vertices(), 0), pinch(input.num_vertices(), 0);
     for (int f = 0; f < input.num_faces(); ++f)
       for (int k = 0; k < 3; ++k) referenced[input.F(f, k)] = 1;
+    for (int v = 0; v < nv; ++v) {
+      const int x = shell.input_vertex[v];
+      if (shell.singular[v] && x >= 0 && x < input.num_vertices() &&
+          shell.mid.row(v) == input.V.row(x))
+        pinch[x] = 1;
+    }
     for (int v = 0; v < input.num_vertices(); ++v) {
       if (!referenced[v]) continue;
       const Eigen::Vector3d x = input.V.row(v);
@@ -138,6 +159,7 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
         ++r.roundtrip_failures;
         continue;
       }
+      if (pinch[v]) continue;
       const auto back = projection.project(*q);
       if (!back) {
         ++r.roundtrip_failures;

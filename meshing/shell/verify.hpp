@@ -9,7 +9,10 @@
 //                 interior; shell_intersection.hpp) has a
 //                 normal making a positive dot product with every non-singular pillar, so every
 //                 fiber crosses the input transversally and at most once (thesis §4.4, I2)
-//   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge
+//   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (a pinch
+//                 point, a zero-length fiber that P fixes, must only be located)
+
+#include <vector>
 
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/shell/shell.hpp"
@@ -31,5 +34,10 @@ struct ShellVerification {
 };
 
 ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input);
+
+// The prisms failing the section condition above, in increasing order (verify_shell counts
+// them; build_beveled_shell bevels under them). Parallel over prisms; the result does not depend
+// on the thread count.
+std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input);
 
 }  // namespace curvefem::meshing::shell

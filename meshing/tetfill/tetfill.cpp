@@ -3,12 +3,18 @@
 #include "meshing/tetfill/tetfill.hpp"
 
 #include <gmsh.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -334,6 +340,109 @@ std::vector<std::string> gmsh_errors(const std::vector<std::string>& messages,
                      " failed: " + (all.empty() ? "unknown gmsh error" : all));
 }
 
+/// What fill_interior reads back from gmsh.
+struct GmshOutput {
+  std::vector<std::size_t> tet_tags, tet_nodes, all_tags, surface_tags, tri_tags, tri_back;
+  std::vector<double> all_coords;
+  double seconds = 0;
+};
+
+void append_bytes(std::string& buf, const void* p, std::size_t n) {
+  buf.append(static_cast<const char*>(p), n);
+}
+template <class T>
+void append_vector(std::string& buf, const std::vector<T>& v) {
+  const std::uint64_t n = v.size();
+  append_bytes(buf, &n, sizeof n);
+  append_bytes(buf, v.data(), n * sizeof(T));
+}
+template <class T>
+bool read_vector(const std::string& buf, std::size_t& at, std::vector<T>& v) {
+  std::uint64_t n = 0;
+  if (at + sizeof n > buf.size()) return false;
+  std::memcpy(&n, buf.data() + at, sizeof n);
+  at += sizeof n;
+  if (n > (buf.size() - at) / sizeof(T)) return false;
+  v.resize(n);
+  std::memcpy(v.data(), buf.data() + at, n * sizeof(T));
+  at += n * sizeof(T);
+  return true;
+}
+
+/// Runs `body` in a forked child and returns its output through a pipe. A MeshingError thrown
+/// in the child is rethrown here with its text; a crash (signal) becomes a MeshingError.
+GmshOutput run_isolated(const std::function<void(GmshOutput&)>& body) {
+  int fds[2];
+  if (::pipe(fds) != 0)
+    throw MeshingError(std::string("tetfill: cannot create a pipe: ") + std::strerror(errno));
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw MeshingError(std::string("tetfill: cannot fork: ") + std::strerror(errno));
+  }
+  if (pid == 0) {  // child: run, serialize, leave without running the parent's destructors
+    ::close(fds[0]);
+    std::string buf;
+    try {
+      GmshOutput out;
+      body(out);
+      buf.push_back('\0');
+      for (const auto* v : {&out.tet_tags, &out.tet_nodes, &out.all_tags, &out.surface_tags,
+                            &out.tri_tags, &out.tri_back})
+        append_vector(buf, *v);
+      append_vector(buf, out.all_coords);
+      append_bytes(buf, &out.seconds, sizeof out.seconds);
+    } catch (const std::exception& e) {
+      buf = std::string(1, '\1') + e.what();
+    } catch (...) {
+      buf = std::string(1, '\1') + "tetfill: 3D meshing failed: unknown error in gmsh";
+    }
+    std::size_t done = 0;
+    while (done < buf.size()) {
+      const ssize_t w = ::write(fds[1], buf.data() + done, buf.size() - done);
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) ::_exit(3);
+      done += std::size_t(w);
+    }
+    ::close(fds[1]);
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string buf;
+  char chunk[1 << 16];
+  for (;;) {
+    const ssize_t r = ::read(fds[0], chunk, sizeof chunk);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) break;
+    buf.append(chunk, std::size_t(r));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status))
+    throw MeshingError("tetfill: 3D meshing failed: gmsh crashed (signal " +
+                       std::to_string(WTERMSIG(status)) + " " + strsignal(WTERMSIG(status)) +
+                       "; gmsh 4.8's boundary recovery aborts on some near-degenerate surfaces)");
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || buf.empty())
+    throw MeshingError("tetfill: 3D meshing failed: the gmsh child process exited with status " +
+                       std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1));
+  if (buf[0] == '\1') throw MeshingError(buf.substr(1));
+  GmshOutput out;
+  std::size_t at = 1;
+  bool ok = true;
+  for (auto* v : {&out.tet_tags, &out.tet_nodes, &out.all_tags, &out.surface_tags, &out.tri_tags,
+                  &out.tri_back})
+    ok = ok && read_vector(buf, at, *v);
+  ok = ok && read_vector(buf, at, out.all_coords) && at + sizeof out.seconds == buf.size();
+  if (!ok) throw MeshingError("tetfill: 3D meshing failed: truncated output from the gmsh child");
+  std::memcpy(&out.seconds, buf.data() + at, sizeof out.seconds);
+  return out;
+}
+
 }  // namespace
 
 TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
@@ -370,14 +479,12 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
 
   TetFillResult result;
   result.boundary_vertices = static_cast<int>(n);
-  std::vector<std::size_t> tet_tags, tet_nodes, all_tags, surface_tags, tri_tags, tri_back;
-  std::vector<double> all_coords, surface_coords, param;
-  {
+  auto run_gmsh = [&](GmshOutput& out, int threads) {
     io::GmshSession session("tetfill");
     GmshSettings settings;
     // Library use: gmsh never prints (its messages go to the debug log).
     gmsh::option::setNumber("General.Terminal", 0);
-    settings.set("General.NumThreads", std::max(1, options.threads));
+    settings.set("General.NumThreads", std::max(1, threads));
     settings.set("Mesh.Algorithm3D", 1);  // Delaunay with tetgen-style boundary recovery
     settings.set("Mesh.Optimize", options.optimize ? 1 : 0);
     settings.set("Mesh.OptimizeNetgen", 0);
@@ -393,6 +500,7 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
           [field](int, int, double x, double y, double z) { return (*field)(x, y, z); });
     }
     Stopwatch gmsh_watch;
+    std::vector<double> surface_coords, param;
     try {
       for (int c = 0; c < components; ++c) {
         gmsh::model::addDiscreteEntity(2, c + 1);
@@ -410,10 +518,10 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
       }
       gmsh::model::geo::synchronize();
       gmsh::model::mesh::generate(3);
-      gmsh::model::mesh::getElementsByType(k_gmsh_tet, tet_tags, tet_nodes);
-      gmsh::model::mesh::getNodes(all_tags, all_coords, param, -1, -1, false, false);
-      gmsh::model::mesh::getNodes(surface_tags, surface_coords, param, 2, -1, false, false);
-      gmsh::model::mesh::getElementsByType(k_gmsh_triangle, tri_tags, tri_back);
+      gmsh::model::mesh::getElementsByType(k_gmsh_tet, out.tet_tags, out.tet_nodes);
+      gmsh::model::mesh::getNodes(out.all_tags, out.all_coords, param, -1, -1, false, false);
+      gmsh::model::mesh::getNodes(out.surface_tags, surface_coords, param, 2, -1, false, false);
+      gmsh::model::mesh::getElementsByType(k_gmsh_triangle, out.tri_tags, out.tri_back);
     } catch (const std::string& what) {  // gmsh 4.8's API throws its message as a string
       throw_gmsh_failure(gmsh_errors(settings.messages(), what));
     } catch (const std::exception& e) {
@@ -422,8 +530,17 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
     // With AbortOnError = 0, meshing errors are only logged.
     const std::vector<std::string> errors = gmsh_errors(settings.messages(), "");
     if (!errors.empty()) throw_gmsh_failure(errors);
-    result.gmsh_seconds = gmsh_watch.seconds();
-  }
+    out.seconds = gmsh_watch.seconds();
+  };
+  GmshOutput g;
+  if (options.isolate)
+    g = run_isolated([&](GmshOutput& out) { run_gmsh(out, 1); });
+  else
+    run_gmsh(g, options.threads);
+  result.gmsh_seconds = g.seconds;
+  const std::vector<std::size_t>&tet_nodes = g.tet_nodes, &all_tags = g.all_tags,
+        &surface_tags = g.surface_tags, &tri_back = g.tri_back;
+  const std::vector<double>& all_coords = g.all_coords;
 
   // The surface must come back untouched: same nodes, same triangles.
   if (surface_tags.size() != referenced ||
@@ -434,7 +551,7 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                        " triangles for " + std::to_string(F.rows()) +
                        "): Steiner points on the boundary");
   }
-  if (tet_tags.empty()) throw MeshingError("tetfill: 3D meshing failed: gmsh produced no tets");
+  if (g.tet_tags.empty()) throw MeshingError("tetfill: 3D meshing failed: gmsh produced no tets");
 
   // Node tags → rows: tag i + 1 is input row i (bit-identical); interior nodes are appended in
   // order of first use by a tet.
@@ -476,8 +593,8 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
     }
   }
   // Gmsh's tets are positively oriented (det(x1 - x0, x2 - x0, x3 - x0) > 0), as verified below.
-  result.T.resize(static_cast<long long>(tet_tags.size()), 4);
-  for (std::size_t e = 0; e < tet_tags.size(); ++e) {
+  result.T.resize(static_cast<long long>(g.tet_tags.size()), 4);
+  for (std::size_t e = 0; e < g.tet_tags.size(); ++e) {
     for (int k = 0; k < 4; ++k) result.T(e, k) = row_of[tet_nodes[4 * e + k]];
   }
 

@@ -33,6 +33,10 @@ struct TetFillOptions {
   double size_factor = 1.0;
   bool optimize = true;  ///< gmsh tet optimization (Mesh.Optimize); boundary entities never move
   int threads = 1;       ///< gmsh General.NumThreads (the 3D Delaunay itself is serial in 4.8)
+  /// Run gmsh in a forked child process. Gmsh 4.8's boundary recovery can fail an assertion
+  /// (abort) on near-degenerate surfaces; isolated, that becomes a MeshingError the caller can
+  /// handle instead of killing the process. The child runs gmsh on one thread.
+  bool isolate = true;
 };
 
 struct TetFillResult {

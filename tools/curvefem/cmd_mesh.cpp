@@ -248,7 +248,21 @@ void register_mesh(CLI::App& app) {
         {"output_nodes", result.mesh.num_nodes()},
         {"output_boundary_faces", result.map.boundary.num_cells()},
         {"shell_prisms", stats.shell_faces},
+        {"coarsening",
+         {{"collapses", stats.coarsen_collapses},
+          {"flips", stats.coarsen_flips},
+          {"pillar_rotations", stats.coarsen_rotations},
+          {"thickness_growths", stats.coarsen_zooms},
+          {"median_half_thickness_rel", stats.coarse_median_thickness_rel},
+          {"min_half_thickness_rel", stats.coarse_min_thickness_rel},
+          {"seconds",
+           [&] {
+             nlohmann::ordered_json j = nlohmann::ordered_json::object();
+             for (const auto& [name, t] : stats.coarsen_seconds) j[name] = t;
+             return j;
+           }()}}},
         {"singular_vertices", stats.singular_vertices},
+        {"beveled_faces", stats.beveled_faces},
         {"shell_section_verified", stats.shell_section_verified},
         {"shell_non_section_prisms", stats.shell_non_section_prisms},
         {"faces_fully_curved", stats.faces_fully_curved},

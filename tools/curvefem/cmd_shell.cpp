@@ -1,8 +1,14 @@
-// `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--threads N]`: builds the
-// prismatic shell of a closed surface (meshing/shell), verifies it with independent code and
-// writes shell.vtu (prisms as VTK_WEDGE, cell data `half`: 0 base→mid, 1 mid→top, `input_face`),
-// middle.obj and report.json. Without --no-simplify the shell is coarsened by collapses that
-// keep it positive, a section of the input and separated from it (meshing/shell/simplify.hpp).
+// `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--remesh-section L]
+// [--threads N]`: builds the prismatic shell of a closed surface (meshing/shell), verifies it with
+// independent code and writes shell.vtu (prisms as VTK_WEDGE, cell data `half`: 0 base→mid,
+// 1 mid→top, `input_face`), middle.obj and report.json. Without --no-simplify the shell is
+// coarsened by collapses that keep it positive, a section of the input and separated from it
+// (meshing/shell/simplify.hpp). With --remesh-section the middle surface is also remeshed
+// isotropically as a section of the shell (meshing/shell/section_remesh.hpp) into remeshed.obj,
+// and the roundtrip input → remeshed → input of a smooth field through P is reported.
+// Where the input's own shell is not a section, the input is first refined by topological
+// beveling (meshing/shell/bevel.hpp; same geometry) and the shell built, simplified and verified
+// on the refined surface; `input_face` in shell.vtu still names faces of the input.
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -14,6 +20,10 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
+#include "meshing/shell/bevel.hpp"
+#include "meshing/shell/projection.hpp"
+#include "meshing/shell/section_remesh.hpp"
+#include "meshing/shell/section_transfer.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/simplify.hpp"
 #include "meshing/shell/verify.hpp"
@@ -29,6 +39,8 @@ struct ShellArgs {
   std::string input, output;
   double thickness = 0.02;
   bool no_simplify = false;
+  double remesh_section = 0;  // target edge relative to the longest bbox edge; 0: no remeshing
+  double zoom = 0.1;
   GlobalOptions global;
 };
 
@@ -69,6 +81,51 @@ void write_wedges(const std::filesystem::path& path, const sh::Shell& s) {
   write_text_file_atomic(path, out.str());
 }
 
+// --remesh-section: isotropic remeshing of the middle surface kept a section of the shell, then
+// the smooth test field carried input → remeshed → input through P. Fills `remeshed` and returns
+// the report's `section_remesh` object (with `error` when the middle surface is no section).
+nlohmann::ordered_json run_section_remesh(const sh::Shell& shell, const SurfaceMesh& input,
+                                          double target_rel, int threads, SurfaceMesh& remeshed) {
+  const double unit = bbox_longest_edge(input.V);
+  nlohmann::ordered_json j = {{"target_edge_rel", target_rel}, {"target_edge", target_rel * unit}};
+  Stopwatch clock;
+  const sh::ShellProjection projection(shell, input);
+  sh::SectionRemeshOptions options;
+  options.target_edge = target_rel * unit;
+  options.threads = threads > 0 ? threads : 2;
+  sh::SectionRemeshResult r;
+  try {
+    r = sh::remesh_section(projection, options);
+  } catch (const MeshingError& e) {
+    j["is_section_verified"] = false;
+    j["error"] = e.what();
+    return j;
+  }
+  remeshed = r.mesh;
+  const double remesh_s = clock.seconds();
+  const Eigen::Vector3d center =
+      0.5 * (input.V.colwise().minCoeff() + input.V.colwise().maxCoeff()).transpose();
+  const Eigen::VectorXd f = sh::smooth_test_field(input.V, center, 0.5 * unit);
+  const sh::FieldRoundtrip rt = sh::field_roundtrip(projection, input, r.mesh, f);
+  j["vertices"] = r.mesh.num_vertices();
+  j["faces"] = r.mesh.num_faces();
+  j["is_section_verified"] = r.result.is_section();
+  j["section_check"] = {{"manifold", r.result.manifold},
+                        {"vertices_outside", r.result.vertices_outside},
+                        {"faces_crossing_cage", r.result.faces_crossing_cage},
+                        {"faces_not_transversal", r.result.faces_not_transversal},
+                        {"degree_failures", r.result.degree_failures}};
+  j["field"] = "sin(3x) cos(2y) + z^2 at (p - bbox center) / (longest bbox edge / 2)";
+  j["field_roundtrip_max_error"] = rt.max_error;
+  j["field_roundtrip_mean_error"] = rt.mean_error;
+  j["field_roundtrip_failures"] = rt.failures;
+  j["time_s"] = {{"remesh", remesh_s - r.result.seconds},
+                 {"is_section", r.result.seconds},
+                 {"roundtrip", clock.seconds() - remesh_s},
+                 {"total", clock.seconds()}};
+  return j;
+}
+
 }  // namespace
 
 void register_shell(CLI::App& app) {
@@ -82,6 +139,14 @@ void register_shell(CLI::App& app) {
                   "cap on each half-pillar, relative to the longest bbox edge")
       ->check(CLI::PositiveNumber);
   sub->add_flag("--no-simplify", args->no_simplify, "keep the input as the middle surface");
+  sub->add_option("--remesh-section", args->remesh_section,
+                  "also remesh the middle surface isotropically to this edge length (relative to "
+                  "the longest bbox edge), keeping it a section; writes remeshed.obj")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--zoom", args->zoom,
+                  "simplification may grow each half-pillar up to this length, relative to the "
+                  "longest bbox edge (0: never grow)")
+      ->check(CLI::NonNegativeNumber);
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
@@ -91,15 +156,25 @@ void register_shell(CLI::App& app) {
     options.max_thickness_rel = args->thickness;
     options.threads = args->global.threads;
     sh::ShellStats stats;
-    sh::Shell shell = sh::build_shell(input, options, stats, progress->callback());
+    sh::BeveledShell beveled =
+        sh::build_beveled_shell(input, options, stats, {}, progress->callback());
+    sh::Shell shell = std::move(beveled.shell);
+    const SurfaceMesh& surface = beveled.surface.mesh;  // the input, or its beveled refinement
     sh::SimplifyStats simplify;
     if (!args->no_simplify) {
       sh::SimplifyOptions so;
       so.threads = args->global.threads > 0 ? args->global.threads : 2;
-      shell = sh::simplify_shell(shell, input, so, simplify);
+      so.zoom = args->zoom * bbox_longest_edge(input.V);
+      shell = sh::simplify_shell(shell, surface, so, simplify);
       stats.stage_seconds.emplace_back("simplify", simplify.seconds);
     }
-    const sh::ShellVerification check = sh::verify_shell(shell, input);
+    const sh::ShellVerification check = sh::verify_shell(shell, surface);
+    SurfaceMesh remeshed;
+    nlohmann::ordered_json section_remesh = nullptr;
+    if (args->remesh_section > 0)
+      section_remesh =
+          run_section_remesh(shell, surface, args->remesh_section, args->global.threads, remeshed);
+    sh::restore_input_ids(shell, beveled.surface);
 
     StagedOutputDir out(args->output);
     write_wedges(out.path("shell.vtu"), shell);
@@ -107,6 +182,8 @@ void register_shell(CLI::App& app) {
     middle.V = shell.mid;
     middle.F = shell.F;
     io::write_surface(out.path("middle.obj"), middle, io::SurfaceFormat::obj);
+    if (remeshed.num_faces() > 0)
+      io::write_surface(out.path("remeshed.obj"), remeshed, io::SurfaceFormat::obj);
     nlohmann::ordered_json stages = nlohmann::ordered_json::object();
     for (const auto& [name, s] : stats.stage_seconds) stages[name] = s;
     stages["verification"] = check.seconds;
@@ -117,19 +194,27 @@ void register_shell(CLI::App& app) {
         {"prisms", int(shell.F.rows())},
         {"simplified", !args->no_simplify},
         {"prisms_per_input_face", double(shell.F.rows()) / double(stats.input_faces)},
-        {"simplify_collapses",
-         [&] {
-           int n = 0;
-           for (const auto& p : simplify.passes) n += int(p.succeeded);
-           return n;
-         }()},
+        {"simplify_collapses", simplify.collapses},
+        {"simplify_flips", simplify.flips},
+        {"simplify_pillar_rotations", simplify.rotations},
+        {"simplify_zooms", simplify.zooms},
         {"singular_vertices", stats.singular_vertices},
         {"pinch_splits", stats.pinch_splits},
-        {"beveled_faces", nullptr},
-        {"beveling", "not implemented"},
+        {"beveling", beveled.stats.needed ? "applied" : "not needed"},
+        {"beveled_faces", beveled.stats.beveled_faces},
+        {"bevel_rounds", beveled.stats.rounds},
+        {"non_section_prisms_before_beveling", beveled.stats.non_section_before},
         {"min_thickness_rel", stats.min_thickness_rel},
         {"median_thickness_rel", stats.median_thickness_rel},
         {"max_thickness_rel", stats.max_thickness_rel},
+        {"simplified_thickness_rel",
+         args->no_simplify ? nlohmann::ordered_json(nullptr)
+                           : nlohmann::ordered_json{{"min", simplify.min_half_thickness /
+                                                                bbox_longest_edge(input.V)},
+                                                    {"median", simplify.median_half_thickness /
+                                                                   bbox_longest_edge(input.V)},
+                                                    {"max", simplify.max_half_thickness /
+                                                                bbox_longest_edge(input.V)}}},
         {"positive_verified", check.positive()},
         {"non_positive_prisms", check.non_positive_faces},
         {"intersection_free_verified", check.separated()},
@@ -140,6 +225,7 @@ void register_shell(CLI::App& app) {
         {"roundtrip_failures", check.roundtrip_failures},
         {"time_s", stages},
         {"peak_rss_mb", peak_rss_mb()}};
+    if (args->remesh_section > 0) report["section_remesh"] = section_remesh;
     report["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
@@ -151,8 +237,18 @@ void register_shell(CLI::App& app) {
         stats.min_thickness_rel, check.positive() ? "yes" : "NO", check.separated() ? "yes" : "NO",
         check.section() ? "yes" : "NO", check.non_section_faces, check.roundtrip_max_error_rel,
         total.seconds(), out.final_path("report.json").string().c_str());
+    const bool remesh_ok =
+        args->remesh_section <= 0 || section_remesh.value("is_section_verified", false);
+    if (args->remesh_section > 0) {
+      std::string line = section_remesh.value("error", "");
+      if (line.empty())
+        line = std::to_string(section_remesh["faces"].get<int>()) + " faces, section " +
+               (remesh_ok ? "yes" : "NO") + ", field roundtrip max error " +
+               std::to_string(section_remesh["field_roundtrip_max_error"].get<double>());
+      std::printf("section remesh: %s\n", line.c_str());
+    }
     std::fflush(stdout);
-    return check.positive() && check.separated() ? 0 : 3;
+    return check.positive() && check.separated() && remesh_ok ? 0 : 3;
   });
 }
 

@@ -5,75 +5,77 @@
 //   3. flip edges that reduce the squared deviation of the four vertices' valences from 6
 //      (4 on the boundary),
 //   4. tangential relaxation: move each vertex towards the centroid of its neighbours within
-//      its tangent plane, then back onto the input surface (closest point).
+//      its tangent plane, then back onto the surface (place_on_surface: by default the closest
+//      point of the input).
 // Each step is one scheduler pass; splits and collapses renew the edges around the new vertex,
 // flips renew the improving edges around their four vertices (each flip lowers the total
 // valence deviation, so the pass terminates).
 
+#include "meshing/editing/algorithms/isotropic_remeshing.hpp"
+
 #include <algorithm>
+#include <cmath>
 #include <memory>
+#include <span>
 
 #include "meshing/editing/algorithms/surface_passes.hpp"
 
 namespace curvefem::meshing::editing {
 
+int IsotropicMesh::deviation_change(const Tuple& t) const {
+  const Id a = t.vid, b = other_vertex(t);
+  const Id e[2] = {a, b};
+  const auto faces = cells_containing(std::span<const Id>(e, 2));
+  if (faces.size() != 2) return 0;
+  Id opp[2];
+  for (int i = 0; i < 2; ++i)
+    for (Id v : cell(faces[i]))
+      if (v != a && v != b) opp[i] = v;
+  auto dev = [&](Id v, int change) {
+    const int d = valence(v) + change - target_valence(v);
+    return d * d;
+  };
+  const int before = dev(a, 0) + dev(b, 0) + dev(opp[0], 0) + dev(opp[1], 0);
+  const int after = dev(a, -1) + dev(b, -1) + dev(opp[0], 1) + dev(opp[1], 1);
+  return after - before;
+}
+
+bool IsotropicMesh::collapse_acceptable(const OperationRecord& r) const {
+  for (Id u : one_ring(r.v1))
+    if ((position[u] - position[r.v1]).squaredNorm() > high2) return false;
+  return true;
+}
+
+// Flip toward valence 6, but never create an edge longer than 4/3 L (it would stay: splits come
+// before flips in a round).
+bool IsotropicMesh::swap_acceptable(const Tuple& t) const {
+  if (deviation_change(t) >= 0) return false;
+  const Id a = t.vid, b = other_vertex(t);
+  const Id e[2] = {a, b};
+  const auto faces = cells_containing(std::span<const Id>(e, 2));
+  if (faces.size() != 2) return false;
+  Id opp[2] = {k_no_id, k_no_id};
+  for (int i = 0; i < 2; ++i)
+    for (Id v : cell(faces[i]))
+      if (v != a && v != b) opp[i] = v;
+  return (position[opp[0]] - position[opp[1]]).squaredNorm() <= high2;
+}
+
+Eigen::Vector3d IsotropicMesh::place_on_surface(const Eigen::Vector3d& p) const {
+  return input != nullptr ? input->closest_point(p) : p;
+}
+
+Eigen::Vector3d IsotropicMesh::smooth_position(Id v) const {
+  const auto ring = one_ring(v);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (Id u : ring) centroid += position[u];
+  centroid /= double(ring.size());
+  const Eigen::Vector3d n = vertex_normal(v);
+  const Eigen::Vector3d d = centroid - position[v];
+  return place_on_surface(position[v] + d - n * n.dot(d));
+}
+
 namespace {
-
-class IsotropicMesh : public SurfaceEditMesh {
- public:
-  double high2 = 0;  // (4/3 L)^2: collapses may not create longer edges
-  const SurfaceDistance* input = nullptr;
-
-  int target_valence(Id v) const { return frozen[v] ? 4 : 6; }
-  int deviation_change(const Tuple& t) const {
-    const Id a = t.vid, b = other_vertex(t);
-    const Id e[2] = {a, b};
-    const auto faces = cells_containing(std::span<const Id>(e, 2));
-    if (faces.size() != 2) return 0;
-    Id opp[2];
-    for (int i = 0; i < 2; ++i)
-      for (Id v : cell(faces[i]))
-        if (v != a && v != b) opp[i] = v;
-    auto dev = [&](Id v, int change) {
-      const int d = valence(v) + change - target_valence(v);
-      return d * d;
-    };
-    const int before = dev(a, 0) + dev(b, 0) + dev(opp[0], 0) + dev(opp[1], 0);
-    const int after = dev(a, -1) + dev(b, -1) + dev(opp[0], 1) + dev(opp[1], 1);
-    return after - before;
-  }
-
- protected:
-  bool collapse_acceptable(const OperationRecord& r) const override {
-    for (Id u : one_ring(r.v1))
-      if ((position[u] - position[r.v1]).squaredNorm() > high2) return false;
-    return true;
-  }
-  // Flip toward valence 6, but never create an edge longer than 4/3 L (it would stay: splits
-  // come before flips in a round).
-  bool swap_acceptable(const Tuple& t) const override {
-    if (deviation_change(t) >= 0) return false;
-    const Id a = t.vid, b = other_vertex(t);
-    const Id e[2] = {a, b};
-    const auto faces = cells_containing(std::span<const Id>(e, 2));
-    if (faces.size() != 2) return false;
-    Id opp[2] = {k_no_id, k_no_id};
-    for (int i = 0; i < 2; ++i)
-      for (Id v : cell(faces[i]))
-        if (v != a && v != b) opp[i] = v;
-    return (position[opp[0]] - position[opp[1]]).squaredNorm() <= high2;
-  }
-  Eigen::Vector3d smooth_position(Id v) const override {
-    const auto ring = one_ring(v);
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (Id u : ring) centroid += position[u];
-    centroid /= double(ring.size());
-    const Eigen::Vector3d n = vertex_normal(v);
-    const Eigen::Vector3d d = centroid - position[v];
-    const Eigen::Vector3d moved = position[v] + d - n * n.dot(d);
-    return input != nullptr ? input->closest_point(moved) : moved;
-  }
-};
 
 std::vector<SurfacePass::Work> edges_where(const SurfaceEditMesh& m,
                                            const std::vector<TriMesh::Tuple>& edges,
@@ -93,6 +95,11 @@ void isotropic_remeshing(SurfaceEditMesh& base, const SurfaceDistance& input, do
                          int iterations, int threads, PassLog& log) {
   auto& m = dynamic_cast<IsotropicMesh&>(base);
   m.input = &input;
+  isotropic_remeshing(m, target_edge, iterations, threads, log);
+}
+
+void isotropic_remeshing(IsotropicMesh& m, double target_edge, int iterations, int threads,
+                         PassLog& log) {
   const double high2 = std::pow(4.0 / 3.0 * target_edge, 2),
                low2 = std::pow(4.0 / 5.0 * target_edge, 2);
   m.high2 = high2;

@@ -7,13 +7,13 @@
 #include <utility>
 #include <vector>
 
+#include "meshing/editing/algorithms/isotropic_remeshing.hpp"
 #include "meshing/editing/algorithms/surface_edit_mesh.hpp"
 #include "meshing/editing/scheduler.hpp"
 
 namespace curvefem::meshing::editing {
 
 using SurfacePass = ExecutePass<TriMesh>;
-using PassLog = std::vector<std::pair<std::string, PassStats>>;
 
 inline SurfacePass make_surface_pass(SurfaceEditMesh& m, int threads) {
   SurfacePass pass;

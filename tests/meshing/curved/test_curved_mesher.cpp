@@ -162,3 +162,37 @@ TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
     EXPECT_EQ(check.quality_by_tag.count(4), 1u);
   }
 }
+
+TEST(CurvedMesher, BevelsACraterAndKeepsTheMapOnTheInput) {
+  // The crater of tests/meshing/shell/test_shell_bevel.cpp: its own shell is no section (a
+  // pinched rim edge), so the mesher bevels 10 of its 14 faces first. The boundary map and the
+  // returned shell still refer to the 9 input vertices and 14 input faces.
+  SurfaceMesh s;
+  s.V.resize(9, 3);
+  s.V << 0.44, 0, 1.40, -0.04, -0.11, 0.95, -0.55, -0.22, 0.97, -0.60, 0.70, 0.78, 0.98, 0.57, 0.90,
+      1.24, 0.30, 1.07, -0.08, 0.09, -1.45, 0.92, 0.81, 0.48, -0.35, -0.48, 1.14;
+  s.F.resize(14, 3);
+  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1, 5, 0, 6, 4, 5, 6, 7, 4, 6,
+      3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
+  const MeshRun r = mesh(s, 2, 1e-2);
+  EXPECT_EQ(r.stats.beveled_faces, 10);
+  EXPECT_TRUE(r.stats.shell_section_verified) << r.stats.shell_non_section_prisms;
+  EXPECT_EQ(r.stats.input_vertices, 9);
+  EXPECT_EQ(r.stats.input_faces, 14);
+  EXPECT_TRUE(r.check.valid(1e-2))
+      << r.check.non_positive_tets << " non-positive, " << r.check.boundary_self_intersections
+      << " intersections, distance " << r.check.max_distance_rel;
+  ASSERT_EQ(r.mesh.map.num_input_vertices(), 9);
+  ASSERT_EQ(r.mesh.map.vertex_uv.rows(), 9);
+  for (int v = 0; v < 9; ++v) {
+    EXPECT_GE(r.mesh.map.vertex_face[v], 0) << v;
+    EXPECT_LE((r.mesh.map.image(v) - s.V.row(v).transpose()).norm(),
+              1e-2 * curvefem::bbox_longest_edge(s.V))
+        << v;
+  }
+  for (int p : r.mesh.shell.face_parent) {
+    EXPECT_GE(p, 0);
+    EXPECT_LT(p, 14);
+  }
+  for (int x : r.mesh.shell.input_vertex) EXPECT_LT(x, 9);
+}

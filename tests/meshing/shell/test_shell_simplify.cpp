@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "meshing/core/primitives.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/simplify.hpp"
@@ -58,4 +60,97 @@ TEST(ShellSimplify, CoarsensABoxShellAcrossSharpEdges) {
   EXPECT_TRUE(v.separated());
   EXPECT_TRUE(v.section()) << v.non_section_faces;
   EXPECT_EQ(v.roundtrip_failures, 0);
+}
+
+TEST(ShellSimplify, FlipsRotationsAndGrowthCoarsenFurtherUnderADistanceBound) {
+  // Collapses alone stop where the kept pillars no longer fit the coarse faces and where the
+  // initial shell is too thin for the chords; flips, pillar rotation and thickness growth must
+  // each run and must let the same distance bound reach a coarser, still valid shell.
+  const SurfaceMesh sphere = curvefem::make_icosphere(3);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  const double unit = curvefem::bbox_longest_edge(sphere.V);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.05 * unit;
+  o.max_mips = 10;
+  o.rounds = 5;
+  o.flips = o.rotate = false;
+  sh::SimplifyStats plain_stats;
+  const sh::Shell plain = sh::simplify_shell(shell, sphere, o, plain_stats);
+  EXPECT_EQ(plain_stats.flips + plain_stats.rotations + plain_stats.zooms, 0);
+
+  o.flips = o.rotate = true;
+  o.zoom = 0.1 * unit;
+  sh::SimplifyStats s;
+  const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, s);
+  EXPECT_GT(s.flips, 0);
+  EXPECT_GT(s.rotations, 0);
+  EXPECT_GT(s.zooms, 0);
+  EXPECT_LT(s.faces_after, plain_stats.faces_after * 9 / 10)
+      << "collapse only: " << plain_stats.faces_after;
+  EXPECT_LE(s.max_distance, o.max_distance);
+  // Growth: the median half-pillar is above the built shell's, none exceeds the cap.
+  EXPECT_GT(s.median_half_thickness, 1.2 * stats.median_thickness_rel * unit);
+  EXPECT_LE(s.max_half_thickness, o.zoom * (1 + 1e-12));
+  const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
+  EXPECT_TRUE(v.positive());
+  EXPECT_TRUE(v.separated());
+  EXPECT_TRUE(v.section()) << v.non_section_faces;
+  EXPECT_EQ(v.roundtrip_failures, 0);
+  EXPECT_LT(v.roundtrip_max_error_rel, 1e-12);
+  // The middle surface still sits on input vertices; the pillars are unit-free but not shorter.
+  for (int m = 0; m < coarse.mid.rows(); ++m) {
+    ASSERT_GE(coarse.input_vertex[m], 0);
+    EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(coarse.input_vertex[m])).norm(), 0.0);
+    const int x = coarse.input_vertex[m];
+    EXPECT_GE((coarse.top.row(m) - coarse.mid.row(m)).norm(),
+              (shell.top.row(x) - shell.mid.row(x)).norm() * (1 - 1e-12));
+  }
+}
+
+TEST(ShellSimplify, FlipsNeverRemoveAnEdgeBetweenFrozenVertices) {
+  // Frozen vertices carry feature chains, so an edge between two of them must survive. Freeze a
+  // cap of the sphere: every input edge inside it must still be an edge of the coarse shell,
+  // while the rest of the sphere coarsens with flips.
+  // The cap is jittered on the sphere so that its triangles are irregular: without the rule,
+  // flips would swap some of its edges.
+  SurfaceMesh sphere = curvefem::make_icosphere(3);
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    if (sphere.V(v, 0) <= 0.65) continue;
+    Eigen::Vector3d p = sphere.V.row(v).transpose();
+    p += 0.05 * Eigen::Vector3d(0, std::sin(12.9898 * v), std::cos(78.233 * v));
+    sphere.V.row(v) = p.normalized().transpose();
+  }
+  const double unit = curvefem::bbox_longest_edge(sphere.V);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.05 * unit;
+  o.max_mips = 10;
+  o.zoom = 0.1 * unit;
+  o.frozen_input_vertices.assign(sphere.num_vertices(), 0);
+  for (int v = 0; v < sphere.num_vertices(); ++v) o.frozen_input_vertices[v] = sphere.V(v, 0) > 0.6;
+  std::set<std::pair<int, int>> kept;
+  for (int f = 0; f < sphere.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = sphere.F(f, k), b = sphere.F(f, (k + 1) % 3);
+      if (o.frozen_input_vertices[a] && o.frozen_input_vertices[b])
+        kept.insert({std::min(a, b), std::max(a, b)});
+    }
+  ASSERT_GT(kept.size(), 100u);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  sh::SimplifyStats s;
+  const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, s);
+  EXPECT_GT(s.flips, 0);
+  std::set<std::pair<int, int>> edges;
+  for (int f = 0; f < coarse.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = coarse.input_vertex[coarse.F(f, k)];
+      const int b = coarse.input_vertex[coarse.F(f, (k + 1) % 3)];
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  for (const auto& e : kept) EXPECT_TRUE(edges.count(e)) << e.first << "-" << e.second;
+  const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
+  EXPECT_TRUE(v.positive());
+  EXPECT_TRUE(v.separated());
+  EXPECT_TRUE(v.section()) << v.non_section_faces;
 }

@@ -1,0 +1,69 @@
+#include "meshing/shell/section_transfer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "meshing/core/error.hpp"
+
+namespace curvefem::meshing::shell {
+
+Eigen::MatrixXd transfer_vertex_field(const ShellProjection& onto_source, const SurfaceMesh& source,
+                                      const Eigen::MatrixXd& values, const Eigen::MatrixXd& points,
+                                      int* failures) {
+  CF_VERIFY(values.rows() == source.num_vertices(), "one field value row per source vertex");
+  Eigen::MatrixXd out = Eigen::MatrixXd::Constant(points.rows(), values.cols(),
+                                                  std::numeric_limits<double>::quiet_NaN());
+  int failed = 0;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const auto q = onto_source.locate(points.row(i).transpose());
+    const auto s = q ? onto_source.project(*q) : std::nullopt;
+    if (!s) {
+      ++failed;
+      continue;
+    }
+    out.row(i).setZero();
+    for (int k = 0; k < 3; ++k) out.row(i) += s->bary[k] * values.row(source.F(s->face, k));
+  }
+  if (failures != nullptr) *failures = failed;
+  return out;
+}
+
+FieldRoundtrip field_roundtrip(const ShellProjection& onto_input, const SurfaceMesh& input,
+                               const SurfaceMesh& section, const Eigen::MatrixXd& values) {
+  FieldRoundtrip r;
+  r.there = transfer_vertex_field(onto_input, input, values, section.V, &r.failures);
+  const ShellProjection onto_section(onto_input.shell(), section);
+  r.back = transfer_vertex_field(onto_section, section, r.there, input.V);
+  std::vector<char> referenced(std::size_t(input.num_vertices()), 0);
+  for (int f = 0; f < input.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) referenced[std::size_t(input.F(f, k))] = 1;
+  double sum = 0;
+  int count = 0;
+  for (int v = 0; v < input.num_vertices(); ++v) {
+    if (!referenced[std::size_t(v)]) continue;
+    const double e = (r.back.row(v) - values.row(v)).cwiseAbs().maxCoeff();
+    if (!std::isfinite(e)) {
+      ++r.failures;
+      continue;
+    }
+    r.max_error = std::max(r.max_error, e);
+    sum += e;
+    ++count;
+  }
+  r.mean_error = count > 0 ? sum / count : 0.0;
+  return r;
+}
+
+Eigen::VectorXd smooth_test_field(const Eigen::MatrixXd& V, const Eigen::Vector3d& center,
+                                  double scale) {
+  Eigen::VectorXd f(V.rows());
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    const Eigen::Vector3d p = (V.row(i).transpose() - center) / scale;
+    f[i] = std::sin(3 * p.x()) * std::cos(2 * p.y()) + p.z() * p.z();
+  }
+  return f;
+}
+
+}  // namespace curvefem::meshing::shell
