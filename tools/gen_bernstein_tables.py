@@ -25,6 +25,18 @@ holds, computed exactly with fractions.Fraction:
   bounds     l2b_abs_row_sum >= max_alpha sum_j max(|lower|, |upper|) and
              l2b_width_row_sum >= max_alpha sum_j (upper - lower), exact sums rounded up.
 
+and, for k = 1..4, the constants of the affine path of the certificate:
+
+  gradient bounds  Lambda[k][c] >= max over the reference tet of sum_{i >= 4} |dN_i/dxi_c(xi)|,
+             the sum over the non-corner nodes of the order-k basis (the corners are the first
+             four nodes). dN_i/dxi_c = dN_i/dlambda_c - dN_i/dlambda_0 has degree k-1. On each
+             child T_s of one red refinement of the reference tet (a partition) its exact
+             Bernstein coefficients g_{s,i,beta} (|beta| = k-1) give, since the B_beta are >= 0
+             and sum to 1, sum_i |dN_i/dxi_c| <= max_beta sum_i |g_{s,i,beta}| on T_s; Lambda is
+             the maximum over s (exact, rounded up). One refinement level halves the k = 4 bound
+             (182.7 on the whole tet, 98 on the children; the sampled maximum is 74.7).
+             k = 1 has no non-corner node: 0.
+
 M is built without inverting V: row alpha of M holds the Bernstein coefficients of the degree-d
 Lagrange polynomial of each lattice point, L_beta = prod_i prod_{t < beta_i} (d lambda_i - t)/(t+1),
 expanded exactly as a homogeneous polynomial in lambda. M V = I is then verified exactly.
@@ -183,6 +195,110 @@ def gradients(k, d, lattice):
 
 
 # ---------------------------------------------------------------------------------------------
+# Bernstein bounds of the order-k basis gradients (affine path of the certificate)
+
+
+def lagrange_basis_poly(k, alpha):
+    """N_alpha = prod_i prod_{t < alpha_i} (k lambda_i - t sum(lambda)) / (t + 1), homogeneous of
+    degree k in lambda: dict exponent -> Fraction."""
+    poly, denom = {(0, 0, 0, 0): 1}, 1
+    for i in range(4):
+        for t in range(alpha[i]):
+            lin = [-t] * 4
+            lin[i] = k - t
+            poly = poly_mul_linear(poly, lin)
+            denom *= t + 1
+    return {e: Fraction(c, denom) for e, c in poly.items() if c != 0}
+
+
+def poly_derivative(poly, i):
+    out = {}
+    for e, c in poly.items():
+        if e[i] > 0:
+            f = list(e)
+            f[i] -= 1
+            f = tuple(f)
+            out[f] = out.get(f, Fraction(0)) + c * e[i]
+    return out
+
+
+def red_children():
+    """The 8 children of the red refinement of the reference tet (4 corner tets, 4 around the
+    diagonal between the midpoints of edges 02 and 13): a partition of the tet. Each child is 4
+    points in barycentric coordinates of the parent."""
+    def v(i):
+        return tuple(Fraction(int(j == i)) for j in range(4))
+
+    def m(a, b):
+        return tuple(Fraction(int(j in (a, b)), 2) for j in range(4))
+
+    children = [(v(0), m(0, 1), m(0, 2), m(0, 3)), (m(0, 1), v(1), m(1, 2), m(1, 3)),
+                (m(0, 2), m(1, 2), v(2), m(2, 3)), (m(0, 3), m(1, 3), m(2, 3), v(3)),
+                (m(0, 2), m(1, 3), m(0, 1), m(0, 3)), (m(0, 2), m(1, 3), m(0, 3), m(2, 3)),
+                (m(0, 2), m(1, 3), m(2, 3), m(1, 2)), (m(0, 2), m(1, 3), m(1, 2), m(0, 1))]
+    # The inner four share the diagonal m02-m13 and take consecutive pairs of the cycle
+    # m01 m03 m23 m12 around it, so they tile the octahedron; every child has 1/8 of the volume.
+    for child in children:
+        e = [[child[j][i] - child[0][i] for i in range(1, 4)] for j in range(1, 4)]
+        det = (e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+               e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+               e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]))
+        assert abs(det) == Fraction(1, 8), child
+    return children
+
+
+def compose(poly, child):
+    """poly(lambda) with lambda = sum_j mu_j child[j] (homogeneous in mu, same degree)."""
+    out = {}
+    for e, c in poly.items():
+        term = {(0, 0, 0, 0): c}
+        for i in range(4):
+            lin = [child[j][i] for j in range(4)]
+            for _ in range(e[i]):
+                term = poly_mul_linear(term, lin)
+        for f, q in term.items():
+            out[f] = out.get(f, 0) + q
+    return out
+
+
+def gradient_bernstein_bounds(k):
+    """[Lambda_c for c = 0, 1, 2] as Fractions (see the module docstring)."""
+    nodes = canonical_lattice(k)
+    assert nodes[:4] == [tuple(k if j == v else 0 for j in range(4)) for v in range(4)]
+    if k == 1:
+        return [Fraction(0)] * 3
+    labels = canonical_lattice(k - 1)
+    _, grad = gradients(k, k - 1, labels)
+    children = red_children()
+    bounds = []
+    for c in range(3):
+        sums = [{beta: Fraction(0) for beta in labels} for _ in children]
+        for i, alpha in enumerate(nodes):
+            poly = lagrange_basis_poly(k, alpha)
+            # On the simplex d/dxi_c = d/dlambda_{c+1} - d/dlambda_0 of the homogeneous form.
+            dc, d0 = poly_derivative(poly, c + 1), poly_derivative(poly, 0)
+            deriv = {b: dc.get(b, Fraction(0)) - d0.get(b, Fraction(0)) for b in labels}
+            # Cross-check against the independent point evaluation of `gradients` (exact).
+            for j, beta in enumerate(labels):
+                lam = barycentric(beta, k - 1)
+                value = sum(q * math.prod(x**e for x, e in zip(lam, b)) for b, q in deriv.items())
+                assert value == grad[j][i][c], (k, i, c, beta)
+            if i < 4:
+                continue
+            for s, child in enumerate(children):
+                sub = compose(deriv, child)
+                for v in range(4):  # corner coefficients are the values at the child's vertices
+                    corner = tuple(k - 1 if j == v else 0 for j in range(4))
+                    value = sum(q * math.prod(x**e for x, e in zip(child[v], b))
+                                for b, q in deriv.items())
+                    assert sub.get(corner, 0) == value, (k, i, c, s, v)
+                for b in labels:
+                    sums[s][b] += abs(Fraction(sub.get(b, 0))) / multinomial(b)
+        bounds.append(max(max(t.values()) for t in sums))
+    return bounds
+
+
+# ---------------------------------------------------------------------------------------------
 # Emission
 
 
@@ -242,6 +358,8 @@ def generate():
     emit("//              matrix: b_alpha = sum_j M[alpha][j] p(lattice point j).")
     emit("//   l2b_abs_row_sum >= max_alpha sum_j max(|lower|, |upper|);")
     emit("//   l2b_width_row_sum >= max_alpha sum_j (upper - lower).")
+    emit("//   k_gradient_bernstein_bounds (k = 1..4): gradient sums of the order-k basis, for the")
+    emit("//              affine path (nearly straight tets).")
     emit("// Included by meshing/curved/jacobian_certificate.cpp inside namespace")
     emit("// curvefem::meshing::curved::generated.")
     emit("")
@@ -311,6 +429,20 @@ def generate():
         emit(f"    {{{k}, {d}, {n}, {m}, k_{name}_lattice, {den}.0, k_{name}_gradients,")
         emit(f"     k_{name}_l2b_lower, k_{name}_l2b_upper, {double_literal(abs_sum)},"
              f" {double_literal(width_sum)}}},")
+    emit("};")
+    emit("")
+    emit("// Affine path: k_gradient_bernstein_bounds[k-1][c] >= max over the reference tet of")
+    emit("// sum_{i >= 4} |dN_i/dxi_c| (order-k basis, non-corner nodes): the maximum over the 8 red")
+    emit("// children and over beta of sum_i |Bernstein coefficient beta of dN_i/dxi_c on the")
+    emit("// child| (degree k-1), exact, rounded up.")
+    rows = []
+    for k in (1, 2, 3, 4):
+        lam = gradient_bernstein_bounds(k)
+        exact = ", ".join(str(q) for q in lam)
+        rows.append(("{" + ", ".join(double_literal(round_up(q)) for q in lam) + "},", k, exact))
+    emit("inline constexpr double k_gradient_bernstein_bounds[4][3] = {")
+    for text, k, exact in rows:
+        emit(f"    {text}  // k = {k}: {exact}")
     emit("};")
     emit("")
     emit("// clang-format on")

@@ -107,6 +107,8 @@ struct Prepared {
   std::vector<double> l2b;                  // column-major lower enclosure: [j][alpha]
   double abs_row_sum = 1.0, width_row_sum = 0.0;
   std::array<std::vector<double>, 8> sub;  // column-major exact subdivision matrices [alpha][gamma]
+  std::vector<std::array<int, 4>> nodes;   // n multi-indices α of the order-k nodes (core order)
+  std::array<double, 3> grad_bound{};  // Λ_c ≥ max_ξ Σ_{i≥4} |∂N_i/∂ξ_c| (generated)
 };
 
 // Exact subdivision matrix of the Bernstein form on child tet `child` (see k_red_children):
@@ -211,6 +213,14 @@ Prepared prepare(int order) {
     for (int c = 0; c < 8; ++c) t.sub[c] = subdivision_matrix(t, k_red_children[c]);
   }
   t.den3 = t.den * t.den * t.den;
+  t.nodes = lagrange_lattice(CellKind::tetrahedron, order);
+  CF_VERIFY(static_cast<int>(t.nodes.size()) == n, "bad node lattice");
+  for (int v = 0; v < 4; ++v) CF_VERIFY(t.nodes[v][v] == order, "the corners must come first");
+  for (int c = 0; c < 3; ++c) {
+    t.grad_bound[c] = generated::k_gradient_bernstein_bounds[order - 1][c];
+    CF_VERIFY(t.grad_bound[c] >= 0.0 && (order > 1 || t.grad_bound[c] == 0.0),
+              "bad generated gradient bound");
+  }
   for (int c = 0; c < 3; ++c)
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < m; ++j)
@@ -378,6 +388,91 @@ class Refiner {
   std::vector<double> m_work;
 };
 
+// ---------------------------------------------------------------------------------------------
+// Affine path (nearly straight tets, where the Bernstein bounds above, which scale like |J|³, swamp
+// det J ≪ |J|³).
+//
+// The order-k basis reproduces affine maps, so with J_a = [x1 − x0, x2 − x0, x3 − x0] and the
+// node deviations d_i = x_i − aff(ξ_i) (zero at the corners): J(ξ) = J_a + E(ξ),
+// E(ξ) = Σ_{i≥4} d_i ∇N_i(ξ)ᵀ, hence ‖column c of E(ξ)‖₂ ≤ ε_c = Λ_c max_i ‖d_i‖₂ on the whole tet
+// (Λ_c generated, see tools/gen_bernstein_tables.py). det is multilinear in the columns and every
+// term with at least one E column is bounded by the product of its column norms (Hadamard), so
+//   |det J(ξ) − det J_a| ≤ Π_c (A_c + ε_c) − Π_c A_c = ε0 B1 B2 + A0 (ε1 B2 + A1 ε2) =: δ,
+// A_c ≥ ‖column c of J_a‖₂, B = A + ε (no cancellation). Rounding:
+//  * y_v = fl(x_v − x0): |y_v − (x_v − x0)| ≤ u|y_v| componentwise (a difference never underflows).
+//  * det J_a: every Leibniz term of det Y differs from the exact one by ≤ ((1+u)³ − 1) relative and
+//    the cofactor evaluation commits ≤ γ5 per term, so |fl(det Y) − det J_a| ≤ 8.01u perm|Y|; we
+//    use 16u·fl(perm|Y|) (the factor 2 covers the rounding of perm) plus k_tiny (1 + ‖y_1‖₁) for
+//    underflow (≤ 4·2^-1022 (‖y_1‖₁ + 1)).
+//  * k d_i = k (x_i − x0) − Σ_{v=1..3} α_v (x_v − x0) exactly (α the node's multi-index, integer
+//    weights); t = fl(k y_i − Σ α_v y_v) is a length-4 dot product of rounded inputs, so
+//    |k d_i − t| ≤ (γ4 + u) S ≤ 10u·fl(S) componentwise, S = k|y_i| + Σ α_v |y_v| (products by
+//    integers ≤ 4 are exact when subnormal: no underflow term).
+//  * everything else is non-negative and rounded outwards with up()/down().
+// Result: det J(ξ) ∈ [lower, upper] for every ξ in the tet (±∞ when not finite).
+struct AffineBounds {
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+};
+
+// Upper bound of the Euclidean norm of a vector given by non-negative component upper bounds.
+inline double norm2_up(double a, double b, double c) {
+  return up(std::sqrt(up(up(up(a * a) + up(b * b)) + up(c * c))));
+}
+
+template <int K>
+AffineBounds affine_bounds(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
+  constexpr int N = num_nodes(K);
+  AffineBounds out;
+  // y[v] = fl(x_v − x0), v = 1..3: the columns of J_a (rounded).
+  double y[4][3];
+  for (int v = 1; v < 4; ++v)
+    for (int r = 0; r < 3; ++r) y[v][r] = nodes(v, r) - nodes(0, r);
+  // Deviations.
+  double dmax = 0.0;
+  for (int i = 4; i < N; ++i) {
+    const std::array<int, 4>& a = t.nodes[i];
+    double bound[3];
+    for (int r = 0; r < 3; ++r) {
+      const double yi = nodes(i, r) - nodes(0, r);
+      const double tr = K * yi - a[1] * y[1][r] - a[2] * y[2][r] - a[3] * y[3][r];
+      const double s = K * std::abs(yi) + a[1] * std::abs(y[1][r]) + a[2] * std::abs(y[2][r]) +
+                       a[3] * std::abs(y[3][r]);
+      bound[r] = up(up(std::abs(tr) + up(10.0 * k_u * s)) / K);
+    }
+    dmax = std::max(dmax, norm2_up(bound[0], bound[1], bound[2]));
+  }
+  // det J_a and its radius; A_c ≥ ‖(x_{c+1} − x0)‖₂ (the factor 1 + 2^-52 ≥ 1 + u covers the
+  // rounding of y).
+  const double a00 = y[1][0], a10 = y[1][1], a20 = y[1][2];  // column 0
+  const double a01 = y[2][0], a11 = y[2][1], a21 = y[2][2];  // column 1
+  const double a02 = y[3][0], a12 = y[3][1], a22 = y[3][2];  // column 2
+  const double det =
+      a00 * (a11 * a22 - a21 * a12) - a10 * (a01 * a22 - a21 * a02) + a20 * (a01 * a12 - a11 * a02);
+  using std::abs;
+  const double perm = abs(a00) * (abs(a11) * abs(a22) + abs(a21) * abs(a12)) +
+                      abs(a10) * (abs(a01) * abs(a22) + abs(a21) * abs(a02)) +
+                      abs(a20) * (abs(a01) * abs(a12) + abs(a11) * abs(a02));
+  const double col0_l1 = abs(a00) + abs(a10) + abs(a20);
+  const double rad = up(up(16.0 * k_u * perm) + k_tiny * (1.0 + col0_l1));
+  double A[3], eps[3];
+  for (int c = 0; c < 3; ++c) {
+    A[c] = up(norm2_up(abs(y[c + 1][0]), abs(y[c + 1][1]), abs(y[c + 1][2])) * (1.0 + 0x1p-52));
+    eps[c] = up(t.grad_bound[c] * dmax);
+  }
+  const double B1 = up(A[1] + eps[1]), B2 = up(A[2] + eps[2]);
+  const double delta =
+      up(up(eps[0] * up(B1 * B2)) + up(A[0] * up(up(eps[1] * B2) + up(A[1] * eps[2]))));
+  const double lower = down(down(det - rad) - delta);
+  const double upper = up(up(det + rad) + delta);
+  // std::max drops NaN: check dmax too (the caller has already refused non-finite nodes).
+  if (std::isfinite(dmax) && std::isfinite(lower) && std::isfinite(upper)) {
+    out.lower = lower;
+    out.upper = upper;
+  }
+  return out;
+}
+
 template <int K>
 JacobianCertificate certify(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
                             const CertificateOptions& opts) {
@@ -401,23 +496,46 @@ JacobianCertificate certify(const Prepared& t, const Eigen::Ref<const Eigen::Mat
   out.min_upper_bound = out.min_lattice_upper;
   if (lat_hi <= 0.0) {
     out.verdict = JacobianVerdict::non_positive;
+    out.decided_by = CertificatePath::lattice;
     return out;
   }
+  // Affine path: a handful of flops, so computed whenever enabled; its bounds only tighten the
+  // proven lower_bound / min_upper_bound, and it decides only what the element's Bernstein
+  // coefficients leave open (before any subdivision).
+  AffineBounds affine;
+  if (opts.affine_path) affine = affine_bounds<K>(t, nodes);
+  out.min_upper_bound = std::min(out.min_upper_bound, affine.upper);
   std::array<double, M> b;
   const double r = bernstein<K>(t, ev, b);
-  if (!std::isfinite(r)) return out;
-  for (int a = 0; a < M; ++a)
-    if (!std::isfinite(b[a])) return out;
-  double lo = std::numeric_limits<double>::infinity();
-  for (int a = 0; a < M; ++a) lo = std::min(lo, down(b[a] - r));
+  bool bernstein_finite = std::isfinite(r);
+  for (int a = 0; a < M; ++a) bernstein_finite = bernstein_finite && std::isfinite(b[a]);
+  double lo = -std::numeric_limits<double>::infinity();
+  if (bernstein_finite) {
+    lo = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < M; ++a) lo = std::min(lo, down(b[a] - r));
+  }
   if (lo > 0.0) {
     out.verdict = JacobianVerdict::positive;
-    out.lower_bound = down(lo / den3);
+    out.decided_by = CertificatePath::bernstein;
+    out.lower_bound = std::max(down(lo / den3), affine.lower);
     return out;
   }
+  if (affine.lower > 0.0) {
+    out.verdict = JacobianVerdict::positive;
+    out.decided_by = CertificatePath::affine;
+    out.lower_bound = affine.lower;
+    return out;
+  }
+  if (affine.upper <= 0.0) {  // det J ≤ upper ≤ 0 on the whole tet
+    out.verdict = JacobianVerdict::non_positive;
+    out.decided_by = CertificatePath::affine;
+    return out;
+  }
+  if (!bernstein_finite) return out;
   if (t.degree == 0) return out;  // constant det J: subdivision cannot help
   Refiner<K> refiner(t, opts, out);
   out.verdict = refiner.refine(b.data(), r, 0);
+  if (out.verdict != JacobianVerdict::undecided) out.decided_by = CertificatePath::subdivision;
   if (out.verdict == JacobianVerdict::positive) out.lower_bound = down(refiner.min_lower / den3);
   out.min_upper_bound = std::min(out.min_upper_bound, up(refiner.min_upper / den3));
   return out;
@@ -471,6 +589,22 @@ const char* to_string(JacobianVerdict verdict) {
       return "undecided";
   }
   return "undecided";
+}
+
+const char* to_string(CertificatePath path) {
+  switch (path) {
+    case CertificatePath::none:
+      return "none";
+    case CertificatePath::lattice:
+      return "lattice";
+    case CertificatePath::bernstein:
+      return "bernstein";
+    case CertificatePath::affine:
+      return "affine";
+    case CertificatePath::subdivision:
+      return "subdivision";
+  }
+  return "none";
 }
 
 int jacobian_degree(int order) {

@@ -14,7 +14,16 @@
 //   2. Bernstein coefficients b = M·v (M the exact Lagrange-to-Bernstein matrix of
 //      tools/gen_bernstein_tables.py, committed in generated/bernstein_tables.inc);
 //      all certainly > 0 → positive (a proof: det J ≥ min b > 0 on the whole tet);
-//   3. otherwise red refinement (4 corner tets + 4 around the diagonal between the midpoints of
+//   3. affine path (CertificateOptions::affine_path), for nearly straight tets: J(ξ) = J_a + E(ξ)
+//      with J_a = [x1 − x0, x2 − x0, x3 − x0] (the corner rows) and E(ξ) = Σ_i d_i ∇N_i(ξ)ᵀ,
+//      d_i = x_i − aff(ξ_i) the deviation of node i from the affine map of the corners (the basis
+//      reproduces affine maps). With ‖d_i‖ ≤ dmax and the generated constants
+//      Λ_c ≥ max_ξ Σ_i |∂N_i/∂ξ_c| (k = 1..4: 0, 8, 31.5, 98), every column of E is bounded by
+//      ε_c = Λ_c dmax on the whole tet, and (multilinearity + Hadamard, A_c = ‖column c of J_a‖)
+//        |det J(ξ) − det J_a| ≤ Π_c (A_c + ε_c) − Π_c A_c =: δ.
+//      det J_a − δ > 0 (everything with proven rounding bounds) → positive; det J_a + δ ≤ 0 →
+//      non_positive (det J ≤ 0 everywhere). No subdivision, O(n) flops;
+//   4. otherwise red refinement (4 corner tets + 4 around the diagonal between the midpoints of
 //      edges 02 and 13), child coefficients by exact dyadic subdivision matrices; a child corner
 //      coefficient is a point value (certainly ≤ 0 → non_positive); recurse up to
 //      CertificateOptions::max_depth; anything left → undecided. Callers treat undecided as
@@ -25,8 +34,17 @@
 // inside another rounding mode (e.g. CGAL's protected scopes) is switched to nearest for the call
 // and restored. Coordinates must satisfy |x| < 1e90 (NaN, inf or larger → undecided), and det J
 // must exceed ~1e-280 (absolute underflow guards), i.e. tets not smaller than ~1e-90.
-// Slack: the proven lower bound is within ~1e-9 (well-shaped) to ~1e-5 (flat P4) of the true
-// minimum for straight tets; the a priori bounds use table-wide row sums, not per-entry ones.
+// Slack: steps 2 and 4 bound rounding errors like |J|³ (table-wide row sums, not per-entry ones),
+// so for straight tets their proven lower bound is within ~1e-9 (well-shaped) to ~1e-5 (flat P4)
+// of det J, relative to |J|³; alone they leave straight tets undecided below a min scaled Jacobian
+// of ~1e-7 (P4; P3 ~1e-9, P2 ~1e-11; measured on random slivers, needles and caps). Step 3 has
+// slack δ ≈ (A0A1 + A0A2 + A1A2)·Λ·dmax plus 16u·perm|J_a|; for nodes that are floating-point
+// affine interpolations of the corners (dmax ~ 20u·|x − x0| from the rounding bounds), it certifies
+// straight tets down to height/edge ~3e-12 (P4; P2 ~3e-13, P1 ~1e-16; every random P4 sliver,
+// needle or cap with min scaled Jacobian ≥ 1e-11) when the coordinates are of the size of the tet,
+// ~2e-10 (P4) when they are 1000× larger. It cannot help curved tets: dmax is then of the size of
+// the curving, and it gives up on a flat tet whose nodes deviate by more than ~h/(3Λ) (e.g. P4,
+// height h: one edge node pushed by 0.005h is still certified, det J turns negative at ~0.06h).
 //
 // Thread safety: all functions are reentrant (the tables are built once, thread-safely, on first
 // use and are immutable afterwards); call them from a oneTBB loop freely.
@@ -41,6 +59,14 @@ enum class JacobianVerdict { positive, non_positive, undecided };
 /// "positive", "non_positive", "undecided".
 const char* to_string(JacobianVerdict verdict);
 
+/// The step of the certificate that decided the verdict (see above): lattice point values (1),
+/// the element's Bernstein coefficients (2), the affine path (3), red subdivision (4); none when
+/// undecided.
+enum class CertificatePath { none, lattice, bernstein, affine, subdivision };
+
+/// "none", "lattice", "bernstein", "affine", "subdivision".
+const char* to_string(CertificatePath path);
+
 struct CertificateOptions {
   /// Red-refinement levels below the element (0 = no subdivision). Each level shrinks a sub-tet
   /// by 2, so the gap between Bernstein coefficients and det J values shrinks about 4×; level 4
@@ -50,6 +76,9 @@ struct CertificateOptions {
   int max_depth = 4;
   /// Hard budget on the number of sub-tets examined (children created); reaching it → undecided.
   int max_subtets = 4680;
+  /// Step 3, the affine path (nearly straight tets). Off: the Bernstein/subdivision proof alone
+  /// (for tests and comparisons).
+  bool affine_path = true;
 };
 
 struct JacobianCertificate {
@@ -59,11 +88,14 @@ struct JacobianCertificate {
   /// Proven enclosure [lower, upper] of min over the degree-d lattice of det J.
   double min_lattice_lower = -std::numeric_limits<double>::infinity();
   double min_lattice_upper = std::numeric_limits<double>::infinity();
-  /// Proven: det J ≥ lower_bound on the whole tet. > 0 when positive; −∞ otherwise.
+  /// Proven: det J ≥ lower_bound on the whole tet. > 0 when positive (the larger of the element's
+  /// Bernstein bound and the affine bound when both are computed); −∞ otherwise.
   double lower_bound = -std::numeric_limits<double>::infinity();
   /// Proven: min det J over the tet ≤ min_upper_bound (from all point values evaluated: the
-  /// lattice and the sub-tet corners). ≤ 0 when non_positive.
+  /// lattice and the sub-tet corners; and from the affine path's det J_a + δ). ≤ 0 when
+  /// non_positive.
   double min_upper_bound = std::numeric_limits<double>::infinity();
+  CertificatePath decided_by = CertificatePath::none;
   int depth_reached = 0;    ///< deepest refinement level examined (0 = the element only)
   int subtets_visited = 0;  ///< sub-tets (children) examined; 0 when decided at the element
 };

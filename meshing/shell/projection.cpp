@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include "meshing/shell/prism_location.hpp"
@@ -31,6 +32,26 @@ struct ShellProjection::Impl {
     const Eigen::MatrixXd& upper = half == 0 ? shell.mid : shell.top;
     return c < 3 ? Eigen::Vector3d(lower.row(v)) : Eigen::Vector3d(upper.row(v));
   }
+  // A pinched vertex: a singular vertex, whose pillar has zero length (base = mid = top).
+  bool pinched(int v) const {
+    return shell.base.row(v) == shell.mid.row(v) && shell.top.row(v) == shell.mid.row(v);
+  }
+  // The fiber points on the rising facets at barycentric weights w of the rotated face.
+  std::array<Eigen::Vector3d, 7> fiber(int f, const std::array<double, 3>& w) const;
+  // The input point of the zero-length fiber at pinch point x, or nullopt (x off the input).
+  std::optional<SurfacePoint> at_pinch(const Eigen::Vector3d& x) const;
+  // The input point on a fiber near pinched corner s of face f (weights w) that the search on
+  // the rounded fiber missed.
+  std::optional<SurfacePoint> near_pinch(int f, int s, const std::array<double, 3>& w) const;
+  SurfacePoint surface_point(int face, const Eigen::Vector3d& bary) const {
+    SurfacePoint r;
+    r.face = face;
+    r.bary = bary;
+    for (int k = 0; k < 3; ++k)
+      r.position += bary[k] * Eigen::Vector3d(input.V().row(input.F()(face, k)));
+    return r;
+  }
+
   std::int64_t key(const Eigen::Vector3d& p) const {
     const Eigen::Vector3d q = (p - origin) / cell;
     const std::int64_t i = std::int64_t(std::floor(q.x())), j = std::int64_t(std::floor(q.y())),
@@ -75,6 +96,13 @@ std::optional<PrismPoint> ShellProjection::locate(const Eigen::Vector3d& p) cons
   for (int f : it->second) {
     if (!m.boxes[f].contains(p)) continue;  // exact: the box of the corners holds the prism
     const Eigen::Vector3i F = m.shell.F.row(f);
+    // A pinch point is the whole pillar of its corner: exactly that corner, at h = 0.
+    const int r = min_rotation(F);
+    for (int c = 0; c < 3; ++c) {
+      const int v = F[(r + c) % 3];
+      if (m.pinched(v) && m.shell.mid.row(v) == p.transpose())
+        return PrismPoint{f, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0, 0.0};
+    }
     std::array<Eigen::Vector3d, 3> b, mid, t;
     for (int k = 0; k < 3; ++k) {
       b[k] = m.shell.base.row(F[k]);
@@ -116,10 +144,9 @@ Eigen::Vector3d ShellProjection::point(const PrismPoint& q) const {
   return prev;
 }
 
-std::array<Eigen::Vector3d, 7> ShellProjection::fiber(int face, double u, double v) const {
-  const Impl& m = *m_impl;
-  const bool type_a = is_type_a(Eigen::Vector3i(m.shell.F.row(face)));
-  const double w[3] = {1 - u - v, u, v};
+std::array<Eigen::Vector3d, 7> ShellProjection::Impl::fiber(int f,
+                                                            const std::array<double, 3>& w) const {
+  const bool type_a = is_type_a(Eigen::Vector3i(shell.F.row(f)));
   std::array<Eigen::Vector3d, 7> out;
   int n = 0;
   for (int half = 0; half < 2; ++half)
@@ -127,31 +154,146 @@ std::array<Eigen::Vector3d, 7> ShellProjection::fiber(int face, double u, double
       std::array<int, 3> sorted = rising_facets(type_a)[i];
       std::sort(sorted.begin(), sorted.end(), [](int a, int b) { return a % 3 < b % 3; });
       Eigen::Vector3d x = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) x += w[k] * m.corner(face, half, sorted[k]);
+      for (int k = 0; k < 3; ++k) x += w[k] * corner(f, half, sorted[k]);
       out[n++] = x;
     }
   return out;
 }
 
+std::array<Eigen::Vector3d, 7> ShellProjection::fiber(int face, double u, double v) const {
+  return m_impl->fiber(face, {1 - u - v, u, v});
+}
+
+namespace {
+// Fiber segments (a, b) in search order: from the middle (index 3) outwards, where the input
+// crosses the fiber near h = 0.
+constexpr int k_walk[6][2] = {{3, 2}, {3, 4}, {2, 1}, {4, 5}, {1, 0}, {5, 6}};
+
+// Barycentric coordinates of x, a point of the plane of tri (floating-point solve).
+Eigen::Vector3d barycentric(const std::array<Eigen::Vector3d, 3>& tri, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+  const double area = n.squaredNorm();
+  Eigen::Vector3d w;
+  w[1] = n.dot((x - tri[0]).cross(tri[2] - tri[0])) / area;
+  w[2] = n.dot((tri[1] - tri[0]).cross(x - tri[0])) / area;
+  w[0] = 1.0 - w[1] - w[2];
+  return w;
+}
+}  // namespace
+
+// A pinch point lies on the input (separation allows contact there only): on an input vertex,
+// or inside an input face or edge. The face of smallest id containing it, exactly; x itself when
+// it is a corner of that face. A pinch point off the surface by rounding only (a singular pinch
+// split's rounded midpoint, a section missing it by rounding) gets the closest surface point.
+std::optional<SurfacePoint> ShellProjection::Impl::at_pinch(const Eigen::Vector3d& x) const {
+  const std::vector<int> star = input.faces_containing(x);
+  if (star.empty()) {
+    Eigen::Vector3d closest;
+    const int f = input.closest_face(x, closest);
+    if (f < 0 || (closest - x).cwiseAbs().maxCoeff() >
+                     16 * std::numeric_limits<double>::epsilon() * x.cwiseAbs().maxCoeff())
+      return std::nullopt;
+    return surface_point(f, barycentric(input.face_triangle(f), closest));
+  }
+  const auto tri = input.face_triangle(star.front());
+  for (int k = 0; k < 3; ++k)
+    if (tri[k] == x) return surface_point(star.front(), Eigen::Vector3d::Unit(k));
+  return surface_point(star.front(), barycentric(tri, x));
+}
+
+// Near a pinched corner s (pinch point x) every fiber point is x + t (z − x): the fiber is the
+// image, under the homothety of centre x and ratio t = 1 − w_s, of the fiber z at the point of
+// the opposite edge with weights w_k / t. For t within rounding of 0 the computed fiber has
+// length ~1e-16 and the exact search on it can miss the input; z has the length of a pillar.
+// The input near x is the fan of the faces containing x, split at x into wedges (x; a, b) over
+// their edges (a, b): a cone with apex x, invariant under the homothety. So z crosses a wedge at
+// x + α (a − x) + β (b − x) exactly where the fiber crosses it at x + t α (a − x) + t β (b − x),
+// which is a point of the face as long as t (α + β) ≤ 1. The crossing is decided by exact
+// predicates on z (segment_crosses_wedge), then solved for (α, β).
+std::optional<SurfacePoint> ShellProjection::Impl::near_pinch(
+    int f, int s, const std::array<double, 3>& w) const {
+  const Eigen::Vector3i F = shell.F.row(f);
+  const Eigen::Vector3d x = shell.mid.row(F[(min_rotation(F) + s) % 3]).transpose();
+  std::array<double, 3> c{std::max(w[0], 0.0), std::max(w[1], 0.0), std::max(w[2], 0.0)};
+  const double rest = c[(s + 1) % 3] + c[(s + 2) % 3];
+  if (!(rest > 0)) return at_pinch(x);
+  const double t = rest / (rest + c[s]);
+  std::array<double, 3> wz{0, 0, 0};
+  for (int k : {(s + 1) % 3, (s + 2) % 3}) wz[k] = c[k] / rest;
+  const auto z = fiber(f, wz);
+
+  const std::vector<int> star = input.faces_containing(x);
+  if (star.empty()) {
+    // x is off the input by rounding: only a fiber that is x up to rounding maps to the input
+    // point closest to x.
+    double extent = 0, scale = x.cwiseAbs().maxCoeff();
+    for (const auto& p : z) {
+      extent = std::max(extent, t * (p - x).cwiseAbs().maxCoeff());
+      scale = std::max(scale, p.cwiseAbs().maxCoeff());
+    }
+    if (extent > 16 * std::numeric_limits<double>::epsilon() * scale) return std::nullopt;
+    return at_pinch(x);
+  }
+  struct Wedge {
+    int face, k;  // the wedge (x; corner k, corner k + 1) of that face
+    std::array<Eigen::Vector3d, 3> tri;
+    Eigen::Vector3d pi;  // barycentric coordinates of x in the face
+  };
+  std::vector<Wedge> wedges;
+  for (int g : star) {
+    const auto tri = input.face_triangle(g);
+    Eigen::Vector3d pi = barycentric(tri, x);
+    for (int k = 0; k < 3; ++k)
+      if (tri[k] == x) pi = Eigen::Vector3d::Unit(k);
+    for (int k = 0; k < 3; ++k)
+      if (tri[k] != x && tri[(k + 1) % 3] != x) wedges.push_back({g, k, tri, pi});
+  }
+  for (const auto& seg : k_walk) {
+    const Eigen::Vector3d &p = z[seg[0]], &q = z[seg[1]];
+    std::optional<SurfacePoint> best;
+    double best_tau = std::numeric_limits<double>::infinity();
+    for (const Wedge& e : wedges) {
+      const Eigen::Vector3d &a = e.tri[e.k], &b = e.tri[(e.k + 1) % 3];
+      if (!segment_crosses_wedge(p, q, x, a, b)) continue;
+      const Eigen::Vector3d n = (a - x).cross(b - x);
+      const double den = n.dot(q - p);
+      const double tau = den != 0 ? std::clamp(n.dot(x - p) / den, 0.0, 1.0) : 0.0;
+      if (tau >= best_tau) continue;
+      const Eigen::Vector3d d = p + tau * (q - p) - x;
+      const double alpha = std::max(n.dot(d.cross(b - x)) / n.squaredNorm(), 0.0),
+                   beta = std::max(n.dot((a - x).cross(d)) / n.squaredNorm(), 0.0);
+      if (t * (alpha + beta) > 1) continue;  // beyond this face: z meets the cone, not the input
+      Eigen::Vector3d bary = (1 - t * (alpha + beta)) * e.pi;
+      bary[e.k] += t * alpha;
+      bary[(e.k + 1) % 3] += t * beta;
+      best = surface_point(e.face, bary);
+      best_tau = tau;
+    }
+    if (best) return best;
+  }
+  return std::nullopt;
+}
+
 std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const {
   const Impl& m = *m_impl;
-  const auto fiber = this->fiber(q.face, q.u, q.v);
-  // Walk the fiber from the middle outwards: the input crosses it near h = 0.
-  const int mid = 3;
-  for (int d = 0; d < 3; ++d)
-    for (int s : {-1, 1}) {
-      const int a = s < 0 ? mid - d : mid + d, b = a + s;
-      if (b < 0 || b >= int(fiber.size())) continue;
-      Eigen::Vector3d bary;
-      const int f = m.input.segment_hit(fiber[a], fiber[b], bary);
-      if (f < 0) continue;
-      SurfacePoint r;
-      r.face = f;
-      r.bary = bary;
-      for (int k = 0; k < 3; ++k)
-        r.position += bary[k] * Eigen::Vector3d(m.input.V().row(m.input.F()(f, k)));
-      return r;
-    }
+  const std::array<double, 3> w{1 - q.u - q.v, q.u, q.v};
+  // The pinched corner of the face (at most one after pinch splitting; the heaviest otherwise).
+  const Eigen::Vector3i F = m.shell.F.row(q.face);
+  const int r = min_rotation(F);
+  int s = -1;
+  for (int c = 0; c < 3; ++c)
+    if (m.pinched(F[(r + c) % 3]) && (s < 0 || w[c] > w[s])) s = c;
+  // At the pinched corner itself the fiber is the pinch point.
+  if (s >= 0 && w[(s + 1) % 3] <= 0 && w[(s + 2) % 3] <= 0)
+    return m.at_pinch(m.corner(q.face, 1, s));
+  const auto fiber = m.fiber(q.face, w);
+  for (const auto& seg : k_walk) {
+    Eigen::Vector3d bary;
+    const int f = m.input.segment_hit(fiber[seg[0]], fiber[seg[1]], bary);
+    if (f >= 0) return m.surface_point(f, bary);
+  }
+  // Rounding can hide the crossing of a fiber shrunk toward a pinch point.
+  if (s >= 0) return m.near_pinch(q.face, s, w);
   return std::nullopt;
 }
 

@@ -43,11 +43,14 @@ class ShellProjection {
   ~ShellProjection();
 
   bool is_inside(const Eigen::Vector3d& p) const { return locate(p).has_value(); }
-  // The prism coordinates of a point of the shell (nullopt outside).
+  // The prism coordinates of a point of the shell (nullopt outside). A pinch point (the corner
+  // of a zero-length pillar, base = mid = top) gets exactly that corner's (u, v) and h = 0.
   std::optional<PrismPoint> locate(const Eigen::Vector3d& p) const;
   // The physical point of prism coordinates.
   Eigen::Vector3d point(const PrismPoint& q) const;
-  // P_T: the input point on the fiber of (face, u, v).
+  // P_T: the input point on the fiber of (face, u, v). At a pinch corner the fiber is the pinch
+  // point: its input point. Near one, where the rounded fiber is too short for the exact search,
+  // the crossing is solved on the fiber scaled up about the pinch point (projection.cpp).
   std::optional<SurfacePoint> project(const PrismPoint& q) const;
   // P: a point of the shell to the input.
   std::optional<SurfacePoint> project(const Eigen::Vector3d& p) const;

@@ -240,6 +240,18 @@ bool triangle_section_contact(const std::array<V3, 3>& t, const std::array<V3, 4
   return false;
 }
 
+bool segment_crosses_wedge(const V3& p, const V3& q, const V3& apex, const V3& a, const V3& b) {
+  if (CGAL::collinear(pt(apex), pt(a), pt(b))) return false;
+  const int sp = sign_det(a, apex, b, apex, p, apex), sq = sign_det(a, apex, b, apex, q, apex);
+  if ((sp == 0 && sq == 0) || sp * sq > 0) return false;
+  // The line p→q meets the plane at x. det[q − p, apex − p, a − p] and det[q − p, b − p, apex − p]
+  // have the sign of the crossing direction (`dir`) where x is strictly inside the wedge, are 0 on
+  // the line of apex–a (apex–b), and change sign across it: both signs agreeing with `dir` (or 0)
+  // put x in the intersection of two half-planes through the apex, which is the wedge.
+  const int dir = sq != 0 ? sq : -sp;
+  return sign_det(q, p, apex, p, a, p) * dir >= 0 && sign_det(q, p, b, p, apex, p) * dir >= 0;
+}
+
 struct InputSurfaceIndex::Impl {
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
@@ -343,6 +355,19 @@ std::vector<int> InputSurfaceIndex::faces_in_box(const Eigen::Vector3d& lo,
   std::vector<int> out;
   out.reserve(hits.size());
   for (const auto& it : hits) out.push_back(m_impl->id(it));
+  return out;
+}
+
+std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) const {
+  std::vector<int> out;
+  for (int f : faces_in_box(p, p)) {
+    const Triangle& t = m_impl->triangles[std::size_t(f)];
+    if (t.is_degenerate()) continue;
+    bool corner = false;
+    for (int k = 0; k < 3; ++k) corner |= m_impl->V.row(m_impl->F(f, k)) == p.transpose();
+    if (corner || t.has_on(pt(p))) out.push_back(f);
+  }
+  std::sort(out.begin(), out.end());
   return out;
 }
 

@@ -43,6 +43,15 @@ bool triangle_section_contact(const std::array<Eigen::Vector3d, 3>& tri,
 bool triangles_meet_beyond_pinch(const std::array<Eigen::Vector3d, 3>& a, int ka,
                                  const std::array<Eigen::Vector3d, 3>& b, int kb);
 
+// Does the closed segment [p, q] cross the plane of the wedge W = {apex + α(a − apex) +
+// β(b − apex) : α, β ≥ 0} at a point of W? The wedge must be non-degenerate (apex, a, b not
+// collinear; false otherwise); a segment lying in its plane does not cross it. Exact: the segment's
+// end points on either side of the plane (or on it), and the crossing point on the inner side of
+// the lines apex–a and apex–b, all as signs of orient3d.
+bool segment_crosses_wedge(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                           const Eigen::Vector3d& apex, const Eigen::Vector3d& a,
+                           const Eigen::Vector3d& b);
+
 class InputSurfaceIndex {
  public:
   InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
@@ -65,6 +74,8 @@ class InputSurfaceIndex {
   // Input faces whose triangle intersects the (closed) tetrahedron (exact).
   std::vector<int> faces_touching_tet(const std::array<Eigen::Vector3d, 4>& tet) const;
 
+  // Non-degenerate input faces whose closed triangle contains p (exact), in increasing order.
+  std::vector<int> faces_containing(const Eigen::Vector3d& p) const;
   // Input faces whose bounding box overlaps [lo, hi] (a superset of the faces meeting the box).
   std::vector<int> faces_in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   // Does input face f intersect the closed tetrahedron (exact)?

@@ -136,21 +136,14 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
   r.non_section_faces = int(non_section_prisms(shell, input).size());
 
   // Roundtrip of every input vertex through P⁻¹ and P. A pinch point (an input vertex that is
-  // a singular shell vertex, base = mid = top) is a zero-length fiber that P and P⁻¹ fix (thesis
-  // §4.2.5): it must be located, but its fiber is not searched for the input (its rounded (u, v)
-  // would give fiber segments of length ~1e-16 around the point itself).
+  // a singular shell vertex, base = mid = top) is a zero-length fiber: P⁻¹ must give its corner
+  // and P the vertex itself (thesis §4.2.5), as for any other vertex.
   {
     const ShellProjection projection(shell, input);
     const double unit = bbox_longest_edge(input.V);
-    std::vector<char> referenced(input.num_vertices(), 0), pinch(input.num_vertices(), 0);
+    std::vector<char> referenced(input.num_vertices(), 0);
     for (int f = 0; f < input.num_faces(); ++f)
       for (int k = 0; k < 3; ++k) referenced[input.F(f, k)] = 1;
-    for (int v = 0; v < nv; ++v) {
-      const int x = shell.input_vertex[v];
-      if (shell.singular[v] && x >= 0 && x < input.num_vertices() &&
-          shell.mid.row(v) == input.V.row(x))
-        pinch[x] = 1;
-    }
     for (int v = 0; v < input.num_vertices(); ++v) {
       if (!referenced[v]) continue;
       const Eigen::Vector3d x = input.V.row(v);
@@ -159,7 +152,6 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
         ++r.roundtrip_failures;
         continue;
       }
-      if (pinch[v]) continue;
       const auto back = projection.project(*q);
       if (!back) {
         ++r.roundtrip_failures;

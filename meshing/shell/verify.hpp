@@ -9,8 +9,8 @@
 //                 interior; shell_intersection.hpp) has a
 //                 normal making a positive dot product with every non-singular pillar, so every
 //                 fiber crosses the input transversally and at most once (thesis §4.4, I2)
-//   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (a pinch
-//                 point, a zero-length fiber that P fixes, must only be located)
+//   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (pinch
+//                 points, zero-length fibers, included)
 
 #include <vector>
 

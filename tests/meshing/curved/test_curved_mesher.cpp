@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "mapping/boundary_inverse.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -195,4 +196,49 @@ TEST(CurvedMesher, BevelsACraterAndKeepsTheMapOnTheInput) {
     EXPECT_LT(p, 14);
   }
   for (int x : r.mesh.shell.input_vertex) EXPECT_LT(x, 9);
+}
+
+TEST(CurvedMesher, CraterPinchPointsMapBackThroughTheShell) {
+  // The crater's rim vertices 0 and 5 are singular: zero-length pillars in the coarse shell too.
+  // `curvefem mesh` reports valid only if the validator passes and every input vertex v comes
+  // back from φ(v): located on the curved boundary (Gauss–Newton, so (u, v) only near the pinch
+  // corner) and pulled back through the shell projection (cmd_mesh.cpp, map_roundtrip). Near a
+  // pinch corner the fiber is ~1e-16 long; the projection must still reach the input.
+  SurfaceMesh s;
+  s.V.resize(9, 3);
+  s.V << 0.44, 0, 1.40, -0.04, -0.11, 0.95, -0.55, -0.22, 0.97, -0.60, 0.70, 0.78, 0.98, 0.57, 0.90,
+      1.24, 0.30, 1.07, -0.08, 0.09, -1.45, 0.92, 0.81, 0.48, -0.35, -0.48, 1.14;
+  s.F.resize(14, 3);
+  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1, 5, 0, 6, 4, 5, 6, 7, 4, 6,
+      3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
+  const double unit = curvefem::bbox_longest_edge(s.V);
+  for (int order : {2, 3}) {
+    const MeshRun r = mesh(s, order, 1e-2);
+    EXPECT_TRUE(r.check.valid(1e-2)) << order;
+    int pinches = 0;
+    for (int v = 0; v < r.mesh.shell.mid.rows(); ++v)
+      if (r.mesh.shell.base.row(v) == r.mesh.shell.mid.row(v) &&
+          r.mesh.shell.top.row(v) == r.mesh.shell.mid.row(v)) {
+        ++pinches;
+        EXPECT_TRUE(r.mesh.shell.input_vertex[std::size_t(v)] == 0 ||
+                    r.mesh.shell.input_vertex[std::size_t(v)] == 5);
+      }
+    EXPECT_EQ(pinches, 2) << order;
+    const auto inverse =
+        curvefem::mapping::BoundaryInverse::through_shell(r.mesh.map, r.mesh.shell, s);
+    int failures = 0;
+    double worst = 0;
+    for (int v = 0; v < 9; ++v) {
+      const auto back = inverse(r.mesh.map.image(v));
+      if (!back) {
+        ++failures;
+        ADD_FAILURE() << "order " << order << ": input vertex " << v << " does not map back";
+        continue;
+      }
+      worst = std::max(worst, (back->position - s.V.row(v).transpose()).norm() / unit);
+    }
+    // The report's condition: valid needs 0 failures and an error <= 1e-6.
+    EXPECT_EQ(failures, 0) << order;
+    EXPECT_LE(worst, 1e-9) << order;
+  }
 }

@@ -5,7 +5,9 @@
 #include <Eigen/LU>
 #include <array>
 #include <cfenv>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <string>
@@ -470,6 +472,349 @@ TEST(JacobianCertificate, ReentrantAndRoundingModeIndependent) {
     EXPECT_EQ(o->min_lattice_lower, a.min_lattice_lower);
     EXPECT_EQ(o->subtets_visited, a.subtets_visited);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Affine path (nearly straight tets)
+
+// Long double reference: order-k basis gradients and det J, independent of the certificate.
+using Vec3L = std::array<long double, 3>;
+
+// ∇N_i at ξ for every node (canonical order), from the product form
+// N_α = Π_i Π_{t<α_i} (k λ_i − t)/(t + 1), in long double.
+std::vector<Vec3L> gradients_ld(int k, const Vec3L& xi) {
+  const auto& lattice = curvefem::lagrange_lattice(CellKind::tetrahedron, k);
+  const long double lam[4] = {1.0L - xi[0] - xi[1] - xi[2], xi[0], xi[1], xi[2]};
+  std::vector<Vec3L> g(lattice.size());
+  for (std::size_t n = 0; n < lattice.size(); ++n) {
+    long double val[4], der[4];
+    for (int i = 0; i < 4; ++i) {
+      long double v = 1.0L, d = 0.0L;
+      for (int t = 0; t < lattice[n][i]; ++t) {
+        const long double f = (k * lam[i] - t) / (t + 1),
+                          df = static_cast<long double>(k) / (t + 1);
+        d = d * f + v * df;
+        v *= f;
+      }
+      val[i] = v;
+      der[i] = d;
+    }
+    long double dlam[4];
+    for (int i = 0; i < 4; ++i) {
+      dlam[i] = der[i];
+      for (int j = 0; j < 4; ++j)
+        if (j != i) dlam[i] *= val[j];
+    }
+    for (int c = 0; c < 3; ++c) g[n][c] = dlam[c + 1] - dlam[0];
+  }
+  return g;
+}
+
+// Gradients at the level-L lattice plus `extra` random interior points (fixed seed).
+std::vector<std::vector<Vec3L>> gradients_ld_at(int k, int level, int extra, unsigned seed) {
+  std::vector<std::vector<Vec3L>> out;
+  for (const Eigen::Vector3d& p : sample_points(level, extra, seed))
+    out.push_back(gradients_ld(k, {p[0], p[1], p[2]}));
+  return out;
+}
+
+// min over the sample points of det J, J = Σ_i (x_i − x_0) ∇N_iᵀ in long double.
+long double sampled_min_ld(const Eigen::MatrixXd& x, const std::vector<std::vector<Vec3L>>& grads) {
+  long double best = std::numeric_limits<long double>::infinity();
+  for (const auto& g : grads) {
+    long double j[3][3] = {};
+    for (int i = 1; i < x.rows(); ++i)
+      for (int r = 0; r < 3; ++r) {
+        const long double d = static_cast<long double>(x(i, r)) - static_cast<long double>(x(0, r));
+        for (int c = 0; c < 3; ++c) j[r][c] += d * g[i][c];
+      }
+    const long double det = j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1]) -
+                            j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0]) +
+                            j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]);
+    best = std::min(best, det);
+  }
+  return best;
+}
+
+std::string sci(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+CertificateOptions without_affine_path() {
+  CertificateOptions o;
+  o.affine_path = false;
+  return o;
+}
+
+// A fixed rotation (not axis-aligned, so rounding deviations leave the plane of a flat tet).
+Eigen::Matrix3d tilted_frame() {
+  return (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()) *
+          Eigen::AngleAxisd(-0.4, Eigen::Vector3d(-2, 1, 0.5).normalized()))
+      .toRotationMatrix();
+}
+
+// Flat tet: base triangle (edges ~1) in a tilted plane, apex at height h above it, all moved by
+// `offset`; vertices rounded to doubles, nodes interpolated in floating point (straight_tet).
+Vertices flat_vertices(double h, const Eigen::Vector3d& offset) {
+  Eigen::Matrix<double, 4, 3> local;
+  local << 0.1, 0.2, 0.0, 1.3, 0.1, 0.0, 0.45, 1.1, 0.0, 0.5, 0.4, h;
+  const Eigen::Matrix3d rot = tilted_frame();
+  Vertices v;
+  for (int a = 0; a < 4; ++a) v.row(a) = (rot * local.row(a).transpose() + offset).transpose();
+  return v;
+}
+
+// Λ_c really bounds Σ_{i≥4} |∂N_i/∂ξ_c| (sampled, long double), and is not far above it.
+TEST(JacobianTables, GradientBoundsDominateTheBasisGradientSums) {
+  const auto pts = sample_points(30, 2000, 17);
+  for (int k = 1; k <= 4; ++k) {
+    double sampled[3] = {0.0, 0.0, 0.0};
+    for (const Eigen::Vector3d& p : pts) {
+      const std::vector<Vec3L> g = gradients_ld(k, {p[0], p[1], p[2]});
+      for (int c = 0; c < 3; ++c) {
+        long double s = 0.0L;
+        for (std::size_t i = 4; i < g.size(); ++i) s += std::abs(g[i][c]);
+        sampled[c] = std::max(sampled[c], static_cast<double>(s));
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double lambda = table::k_gradient_bernstein_bounds[k - 1][c];
+      EXPECT_LE(sampled[c], lambda * (1 + 1e-12)) << "k=" << k << " c=" << c;
+      if (k == 1) EXPECT_EQ(lambda, 0.0);
+      if (k == 2) EXPECT_NEAR(sampled[c], lambda, 1e-12);  // linear gradients: exact at vertices
+      if (k > 2) EXPECT_GT(sampled[c], 0.75 * lambda) << "k=" << k << " c=" << c;
+    }
+  }
+}
+
+// (1) Straight tets made extremely flat (height/edge 1e-6 .. 1e-12; P1 1e-14), nodes interpolated
+// in floating point: the Bernstein / subdivision path alone is undecided on the flattest ones, the
+// affine path certifies all of them without subdivision, with a lower bound within 1e-4
+// (h ≥ 1e-8) or 1e-2 (h ≥ 1e-10) of 6·volume.
+TEST(JacobianAffinePath, FlatStraightTetsArePositive) {
+  const Eigen::Vector3d offsets[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, -2.0, 5.0)};
+  // Flatness at and below which the path without step 3 gives up on this geometry (measured).
+  const double old_undecided_below[5] = {0, 1e-14, 1e-12, 1e-10, 1e-8};
+  for (int k = 1; k <= 4; ++k) {
+    int old_undecided = 0;
+    for (const Eigen::Vector3d& offset : offsets)
+      for (double h : {1e-6, 1e-8, 1e-10, 1e-11, 1e-12, 1e-14}) {
+        if (h < 1e-11 && offset.norm() > 0 && k > 1) continue;  // beyond the affine path's reach
+        if (h < 1e-12 && k > 1) continue;
+        const Vertices v = flat_vertices(h, offset);
+        const long double vol6 = six_volume(v);
+        ASSERT_GT(vol6, 0.0L);
+        const Eigen::MatrixXd x = straight_tet(k, v);
+        const JacobianCertificate old = certify_tet_jacobian(k, x, without_affine_path());
+        const JacobianCertificate c = certify_tet_jacobian(k, x);
+        const std::string where =
+            "k=" + std::to_string(k) + " h=" + sci(h) + " offset=" + sci(offset.norm());
+        EXPECT_NE(old.verdict, JacobianVerdict::non_positive) << where;
+        if (h <= old_undecided_below[k] && offset.norm() == 0) {
+          EXPECT_EQ(old.verdict, JacobianVerdict::undecided) << where;
+          EXPECT_EQ(old.decided_by, CertificatePath::none) << where;
+        }
+        if (old.verdict == JacobianVerdict::undecided) ++old_undecided;
+        ASSERT_EQ(c.verdict, JacobianVerdict::positive) << where;
+        if (old.verdict != JacobianVerdict::positive) {
+          EXPECT_EQ(c.decided_by, CertificatePath::affine) << where;
+        } else {
+          EXPECT_EQ(c.decided_by, CertificatePath::bernstein) << where;
+          EXPECT_GE(c.lower_bound, old.lower_bound) << where;  // the larger proven bound
+        }
+        EXPECT_EQ(c.subtets_visited, 0) << where;
+        EXPECT_EQ(c.depth_reached, 0) << where;
+        EXPECT_LE(c.lower_bound, static_cast<double>(vol6)) << where;
+        const double slack = h >= 1e-8 ? 1e-4 : h >= 1e-10 ? 1e-2 : 1.0;
+        EXPECT_GT(c.lower_bound, static_cast<double>(vol6) * (1 - slack)) << where;
+        EXPECT_LE(c.min_upper_bound, c.min_lattice_upper) << where;
+        EXPECT_GE(c.min_upper_bound, c.lower_bound) << where;
+      }
+    EXPECT_GT(old_undecided, 0) << "k=" << k << ": no case needed the affine path";
+  }
+}
+
+// Inverted flat straight tets: the affine path proves det J ≤ 0 everywhere (det J_a + δ ≤ 0).
+TEST(JacobianAffinePath, InvertedFlatStraightTetsAreNonPositive) {
+  for (int k = 1; k <= 4; ++k) {
+    Vertices v = flat_vertices(1e-10, Eigen::Vector3d::Zero());
+    v.row(1).swap(v.row(2));
+    const JacobianCertificate c = certify_tet_jacobian(k, straight_tet(k, v));
+    EXPECT_EQ(c.verdict, JacobianVerdict::non_positive) << "k=" << k;
+    EXPECT_LE(c.min_upper_bound, 0.0) << "k=" << k;
+    EXPECT_NE(certify_tet_jacobian(k, straight_tet(k, v), without_affine_path()).verdict,
+              JacobianVerdict::positive);
+  }
+}
+
+// (2) A flat tet (height 1e-9, P2: 1e-12) with the first node of edge (0,3) pushed along the
+// normal, through the base face, by s·h: det J turns negative somewhere once s is large enough
+// (checked by dense long double sampling). Whenever it does, the verdict is not positive (the
+// affine path's δ exceeds det J_a); small pushes are still certified by the affine path.
+TEST(JacobianAffinePath, FlatTetWithAFoldIsNotPositive) {
+  const Eigen::Vector3d normal = tilted_frame().col(2);
+  for (int k = 2; k <= 4; ++k) {
+    const double h = k == 2 ? 1e-12 : 1e-9;  // where the path without the affine step gives up
+    const Vertices v = flat_vertices(h, Eigen::Vector3d(0.5, 0.25, -1.0));
+    const auto grads = gradients_ld_at(k, 3 * k, 300, 23);
+    const long double vol6 = six_volume(v);
+    const int node = 4 + 2 * (k - 1);  // edge (0,3), next to vertex 0
+    double largest_certified = 0.0, largest_by_affine = 0.0;
+    double smallest_negative = std::numeric_limits<double>::infinity();
+    int negative = 0;
+    for (int step = 0; step <= 80; ++step) {
+      const double s = step == 0 ? 0.0 : std::pow(10.0, -4.0 + step * 0.05);  // 1e-4 .. 1e0
+      Eigen::MatrixXd x = straight_tet(k, v);
+      x.row(node) -= (s * h) * normal.transpose();
+      const long double smin = sampled_min_ld(x, grads);
+      const JacobianCertificate c = certify_tet_jacobian(k, x);
+      const std::string where = "k=" + std::to_string(k) + " s=" + sci(s);
+      if (smin < -1e-9L * vol6) {
+        ++negative;
+        smallest_negative = std::min(smallest_negative, s);
+        EXPECT_NE(c.verdict, JacobianVerdict::positive) << where;
+        EXPECT_NE(certify_tet_jacobian(k, x, without_affine_path()).verdict,
+                  JacobianVerdict::positive)
+            << where;
+      }
+      if (c.verdict == JacobianVerdict::positive) {
+        largest_certified = std::max(largest_certified, s);
+        if (c.decided_by == CertificatePath::affine)
+          largest_by_affine = std::max(largest_by_affine, s);
+        EXPECT_GT(smin, 0.0L) << where;
+        EXPECT_LE(c.lower_bound, static_cast<double>(smin)) << where;
+      }
+      if (c.verdict == JacobianVerdict::non_positive) EXPECT_LE(c.min_upper_bound, 0.0) << where;
+    }
+    // Pushed by 2h through the base face: negative, and not positive.
+    Eigen::MatrixXd x = straight_tet(k, v);
+    x.row(node) -= (2.0 * h) * normal.transpose();
+    ASSERT_LT(sampled_min_ld(x, grads), 0.0L) << "k=" << k;
+    EXPECT_NE(certify_tet_jacobian(k, x).verdict, JacobianVerdict::positive) << "k=" << k;
+    EXPECT_GT(negative, 10) << "k=" << k;
+    EXPECT_GT(largest_by_affine, 1e-3) << "k=" << k;  // tiny pushes: the affine path certifies
+    EXPECT_LT(largest_certified, smallest_negative) << "k=" << k;
+    RecordProperty("k" + std::to_string(k) + "_largest_certified_push_over_h",
+                   std::to_string(largest_certified));
+    RecordProperty("k" + std::to_string(k) + "_largest_push_over_h_certified_by_affine",
+                   std::to_string(largest_by_affine));
+    RecordProperty("k" + std::to_string(k) + "_smallest_negative_push_over_h",
+                   std::to_string(smallest_negative));
+  }
+}
+
+// (3) A sweep of 3000 nearly straight tets (flat and well-shaped, random perturbations of the
+// non-corner nodes of the order of what makes det J change sign) against dense long double
+// sampling: no positive verdict where a sample is negative, lower_bound below every sample,
+// non_positive only with min_upper_bound ≤ 0, and never a contradiction with the path without the
+// affine step.
+TEST(JacobianAffinePath, NearlyStraightSweepAgreesWithLongDoubleSampling) {
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const Eigen::Matrix3d rot = tilted_frame();
+  for (int k = 1; k <= 4; ++k) {
+    const auto grads = gradients_ld_at(k, k == 1 ? 1 : 2 * k, k == 1 ? 0 : 40, 31 + k);
+    int by_affine = 0, positive = 0, negative = 0, non_positive = 0, old_undecided_now_positive = 0;
+    for (int trial = 0; trial < 750; ++trial) {
+      // height/edge 1e-2 .. 1e-11 (P1, P2, where the path without the affine step reaches
+      // further: 1e-15, 1e-13)
+      const double decades[5] = {0, 13, 11, 9, 9};
+      const double h = std::pow(10.0, -2.0 - decades[k] * uni(rng));
+      Eigen::Matrix<double, 4, 3> local;
+      for (int a = 0; a < 3; ++a) local.row(a) << uni(rng), uni(rng), 0.0;
+      local.row(3) << uni(rng), uni(rng), h;
+      const double area2 = (local(1, 0) - local(0, 0)) * (local(2, 1) - local(0, 1)) -
+                           (local(2, 0) - local(0, 0)) * (local(1, 1) - local(0, 1));
+      if (std::abs(area2) < 0.05) {
+        --trial;
+        continue;
+      }
+      if (area2 < 0) local.row(1).swap(local.row(2));
+      Vertices v;
+      const Eigen::Vector3d offset(normal(rng), normal(rng), normal(rng));
+      for (int a = 0; a < 4; ++a) v.row(a) = (rot * local.row(a).transpose() + offset).transpose();
+      Eigen::MatrixXd x = straight_tet(k, v);
+      // Perturbation: 10^-4 .. 10^0.5 times h, along random directions.
+      const double amp = h * std::pow(10.0, -4.0 + 4.5 * uni(rng));
+      for (int i = 4; i < x.rows(); ++i)
+        for (int c = 0; c < 3; ++c) x(i, c) += amp * normal(rng);
+      const long double smin = sampled_min_ld(x, grads);
+      const long double scale = 1.0L;  // |J|³ ~ 1: edges ~1
+      const JacobianCertificate c = certify_tet_jacobian(k, x);
+      const JacobianCertificate old = certify_tet_jacobian(k, x, without_affine_path());
+      const std::string where = "k=" + std::to_string(k) + " trial " + std::to_string(trial);
+      if (smin < -1e-15L * scale) {
+        ++negative;
+        EXPECT_NE(c.verdict, JacobianVerdict::positive) << where;
+      }
+      if (c.verdict == JacobianVerdict::positive) {
+        ++positive;
+        if (c.decided_by == CertificatePath::affine) ++by_affine;
+        if (old.verdict == JacobianVerdict::undecided) ++old_undecided_now_positive;
+        EXPECT_GT(smin, 0.0L) << where;
+        EXPECT_LE(c.lower_bound, static_cast<double>(smin + 1e-17L * scale)) << where;
+      }
+      if (c.verdict == JacobianVerdict::non_positive) {
+        ++non_positive;
+        EXPECT_LE(c.min_upper_bound, 0.0) << where;
+      }
+      // Two proofs never contradict each other.
+      EXPECT_FALSE(c.verdict == JacobianVerdict::positive &&
+                   old.verdict == JacobianVerdict::non_positive)
+          << where;
+      EXPECT_FALSE(c.verdict == JacobianVerdict::non_positive &&
+                   old.verdict == JacobianVerdict::positive)
+          << where;
+      if (old.verdict != JacobianVerdict::undecided) EXPECT_EQ(c.verdict, old.verdict) << where;
+    }
+    EXPECT_GT(positive, 100) << "k=" << k;
+    EXPECT_GT(by_affine, 50) << "k=" << k;
+    if (k > 1) EXPECT_GT(negative, 50) << "k=" << k;
+    EXPECT_GT(old_undecided_now_positive, 20) << "k=" << k;
+    RecordProperty("k" + std::to_string(k) + "_positive_affine_negative_nonpositive_rescued",
+                   std::to_string(positive) + "/" + std::to_string(by_affine) + "/" +
+                       std::to_string(negative) + "/" + std::to_string(non_positive) + "/" +
+                       std::to_string(old_undecided_now_positive));
+  }
+}
+
+// (4) The affine path decides without subdivision; the path without it examines the whole
+// sub-tet budget before giving up. Times are recorded (benchmarks own timings), not asserted.
+TEST(JacobianAffinePath, DecidesWithoutSubdivision) {
+  const Eigen::MatrixXd x = straight_tet(4, flat_vertices(1e-9, Eigen::Vector3d(1.0, 2.0, 3.0)));
+  const JacobianCertificate old = certify_tet_jacobian(4, x, without_affine_path());
+  EXPECT_EQ(old.verdict, JacobianVerdict::undecided);
+  EXPECT_GT(old.subtets_visited, 0);
+  const JacobianCertificate c = certify_tet_jacobian(4, x);
+  EXPECT_EQ(c.verdict, JacobianVerdict::positive);
+  EXPECT_EQ(c.decided_by, CertificatePath::affine);
+  EXPECT_EQ(c.subtets_visited, 0);
+  EXPECT_EQ(c.depth_reached, 0);
+  auto time_us = [&](const CertificateOptions& o, int reps) {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int r = 0; r < reps; ++r) certify_tet_jacobian(4, x, o);
+    return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0)
+               .count() /
+           reps;
+  };
+  RecordProperty("p4_flat_affine_us", std::to_string(time_us(CertificateOptions{}, 200)));
+  RecordProperty("p4_flat_without_affine_us", std::to_string(time_us(without_affine_path(), 20)));
+  RecordProperty("p4_flat_without_affine_subtets", std::to_string(old.subtets_visited));
+}
+
+TEST(JacobianAffinePath, PathNames) {
+  EXPECT_STREQ(to_string(CertificatePath::none), "none");
+  EXPECT_STREQ(to_string(CertificatePath::affine), "affine");
+  EXPECT_STREQ(to_string(CertificatePath::subdivision), "subdivision");
+  // Decided paths of the classic cases.
+  EXPECT_EQ(certify_tet_jacobian(2, straight_tet(2, regular_vertices())).decided_by,
+            CertificatePath::bernstein);
+  Vertices inv = regular_vertices();
+  inv.row(1).swap(inv.row(2));
+  EXPECT_EQ(certify_tet_jacobian(2, straight_tet(2, inv)).decided_by, CertificatePath::lattice);
 }
 
 // ---------------------------------------------------------------------------------------------
