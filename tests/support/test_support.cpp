@@ -43,4 +43,22 @@ int run_command(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+SurfaceMesh crater_mesh() {
+  SurfaceMesh s;
+  s.V.resize(9, 3);
+  s.V << 0.44, 0, 1.40,    //
+      -0.04, -0.11, 0.95,  //
+      -0.55, -0.22, 0.97,  //
+      -0.60, 0.70, 0.78,   //
+      0.98, 0.57, 0.90,    //
+      1.24, 0.30, 1.07,    //
+      -0.08, 0.09, -1.45,  //
+      0.92, 0.81, 0.48,    //
+      -0.35, -0.48, 1.14;
+  s.F.resize(14, 3);
+  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1,  //
+      5, 0, 6, 4, 5, 6, 7, 4, 6, 3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
+  return s;
+}
+
 }  // namespace curvefem::test

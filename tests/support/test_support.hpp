@@ -5,7 +5,18 @@
 #include <optional>
 #include <string>
 
+#include "meshing/core/surface_mesh.hpp"
+
 namespace curvefem::test {
+
+/// A crater: the pit vertex 1 surrounded by the rim 0, 5, 4, 7, 3, 2, 8 (heights 0.48 to 1.40,
+/// most above the pit), closed below by the apex 6; 9 vertices, 14 faces. Star-shaped around the
+/// origin, so embedded. The rim vertices 0 and 5 are singular (no direction sees all their
+/// faces), so build_shell pinches the rim edge (0, 5) at its rounded midpoint m; the face
+/// (5, 0, 6) across that edge then enters, by the rounding of m, the prisms of (0, m, 1) and
+/// (m, 5, 1), whose pillar at the pit does not see it: 2 prisms fail the section condition
+/// (tests/meshing/shell/test_shell_bevel.cpp).
+SurfaceMesh crater_mesh();
 
 /// ../shared/data (or $CURVEFEM_DATA), or nullopt when absent: tests then GTEST_SKIP() with
 /// k_no_data_message.

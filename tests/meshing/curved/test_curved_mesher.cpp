@@ -15,6 +15,7 @@
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/shell_geometry.hpp"
 #include "meshing/shell/simplify.hpp"
+#include "tests/support/test_support.hpp"
 
 namespace cv = curvefem::meshing::curved;
 namespace sh = curvefem::meshing::shell;
@@ -168,13 +169,7 @@ TEST(CurvedMesher, BevelsACraterAndKeepsTheMapOnTheInput) {
   // The crater of tests/meshing/shell/test_shell_bevel.cpp: its own shell is no section (a
   // pinched rim edge), so the mesher bevels 10 of its 14 faces first. The boundary map and the
   // returned shell still refer to the 9 input vertices and 14 input faces.
-  SurfaceMesh s;
-  s.V.resize(9, 3);
-  s.V << 0.44, 0, 1.40, -0.04, -0.11, 0.95, -0.55, -0.22, 0.97, -0.60, 0.70, 0.78, 0.98, 0.57, 0.90,
-      1.24, 0.30, 1.07, -0.08, 0.09, -1.45, 0.92, 0.81, 0.48, -0.35, -0.48, 1.14;
-  s.F.resize(14, 3);
-  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1, 5, 0, 6, 4, 5, 6, 7, 4, 6,
-      3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
+  const SurfaceMesh s = curvefem::test::crater_mesh();
   const MeshRun r = mesh(s, 2, 1e-2);
   EXPECT_EQ(r.stats.beveled_faces, 10);
   EXPECT_TRUE(r.stats.shell_section_verified) << r.stats.shell_non_section_prisms;
@@ -204,13 +199,7 @@ TEST(CurvedMesher, CraterPinchPointsMapBackThroughTheShell) {
   // back from φ(v): located on the curved boundary (Gauss–Newton, so (u, v) only near the pinch
   // corner) and pulled back through the shell projection (cmd_mesh.cpp, map_roundtrip). Near a
   // pinch corner the fiber is ~1e-16 long; the projection must still reach the input.
-  SurfaceMesh s;
-  s.V.resize(9, 3);
-  s.V << 0.44, 0, 1.40, -0.04, -0.11, 0.95, -0.55, -0.22, 0.97, -0.60, 0.70, 0.78, 0.98, 0.57, 0.90,
-      1.24, 0.30, 1.07, -0.08, 0.09, -1.45, 0.92, 0.81, 0.48, -0.35, -0.48, 1.14;
-  s.F.resize(14, 3);
-  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1, 5, 0, 6, 4, 5, 6, 7, 4, 6,
-      3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
+  const SurfaceMesh s = curvefem::test::crater_mesh();
   const double unit = curvefem::bbox_longest_edge(s.V);
   for (int order : {2, 3}) {
     const MeshRun r = mesh(s, order, 1e-2);

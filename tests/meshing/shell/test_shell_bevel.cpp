@@ -12,35 +12,14 @@
 #include "meshing/shell/bevel.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/verify.hpp"
+#include "tests/support/test_support.hpp"
 
 namespace sh = curvefem::meshing::shell;
 using curvefem::SurfaceMesh;
 
 namespace {
 
-// A crater: the pit vertex 1 surrounded by the rim 0, 5, 4, 7, 3, 2, 8 (heights 0.48 to 1.40,
-// most above the pit), closed below by the apex 6. Star-shaped around the origin, so embedded.
-// The rim vertices 0 and 5 are singular (no direction sees all their faces), so build_shell
-// pinches the rim edge (0, 5) at its rounded midpoint m. The face (5, 0, 6) across that edge
-// then enters, by the rounding of m, the prisms of (0, m, 1) and (m, 5, 1), whose pillar at the
-// pit does not see it: 2 prisms fail the section condition.
-SurfaceMesh crater() {
-  SurfaceMesh s;
-  s.V.resize(9, 3);
-  s.V << 0.44, 0, 1.40,    //
-      -0.04, -0.11, 0.95,  //
-      -0.55, -0.22, 0.97,  //
-      -0.60, 0.70, 0.78,   //
-      0.98, 0.57, 0.90,    //
-      1.24, 0.30, 1.07,    //
-      -0.08, 0.09, -1.45,  //
-      0.92, 0.81, 0.48,    //
-      -0.35, -0.48, 1.14;
-  s.F.resize(14, 3);
-  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1,  //
-      5, 0, 6, 4, 5, 6, 7, 4, 6, 3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
-  return s;
-}
+SurfaceMesh crater() { return curvefem::test::crater_mesh(); }
 
 double area(const SurfaceMesh& s, int f) {
   const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));

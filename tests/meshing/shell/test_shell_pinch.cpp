@@ -20,6 +20,7 @@
 #include "meshing/shell/shell_geometry.hpp"
 #include "meshing/shell/shell_intersection.hpp"
 #include "meshing/shell/verify.hpp"
+#include "tests/support/test_support.hpp"
 
 namespace sh = curvefem::meshing::shell;
 using curvefem::SurfaceMesh;
@@ -27,16 +28,7 @@ using Eigen::Vector3d;
 
 namespace {
 
-SurfaceMesh crater() {  // tests/meshing/shell/test_shell_bevel.cpp
-  SurfaceMesh s;
-  s.V.resize(9, 3);
-  s.V << 0.44, 0, 1.40, -0.04, -0.11, 0.95, -0.55, -0.22, 0.97, -0.60, 0.70, 0.78, 0.98, 0.57, 0.90,
-      1.24, 0.30, 1.07, -0.08, 0.09, -1.45, 0.92, 0.81, 0.48, -0.35, -0.48, 1.14;
-  s.F.resize(14, 3);
-  s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1, 5, 0, 6, 4, 5, 6, 7, 4, 6,
-      3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
-  return s;
-}
+SurfaceMesh crater() { return curvefem::test::crater_mesh(); }
 
 // A needle: the tip 0 over a ring of n vertices of radius about r at z = 0, closed by the centre
 // n + 1. The faces at the tip lean less than 0.5° from the vertical: no direction sees them all
