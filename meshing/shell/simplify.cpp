@@ -212,8 +212,12 @@ class ShellMesh : public TriMesh {
         return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
       });
       normals.erase(std::unique(normals.begin(), normals.end()), normals.end());
+      // The floating-point active set only: the exact fallback (CGAL's QP on Gmpzf) can take
+      // minutes on a nearly degenerate star, and the direction needs no proof here — the
+      // invariants check the rotated prisms exactly.
       Eigen::Vector3d e;
-      if (!most_visible_direction(normals, 1e-2, e)) return false;
+      if (detail::most_visible_direction_fast(normals, 1e-2, e) != detail::FastOutcome::direction)
+        return false;
       if (e.dot(d) > std::cos(1e-3)) return false;  // already there
       top.set(v, m + lt * e);
       base.set(v, m - lb * e);
