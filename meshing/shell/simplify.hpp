@@ -4,8 +4,9 @@
 //             vertex's pillar,
 //   flip      edge swaps of the middle surface that lower the worst 2-D MIPS of the two faces,
 //   rotate    pillar re-orientation: a vertex's pillar turns to the most visible direction
-//             (extrusion_direction.hpp) of its coarse star faces and the input faces its prisms
-//             track, keeping both half-lengths, so the pillars follow the coarse surface,
+//             (extrusion_direction.hpp, floating-point active set only: a star it cannot
+//             decide is skipped) of its coarse star faces and the input faces its prisms track,
+//             keeping both half-lengths, so the pillars follow the coarse surface,
 //   zoom      thickness growth: a vertex's base and top move away from the middle surface along
 //             the pillar (doubling each half, capped by max_half_thickness and by a fraction of
 //             the ray distance to the input), so a coarser middle surface still has the input
