@@ -256,6 +256,7 @@ struct InputSurfaceIndex::Impl {
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
   std::vector<Triangle> triangles;
+  std::vector<CGAL::Bbox_3> boxes;  // of `triangles`
   Tree tree;
   int id(const std::vector<Triangle>::const_iterator& it) const {
     return int(it - triangles.cbegin());
@@ -269,6 +270,8 @@ InputSurfaceIndex::InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::Matr
   m_impl->triangles.reserve(F.rows());
   for (int f = 0; f < F.rows(); ++f)
     m_impl->triangles.emplace_back(pt(V.row(F(f, 0))), pt(V.row(F(f, 1))), pt(V.row(F(f, 2))));
+  m_impl->boxes.reserve(F.rows());
+  for (const Triangle& t : m_impl->triangles) m_impl->boxes.push_back(t.bbox());
   m_impl->tree.insert(m_impl->triangles.cbegin(), m_impl->triangles.cend());
   m_impl->tree.build();
   m_impl->tree.accelerate_distance_queries();
@@ -329,6 +332,85 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   return false;
 }
 
+namespace {
+// True if a plane strictly separates the closed triangle from the closed tet: one of the tet's
+// facet planes with all three triangle corners strictly outside, or the triangle's plane with
+// all four tet corners strictly on one side. Exact (filtered orientation predicates); a cheap
+// rejection before CGAL's general triangle-tetrahedron test, which most bounding-box candidates
+// would otherwise pay for in interval arithmetic.
+bool strictly_separated(const Triangle& tri, const K::Tetrahedron_3& tet) {
+  static constexpr int facet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  for (int j = 0; j < 4; ++j) {
+    const Point &a = tet[facet[j][0]], &b = tet[facet[j][1]], &c = tet[facet[j][2]];
+    const auto inside = CGAL::orientation(a, b, c, tet[j]);
+    if (inside == CGAL::COPLANAR) continue;
+    bool all_out = true;
+    for (int k = 0; k < 3 && all_out; ++k) all_out = CGAL::orientation(a, b, c, tri[k]) == -inside;
+    if (all_out) return true;
+  }
+  const auto s0 = CGAL::orientation(tri[0], tri[1], tri[2], tet[0]);
+  if (s0 == CGAL::COPLANAR) return false;
+  for (int j = 1; j < 4; ++j)
+    if (CGAL::orientation(tri[0], tri[1], tri[2], tet[j]) != s0) return false;
+  return true;
+}
+}  // namespace
+
+namespace {
+// Traversal traits for AABB_tree::traversal (a CGAL-internal entry point, stable in the CGAL 5.5
+// of Debian 12) listing the primitives whose bounding box overlaps a query box. The tree's own
+// box query tests each candidate triangle against the box exactly, work the callers here redo
+// with the real shape anyway.
+struct BoxOverlapTraits {
+  const std::vector<Triangle>* triangles;
+  const std::vector<CGAL::Bbox_3>* boxes;
+  std::vector<int>* out;
+  bool go_further() const { return true; }
+  void intersection(const CGAL::Bbox_3& q, const Primitive& p) {
+    const int f = int(p.id() - triangles->cbegin());
+    if (CGAL::do_overlap(q, (*boxes)[std::size_t(f)])) out->push_back(f);
+  }
+  template <class Node>
+  bool do_intersect(const CGAL::Bbox_3& q, const Node& node) const {
+    return CGAL::do_overlap(q, node.bbox());
+  }
+};
+}  // namespace
+
+std::vector<int> InputSurfaceIndex::faces_touching_tets(
+    const std::vector<std::array<Eigen::Vector3d, 4>>& tets) const {
+  std::vector<int> out;
+  if (tets.empty()) return out;
+  std::vector<K::Tetrahedron_3> T;
+  std::vector<CGAL::Bbox_3> tb;
+  CGAL::Bbox_3 all;
+  for (const auto& t : tets) {
+    T.emplace_back(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
+    tb.push_back(T.back().bbox());
+    all += tb.back();
+  }
+  std::vector<int> candidates;
+  BoxOverlapTraits traits{&m_impl->triangles, &m_impl->boxes, &candidates};
+  m_impl->tree.traversal(all, traits);
+  for (int f : candidates) {
+    const Triangle& tri = m_impl->triangles[std::size_t(f)];
+    const CGAL::Bbox_3& fb = m_impl->boxes[std::size_t(f)];
+    for (std::size_t i = 0; i < T.size(); ++i) {
+      if (!CGAL::do_overlap(fb, tb[i])) continue;
+      // A triangle corner that IS a tet corner touches the closed tet (see faces_touching_tet).
+      bool shared = false;
+      for (int a = 0; a < 3 && !shared; ++a)
+        for (int j = 0; j < 4 && !shared; ++j) shared = tri.vertex(a) == T[i].vertex(j);
+      if (shared || (!strictly_separated(tri, T[i]) && CGAL::do_intersect(tri, T[i]))) {
+        out.push_back(f);
+        break;
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<int> InputSurfaceIndex::faces_touching_tet(
     const std::array<Eigen::Vector3d, 4>& t) const {
   const K::Tetrahedron_3 tet(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
@@ -342,7 +424,8 @@ std::vector<int> InputSurfaceIndex::faces_touching_tet(
     bool shared = false;
     for (int i = 0; i < 3 && !shared; ++i)
       for (int j = 0; j < 4 && !shared; ++j) shared = it->vertex(i) == tet.vertex(j);
-    if (shared || CGAL::do_intersect(*it, tet)) out.push_back(m_impl->id(it));
+    if (shared || (!strictly_separated(*it, tet) && CGAL::do_intersect(*it, tet)))
+      out.push_back(m_impl->id(it));
   }
   return out;
 }
@@ -373,7 +456,8 @@ std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) c
 
 bool InputSurfaceIndex::face_touches_tet(int f, const std::array<Eigen::Vector3d, 4>& t) const {
   const K::Tetrahedron_3 tet(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
-  return CGAL::do_intersect(m_impl->triangles[std::size_t(f)], tet);
+  const Triangle& tri = m_impl->triangles[std::size_t(f)];
+  return !strictly_separated(tri, tet) && CGAL::do_intersect(tri, tet);
 }
 
 bool InputSurfaceIndex::face_section_contact(int f, const std::array<Eigen::Vector3d, 4>& t) const {

@@ -73,6 +73,10 @@ class InputSurfaceIndex {
 
   // Input faces whose triangle intersects the (closed) tetrahedron (exact).
   std::vector<int> faces_touching_tet(const std::array<Eigen::Vector3d, 4>& tet) const;
+  // Input faces intersecting at least one of the closed tetrahedra (exact), in increasing order
+  // (one tree traversal for all of them).
+  std::vector<int> faces_touching_tets(
+      const std::vector<std::array<Eigen::Vector3d, 4>>& tets) const;
 
   // Non-degenerate input faces whose closed triangle contains p (exact), in increasing order.
   std::vector<int> faces_containing(const Eigen::Vector3d& p) const;

@@ -128,11 +128,9 @@ class ShellMesh : public TriMesh {
           q[k] = tet[k] < 3 ? (half == 0 ? b[local] : m[local]) : (half == 0 ? m[local] : t[local]);
         }
         if ((q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]) == 0) continue;
-        for (int x : input->faces_touching_tet(q)) touching.push_back(x);
         tets.push_back(q);
       }
-    std::sort(touching.begin(), touching.end());
-    touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
+    touching = input->faces_touching_tets(tets);
     // I2: a touching face failing the pillar test rejects the prism only if it is in section
     // contact with a split tet (meets the open tet, or lies in a facet plane and meets the
     // facet's relative interior; the argument is in shell_intersection.cpp). The track keeps
