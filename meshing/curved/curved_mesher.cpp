@@ -409,6 +409,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   Stopwatch watch;
   sh::ShellOptions shell_options;
   shell_options.max_thickness_rel = options.thickness_rel;
+  shell_options.max_thickness_per_edge = options.thickness_per_edge;
   shell_options.threads = options.threads;
   sh::ShellStats shell_stats;
   // Topological beveling where the input's own shell is not a section (meshing/shell/bevel.hpp):
@@ -453,6 +454,12 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       it->second += pass.seconds;
   }
   stats.coarse_median_thickness_rel = simplify_stats.median_half_thickness / unit;
+  {
+    const auto& why = simplify_stats.collapse_rejections;
+    stats.coarsen_rejections = {{"shape", why.shape},           {"distance", why.distance},
+                                {"positivity", why.positivity}, {"intersection", why.intersection},
+                                {"section", why.section},       {"coverage", why.coverage}};
+  }
   stats.coarse_min_thickness_rel = simplify_stats.min_half_thickness / unit;
   stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
   stats.stage_seconds.emplace_back("coarsen", watch.seconds());

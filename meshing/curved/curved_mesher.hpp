@@ -38,9 +38,14 @@
 namespace curvefem::meshing::curved {
 
 struct CurvedMeshOptions {
-  int order = 3;                                  // geometric order k, 1..4
-  double eps_rel = 1e-2;                          // distance bound, relative to the bbox edge
-  double thickness_rel = 0.02;                    // shell half-thickness cap
+  int order = 3;                // geometric order k, 1..4
+  double eps_rel = 1e-2;        // distance bound, relative to the bbox edge
+  double thickness_rel = 0.02;  // shell half-thickness cap
+  // Initial half-thickness cap per vertex, × its mean input edge length (ShellOptions; 0: off).
+  // Measured on the refined elephant (88,928 faces, median edge 0.5% of the bbox), K = 3,
+  // ε = 2%: 9,258 coarse faces without it, 662 with 1 (and 674 with 0.5); the dev meshes at
+  // ε = 1% change by -5% to +3%.
+  double thickness_per_edge = 1.0;
   std::vector<std::array<int, 2>> feature_edges;  // input vertex pairs (validated by the caller)
   int simplify_rounds = 5;
   // Depth of the slab layer below the curved surface, relative to the mean coarse edge length at
@@ -80,6 +85,8 @@ struct CurvedMeshStats {
   int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0;
   double coarse_median_thickness_rel = 0, coarse_min_thickness_rel = 0;
   std::vector<std::pair<std::string, double>> coarsen_seconds;  // per operation kind
+  // Collapses refused, by reason (shell::SimplifyStats::Rejections): why coarsening stopped.
+  std::vector<std::pair<std::string, long>> coarsen_rejections;
   bool shell_section_verified = false;
   int shell_non_section_prisms = 0;
   int faces_fully_curved = 0, faces_blended = 0, faces_linear = 0;

@@ -3,7 +3,8 @@
 //   2. Pinching: every edge joining two singular vertices is split at its midpoint (direction:
 //      the normalized sum of its two face normals), so a face has at most one singular corner.
 //   3. Initial half-thickness per vertex: 0.8 × the distance along ±direction to the input
-//      (ray cast, ignoring the vertex's own faces), capped; the smaller side is used for both.
+//      (ray cast, ignoring the vertex's own faces), capped (globally, and optionally relative to
+//      the vertex's mean edge length); the smaller side is used for both.
 //   4. Grading: a corner's step may not exceed twice the sum of the other two (3 rounds).
 //   5. Repair worklist until every face is valid: a face failing the exact 24-tet positivity
 //      test pulls its corners halfway toward its smallest step; a face whose base or top
@@ -144,6 +145,18 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
   const InputSurfaceIndex index(input.V, input.F);
   const double cap = options.max_thickness_rel * unit;
   std::vector<double> step(nv, 0.0);
+  std::vector<double> edge_sum(nv, 0.0);
+  std::vector<int> edge_count(nv, 0);
+  if (options.max_thickness_per_edge > 0)
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {  // each interior edge twice, from both faces: a mean anyway
+        const int a = F[f][k], b = F[f][(k + 1) % 3];
+        const double l = (V[a] - V[b]).norm();
+        edge_sum[a] += l;
+        edge_sum[b] += l;
+        ++edge_count[a];
+        ++edge_count[b];
+      }
   for (int v = 0; v < nv; ++v) {
     if (singular[v]) continue;
     // Faces to ignore: the input faces whose closure contains this vertex.
@@ -152,6 +165,8 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
     const double out = index.ray_distance(V[v], N[v], own),
                  in = index.ray_distance(V[v], -N[v], own);
     step[v] = std::min({cap, 0.8 * out, 0.8 * in});
+    if (edge_count[v] > 0)
+      step[v] = std::min(step[v], options.max_thickness_per_edge * edge_sum[v] / edge_count[v]);
   }
   stage("ray steps");
 

@@ -29,6 +29,11 @@ struct Shell {
 
 struct ShellOptions {
   double max_thickness_rel = 0.02;  // cap on each half-pillar, relative to the longest bbox edge
+  // > 0: also cap each vertex's half-pillar at this multiple of the mean length of its input
+  // edges. A shell much thicker than the input's triangles are wide turns small differences
+  // between neighbouring pillars into inverted prisms once coarsening starts; thickness growth
+  // during simplification (SimplifyOptions::zoom) restores it where the coarse faces allow.
+  double max_thickness_per_edge = 0;
   double singularity_tolerance = 1e-2;
   int smoothing_rounds = 3;
   int threads = 0;  // 0: oneTBB default

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -43,6 +44,14 @@ class ShellMesh : public TriMesh {
   double max_half_thickness = 0, zoom_ray_fraction = 0.45;
   const std::vector<std::vector<int>>* vf = nullptr;  // input vertex -> incident input faces
   std::array<std::vector<char>, 2> revisit;           // per smoothing kind: vertices to visit next
+  // Why operations were refused, counted while `count_rejections` is set (the collapse passes).
+  enum Reject { none, shape, distance, positivity, intersection, section, coverage, n_reasons };
+  std::array<std::atomic<long>, n_reasons> rejections{};
+  bool count_rejections = false;
+  Reject note(Reject why) {
+    if (count_rejections && why != none) rejections[why].fetch_add(1, std::memory_order_relaxed);
+    return why;
+  }
 
   double mips(Id f) const {
     const Cell& c = cell(f);
@@ -100,8 +109,9 @@ class ShellMesh : public TriMesh {
     return true;
   }
 
-  // Input faces touching the 6 canonical split tets of face f; false if a prism half fails.
-  bool prism_ok(Id f, std::vector<int>& touching) const {
+  // Input faces touching the 6 canonical split tets of face f; the first invariant a prism half
+  // fails, or `none`.
+  Reject prism_check(Id f, std::vector<int>& touching) const {
     const Cell& c = cell(f);
     const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
     std::array<Eigen::Vector3d, 3> b, m, t;
@@ -112,10 +122,10 @@ class ShellMesh : public TriMesh {
       t[k] = top[c[k]];
       s[k] = singular[c[k]];
     }
-    if (!shell_face_positive(b, m, t, s)) return false;  // I1
+    if (!shell_face_positive(b, m, t, s)) return positivity;  // I1
     const Eigen::Vector3i ids(input_vertex[c[0]], input_vertex[c[1]], input_vertex[c[2]]);
     if (input->triangle_intersects(b, s, ids) || input->triangle_intersects(t, s, ids))
-      return false;  // I3
+      return intersection;  // I3
     const int rot = min_rotation(F);
     const bool type_a = is_type_a(F);
     touching.clear();
@@ -150,9 +160,9 @@ class ShellMesh : public TriMesh {
       }
       if (seen) continue;
       for (const auto& q : tets)
-        if (input->face_section_contact(x, q)) return false;
+        if (input->face_section_contact(x, q)) return section;
     }
-    return !touching.empty();
+    return touching.empty() ? coverage : none;
   }
 
  protected:
@@ -217,8 +227,17 @@ class ShellMesh : public TriMesh {
       if (detail::most_visible_direction_fast(normals, 1e-2, e) != detail::FastOutcome::direction)
         return false;
       if (e.dot(d) > std::cos(1e-3)) return false;  // already there
-      top.set(v, m + lt * e);
-      base.set(v, m - lb * e);
+      // A turned pillar keeps its lengths, within the growth's ray cap along the new direction:
+      // a half-pillar grown where its ray missed the input may now aim at a nearby part of it,
+      // whose own shell may grow toward it (the invariants only keep base and top off the input).
+      double nt = lt, nb = lb;
+      const int x = input_vertex[v];
+      if (max_half_thickness > 0 && x >= 0) {
+        nt = std::min(nt, zoom_ray_fraction * input->ray_distance(m, e, (*vf)[x]));
+        nb = std::min(nb, zoom_ray_fraction * input->ray_distance(m, -e, (*vf)[x]));
+      }
+      top.set(v, m + nt * e);
+      base.set(v, m - nb * e);
       return true;
     }
     // Zoom: double both halves within the caps.
@@ -240,13 +259,19 @@ class ShellMesh : public TriMesh {
   Check check(const OperationRecord& r) {
     // The distance bound first: a few orientation tests per input vertex, far cheaper than the
     // prism checks, and the reason most collapses fail once the surface is coarse.
-    if (max_mips > 0 && !r.old_cells.empty() && !shape_ok(r)) return Check::shape;
-    if (max_distance > 0 && !rehome_owned(r)) return Check::shell;
+    if (max_mips > 0 && !r.old_cells.empty() && !shape_ok(r)) {
+      note(shape);
+      return Check::shape;
+    }
+    if (max_distance > 0 && !rehome_owned(r)) {
+      note(distance);
+      return Check::shell;
+    }
     std::vector<int> old_union, new_union, touching;
     for (Id f : r.old_cells.empty() ? r.new_cells : r.old_cells)
       old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     for (Id f : r.new_cells) {
-      if (!prism_ok(f, touching)) return Check::shell;
+      if (note(prism_check(f, touching)) != none) return Check::shell;
       track.set(f, touching);
       new_union.insert(new_union.end(), touching.begin(), touching.end());
     }
@@ -255,8 +280,10 @@ class ShellMesh : public TriMesh {
     std::sort(new_union.begin(), new_union.end());
     new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
     // Every input face the removed prisms touched is still inside one of the new ones.
-    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end()))
+    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end())) {
+      note(coverage);
       return Check::shell;
+    }
     return Check::ok;
   }
   bool invariants(const OperationRecord& r) override {
@@ -300,7 +327,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   }
   std::vector<int> touching;
   for (int f = 0; f < nf; ++f) {
-    m.prism_ok(Id(f), touching);
+    m.prism_check(Id(f), touching);
     m.track.set(Id(f), touching);
   }
   stats.faces_before = nf;
@@ -346,6 +373,11 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     return int(s.succeeded);
   };
   auto collapse_pass = [&] {
+    m.count_rejections = true;
+    struct Off {
+      ShellMesh& m;
+      ~Off() { m.count_rejections = false; }
+    } off{m};
     Pass pass;
     pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
       return m.collapse_edge(t);
@@ -422,6 +454,14 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     }
     if (collapsed == 0 && (round > 0 || changed == 0)) break;
   }
+
+  auto& why = stats.collapse_rejections;
+  why.shape = m.rejections[ShellMesh::shape];
+  why.distance = m.rejections[ShellMesh::distance];
+  why.positivity = m.rejections[ShellMesh::positivity];
+  why.intersection = m.rejections[ShellMesh::intersection];
+  why.section = m.rejections[ShellMesh::section];
+  why.coverage = m.rejections[ShellMesh::coverage];
 
   m.consolidate();
   Shell out;

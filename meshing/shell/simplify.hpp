@@ -51,6 +51,13 @@ struct SimplifyStats {
   int faces_before = 0, faces_after = 0;
   std::vector<std::pair<std::string, editing::PassStats>> passes;  // "collapse", "flip", ...
   int collapses = 0, flips = 0, rotations = 0, zooms = 0;
+  // Collapses refused, by the first check that failed: the triangle shape bound, the distance
+  // bound, then per new prism I1 positivity, I3 intersection, I2 section, and coverage (a prism
+  // touching no input face, or an input face the old prisms touched left uncovered). Collapses
+  // refused earlier (link condition, frozen or singular vertex) are not counted here.
+  struct Rejections {
+    long shape = 0, distance = 0, positivity = 0, intersection = 0, section = 0, coverage = 0;
+  } collapse_rejections;
   // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
   double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;
   double max_distance = 0;  // max |x - mid(u, v)| over owned input vertices at the end (if bounded)

@@ -25,6 +25,7 @@
 #include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/io/gmsh_session.hpp"
+#include "meshing/tetfill/isolated.hpp"
 
 namespace curvefem::meshing::tetfill {
 namespace {
@@ -369,47 +370,80 @@ bool read_vector(const std::string& buf, std::size_t& at, std::vector<T>& v) {
   return true;
 }
 
-/// Runs `body` in a forked child and returns its output through a pipe. A MeshingError thrown
-/// in the child is rethrown here with its text; a crash (signal) becomes a MeshingError.
-GmshOutput run_isolated(const std::function<void(GmshOutput&)>& body) {
+/// Runs `body` through detail::run_isolated (gmsh in a forked child), with GmshOutput
+/// serialized as its payload. Errors as detail::run_isolated; a payload that does not decode
+/// exactly throws MeshingError.
+GmshOutput run_gmsh_isolated(const std::function<void(GmshOutput&)>& body) {
+  const std::string buf = detail::run_isolated(
+      [&body] {
+        GmshOutput out;
+        body(out);
+        std::string bytes;
+        for (const auto* v : {&out.tet_tags, &out.tet_nodes, &out.all_tags, &out.surface_tags,
+                              &out.tri_tags, &out.tri_back})
+          append_vector(bytes, *v);
+        append_vector(bytes, out.all_coords);
+        append_bytes(bytes, &out.seconds, sizeof out.seconds);
+        return bytes;
+      },
+      {.failed = "tetfill: 3D meshing failed: ",
+       .name = "gmsh",
+       .note = "; gmsh 4.8's boundary recovery aborts on some near-degenerate surfaces"});
+  GmshOutput out;
+  std::size_t at = 0;
+  bool ok = true;
+  for (auto* v : {&out.tet_tags, &out.tet_nodes, &out.all_tags, &out.surface_tags, &out.tri_tags,
+                  &out.tri_back})
+    ok = ok && read_vector(buf, at, *v);
+  ok = ok && read_vector(buf, at, out.all_coords) && at + sizeof out.seconds == buf.size();
+  if (!ok) throw MeshingError("tetfill: 3D meshing failed: truncated output from the gmsh child");
+  std::memcpy(&out.seconds, buf.data() + at, sizeof out.seconds);
+  return out;
+}
+
+}  // namespace
+
+namespace detail {
+
+std::string run_isolated(const std::function<std::string()>& body, const IsolationText& text) {
   int fds[2];
   if (::pipe(fds) != 0)
-    throw MeshingError(std::string("tetfill: cannot create a pipe: ") + std::strerror(errno));
+    throw MeshingError(text.failed + "cannot create a pipe: " + std::strerror(errno));
   std::fflush(stdout);
   std::fflush(stderr);
   const pid_t pid = ::fork();
   if (pid < 0) {
     ::close(fds[0]);
     ::close(fds[1]);
-    throw MeshingError(std::string("tetfill: cannot fork: ") + std::strerror(errno));
+    throw MeshingError(text.failed + "cannot fork: " + std::strerror(errno));
   }
-  if (pid == 0) {  // child: run, serialize, leave without running the parent's destructors
+  if (pid == 0) {  // child: run, report, leave without running the parent's destructors
     ::close(fds[0]);
+    char tag = '\0';
     std::string buf;
     try {
-      GmshOutput out;
-      body(out);
-      buf.push_back('\0');
-      for (const auto* v : {&out.tet_tags, &out.tet_nodes, &out.all_tags, &out.surface_tags,
-                            &out.tri_tags, &out.tri_back})
-        append_vector(buf, *v);
-      append_vector(buf, out.all_coords);
-      append_bytes(buf, &out.seconds, sizeof out.seconds);
+      buf = body();
     } catch (const std::exception& e) {
-      buf = std::string(1, '\1') + e.what();
+      tag = '\1', buf = e.what();
     } catch (...) {
-      buf = std::string(1, '\1') + "tetfill: 3D meshing failed: unknown error in gmsh";
+      tag = '\1', buf = text.failed + "unknown error in " + text.name;
     }
-    std::size_t done = 0;
-    while (done < buf.size()) {
-      const ssize_t w = ::write(fds[1], buf.data() + done, buf.size() - done);
-      if (w < 0 && errno == EINTR) continue;
-      if (w <= 0) ::_exit(3);
-      done += std::size_t(w);
-    }
+    auto write_all = [&](const char* p, std::size_t n) {
+      std::size_t done = 0;
+      while (done < n) {
+        const ssize_t w = ::write(fds[1], p + done, n - done);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) ::_exit(3);
+        done += std::size_t(w);
+      }
+    };
+    write_all(&tag, 1);
+    write_all(buf.data(), buf.size());
     ::close(fds[1]);
     ::_exit(0);
   }
+  // Parent: read to the end before waiting, else a payload larger than the pipe buffer would
+  // block the child's write while we block in waitpid.
   ::close(fds[1]);
   std::string buf;
   char chunk[1 << 16];
@@ -424,26 +458,18 @@ GmshOutput run_isolated(const std::function<void(GmshOutput&)>& body) {
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   if (WIFSIGNALED(status))
-    throw MeshingError("tetfill: 3D meshing failed: gmsh crashed (signal " +
+    throw MeshingError(text.failed + text.name + " crashed (signal " +
                        std::to_string(WTERMSIG(status)) + " " + strsignal(WTERMSIG(status)) +
-                       "; gmsh 4.8's boundary recovery aborts on some near-degenerate surfaces)");
+                       text.note + ")");
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || buf.empty())
-    throw MeshingError("tetfill: 3D meshing failed: the gmsh child process exited with status " +
+    throw MeshingError(text.failed + "the " + text.name + " child process exited with status " +
                        std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1));
   if (buf[0] == '\1') throw MeshingError(buf.substr(1));
-  GmshOutput out;
-  std::size_t at = 1;
-  bool ok = true;
-  for (auto* v : {&out.tet_tags, &out.tet_nodes, &out.all_tags, &out.surface_tags, &out.tri_tags,
-                  &out.tri_back})
-    ok = ok && read_vector(buf, at, *v);
-  ok = ok && read_vector(buf, at, out.all_coords) && at + sizeof out.seconds == buf.size();
-  if (!ok) throw MeshingError("tetfill: 3D meshing failed: truncated output from the gmsh child");
-  std::memcpy(&out.seconds, buf.data() + at, sizeof out.seconds);
-  return out;
+  buf.erase(0, 1);
+  return buf;
 }
 
-}  // namespace
+}  // namespace detail
 
 TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                             const TetFillOptions& options) {
@@ -534,7 +560,7 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   };
   GmshOutput g;
   if (options.isolate)
-    g = run_isolated([&](GmshOutput& out) { run_gmsh(out, 1); });
+    g = run_gmsh_isolated([&](GmshOutput& out) { run_gmsh(out, 1); });
   else
     run_gmsh(g, options.threads);
   result.gmsh_seconds = g.seconds;

@@ -116,7 +116,7 @@ namespace cv = meshing::curved;
 struct MeshArgs {
   std::string input, output, features;
   int order = 3;
-  double eps = 1e-2, thickness = 0.02, feature_angle = 60;
+  double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
@@ -156,6 +156,10 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--thickness", args->thickness, "shell half-thickness cap (relative)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--thickness-per-edge", args->thickness_per_edge,
+                  "initial shell half-thickness cap per vertex, x its mean input edge length "
+                  "(0: off; default 1)")
+      ->check(CLI::NonNegativeNumber);
   auto* ff = sub->add_option("--features", args->features,
                              "JSON list of feature edges as input vertex-index pairs");
   auto* fa = sub->add_option("--feature-angle", args->feature_angle,
@@ -188,6 +192,7 @@ void register_mesh(CLI::App& app) {
     options.order = args->order;
     options.eps_rel = args->eps;
     options.thickness_rel = args->thickness;
+    options.thickness_per_edge = args->thickness_per_edge;
     options.threads = args->global.threads;
     options.deterministic = !args->nondeterministic;
     options.optimize.sweeps = args->optimize_sweeps;
@@ -255,6 +260,12 @@ void register_mesh(CLI::App& app) {
           {"thickness_growths", stats.coarsen_zooms},
           {"median_half_thickness_rel", stats.coarse_median_thickness_rel},
           {"min_half_thickness_rel", stats.coarse_min_thickness_rel},
+          {"collapses_refused",
+           [&] {
+             nlohmann::ordered_json j = nlohmann::ordered_json::object();
+             for (const auto& [why, n] : stats.coarsen_rejections) j[why] = n;
+             return j;
+           }()},
           {"seconds",
            [&] {
              nlohmann::ordered_json j = nlohmann::ordered_json::object();

@@ -198,6 +198,13 @@ void register_shell(CLI::App& app) {
         {"simplify_flips", simplify.flips},
         {"simplify_pillar_rotations", simplify.rotations},
         {"simplify_zooms", simplify.zooms},
+        {"simplify_collapses_refused",
+         {{"shape", simplify.collapse_rejections.shape},
+          {"distance", simplify.collapse_rejections.distance},
+          {"positivity", simplify.collapse_rejections.positivity},
+          {"intersection", simplify.collapse_rejections.intersection},
+          {"section", simplify.collapse_rejections.section},
+          {"coverage", simplify.collapse_rejections.coverage}}},
         {"singular_vertices", stats.singular_vertices},
         {"pinch_splits", stats.pinch_splits},
         {"beveling", beveled.stats.needed ? "applied" : "not needed"},
@@ -208,13 +215,14 @@ void register_shell(CLI::App& app) {
         {"median_thickness_rel", stats.median_thickness_rel},
         {"max_thickness_rel", stats.max_thickness_rel},
         {"simplified_thickness_rel",
-         args->no_simplify ? nlohmann::ordered_json(nullptr)
-                           : nlohmann::ordered_json{{"min", simplify.min_half_thickness /
-                                                                bbox_longest_edge(input.V)},
-                                                    {"median", simplify.median_half_thickness /
-                                                                   bbox_longest_edge(input.V)},
-                                                    {"max", simplify.max_half_thickness /
-                                                                bbox_longest_edge(input.V)}}},
+         args->no_simplify
+             ? nlohmann::ordered_json(nullptr)
+             : nlohmann::ordered_json{{"min",
+                                       simplify.min_half_thickness / bbox_longest_edge(input.V)},
+                                      {"median",
+                                       simplify.median_half_thickness / bbox_longest_edge(input.V)},
+                                      {"max",
+                                       simplify.max_half_thickness / bbox_longest_edge(input.V)}}},
         {"positive_verified", check.positive()},
         {"non_positive_prisms", check.non_positive_faces},
         {"intersection_free_verified", check.separated()},

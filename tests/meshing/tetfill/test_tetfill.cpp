@@ -2,21 +2,35 @@
 // a cube with a cavity, two disjoint cubes), invalid inputs, and verify_tetfill catching
 // tampered results. Every surface vertex must come back bit-identical, every surface triangle
 // must be a boundary face, and the tets must add up to the enclosed volume.
+// TetFillIsolated: detail::run_isolated (the forked child fill_interior runs gmsh in) with
+// children that abort, segfault, throw, exit, or return a payload larger than a pipe buffer; and
+// fill_interior with and without isolation giving the same tets and the same errors.
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <csignal>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <limits>
 #include <map>
+#include <random>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
+#include "meshing/tetfill/isolated.hpp"
 #include "meshing/tetfill/tetfill.hpp"
 
 namespace tf = curvefem::meshing::tetfill;
@@ -342,9 +356,11 @@ TEST(TetFill, WithoutOptimizationStillValid) {
 
 TEST(TetFill, RepeatableAndSameAtTwoThreads) {
   // gmsh is global state: a second call (and a call with 2 threads) must give the same mesh.
+  // In process: an isolated child always runs gmsh on one thread.
   const Surface s = torus(24, 10, 1.0, 0.4);
   tf::TetFillOptions two;
   two.threads = 2;
+  two.isolate = false;
   const tf::TetFillResult a = tf::fill_interior(s.V, s.F);
   const tf::TetFillResult b = tf::fill_interior(s.V, s.F, two);
   ASSERT_EQ(a.T.rows(), b.T.rows());
@@ -442,4 +458,151 @@ TEST(TetFillVerify, CatchesTamperedResults) {
   const auto vdd = tf::verify_tetfill(s.V, s.F, doubled);
   EXPECT_GT(vdd.bad_interior_faces + vdd.extra_boundary_faces, 0);
   EXPECT_FALSE(vdd.valid());
+}
+
+// ---- isolation (detail::run_isolated, the code path of TetFillOptions::isolate) -------------
+// Each test fails if the body ran in the test process instead of a child: the crash tests would
+// kill the test binary, the others check the child's pid or that its side effects stay there.
+
+namespace {
+
+namespace detail = curvefem::meshing::tetfill::detail;
+
+const detail::IsolationText k_text{.failed = "test: ", .name = "worker", .note = "; note"};
+
+/// Called in the child before a deliberate crash: no core file.
+void no_core_dump() {
+  const rlimit zero{0, 0};
+  setrlimit(RLIMIT_CORE, &zero);
+}
+
+/// The text of the MeshingError run_isolated throws ("no MeshingError" if it returns); other
+/// exception types propagate and fail the test.
+std::string isolated_error(const std::function<std::string()>& body) {
+  try {
+    detail::run_isolated(body, k_text);
+  } catch (const curvefem::MeshingError& e) {
+    return e.what();
+  }
+  return "no MeshingError";
+}
+
+std::string pid_text(pid_t pid) { return "pid " + std::to_string(pid); }
+
+}  // namespace
+
+TEST(TetFillIsolated, AbortInChildIsMeshingErrorNamingTheSignal) {
+  const std::string m = isolated_error([] {
+    no_core_dump();
+    std::abort();
+    return std::string();
+  });
+  // Reaching this line is the parent surviving the child's abort.
+  EXPECT_EQ(m, "test: worker crashed (signal " + std::to_string(SIGABRT) + " " +
+                   strsignal(SIGABRT) + "; note)");
+  EXPECT_NE(m.find("Aborted"), std::string::npos) << m;  // glibc's strsignal(SIGABRT)
+  // The parent can go on isolating after a crash.
+  EXPECT_EQ(detail::run_isolated([] { return std::string("after"); }), "after");
+}
+
+TEST(TetFillIsolated, SegfaultInChildIsMeshingError) {
+  const std::string m = isolated_error([] {
+    no_core_dump();
+    std::raise(SIGSEGV);
+    return std::string();
+  });
+  EXPECT_EQ(m, "test: worker crashed (signal " + std::to_string(SIGSEGV) + " " +
+                   strsignal(SIGSEGV) + "; note)");
+}
+
+TEST(TetFillIsolated, ChildErrorsAreRethrownWithTheirText) {
+  // MeshingError: same text, thrown in another process (its pid is in the text).
+  const std::string m = isolated_error(
+      []() -> std::string { throw curvefem::MeshingError("xyz from " + pid_text(getpid())); });
+  EXPECT_NE(m.find("xyz from pid "), std::string::npos) << m;
+  EXPECT_EQ(m.find(pid_text(getpid())), std::string::npos) << "body ran in the parent: " << m;
+  // Any std::exception arrives as a MeshingError with its text (a runtime_error would escape
+  // isolated_error if the body ran here).
+  EXPECT_EQ(isolated_error([]() -> std::string { throw std::runtime_error("abc"); }), "abc");
+  // Anything else, and a child that leaves without reporting.
+  EXPECT_EQ(isolated_error([]() -> std::string { throw 42; }), "test: unknown error in worker");
+  EXPECT_EQ(isolated_error([]() -> std::string { ::_exit(7); }),
+            "test: the worker child process exited with status 7");
+}
+
+TEST(TetFillIsolated, LargePayloadArrivesBitIdentical) {
+  // 2^16 doubles (special values included) and 2^16 ints: 768 KiB, far more than a 64 KiB pipe
+  // buffer, so reading only after waitpid would deadlock (the alarm then kills the test).
+  std::mt19937_64 rng(12345);
+  std::vector<double> d(1 << 16);
+  std::vector<std::int32_t> k(1 << 16);
+  for (auto& x : d) x = std::ldexp(static_cast<double>(rng()), -64) * 1e3 - 500;
+  for (auto& x : k) x = static_cast<std::int32_t>(rng());
+  d[0] = -0.0, d[1] = std::numeric_limits<double>::denorm_min(), d[2] = INFINITY;
+  d[3] = std::numeric_limits<double>::quiet_NaN(), d[4] = std::nextafter(1.0, 2.0);
+  int touched = 0;
+  ::alarm(30);
+  const std::string bytes = detail::run_isolated(
+      [&] {
+        touched = 1;  // in the child's copy of the memory only
+        const pid_t pid = getpid();
+        std::string b(sizeof pid + d.size() * sizeof(double) + k.size() * sizeof(std::int32_t),
+                      '\0');
+        std::memcpy(b.data(), &pid, sizeof pid);
+        std::memcpy(b.data() + sizeof pid, d.data(), d.size() * sizeof(double));
+        std::memcpy(b.data() + sizeof pid + d.size() * sizeof(double), k.data(),
+                    k.size() * sizeof(std::int32_t));
+        return b;
+      },
+      k_text);
+  ::alarm(0);
+  EXPECT_EQ(touched, 0) << "body ran in the parent";
+  ASSERT_EQ(bytes.size(), sizeof(pid_t) + d.size() * sizeof(double) + k.size() * 4);
+  pid_t child = 0;
+  std::memcpy(&child, bytes.data(), sizeof child);
+  EXPECT_NE(child, getpid());
+  std::vector<double> d_back(d.size());
+  std::vector<std::int32_t> k_back(k.size());
+  std::memcpy(d_back.data(), bytes.data() + sizeof child, d.size() * sizeof(double));
+  std::memcpy(k_back.data(), bytes.data() + sizeof child + d.size() * sizeof(double),
+              k.size() * sizeof(std::int32_t));
+  EXPECT_EQ(std::memcmp(d_back.data(), d.data(), d.size() * sizeof(double)), 0);
+  EXPECT_EQ(k_back, k);
+  // An empty payload is a success, not a child that died before reporting.
+  EXPECT_EQ(detail::run_isolated([] { return std::string(); }), "");
+}
+
+TEST(TetFillIsolated, FillInteriorSameWithAndWithoutIsolation) {
+  tf::TetFillOptions in_process, isolated;
+  in_process.isolate = false;
+  isolated.isolate = true;
+  // A ball with interior vertices and a cube with a cavity (two gmsh surfaces).
+  for (const Surface& s : {icosphere(3), voxel_surface(3, [](int i, int j, int k) {
+                             return !(i == 1 && j == 1 && k == 1);
+                           })}) {
+    const tf::TetFillResult a = fill_and_check(s, in_process);
+    const tf::TetFillResult b = fill_and_check(s, isolated);
+    EXPECT_GT(a.V.rows(), s.V.rows());
+    ASSERT_EQ(a.T.rows(), b.T.rows());
+    ASSERT_EQ(a.V.rows(), b.V.rows());
+    EXPECT_TRUE((a.T.array() == b.T.array()).all());
+    EXPECT_EQ(std::memcmp(a.V.data(), b.V.data(), a.V.size() * sizeof(double)), 0);
+    EXPECT_GT(b.gmsh_seconds, 0);
+  }
+  // A gmsh failure in the child arrives with the same text as in the process.
+  Surface bad = icosphere(2);
+  bad.V.row(0) *= -1.6;
+  std::string errors[2];
+  for (const bool isolate : {false, true}) {
+    tf::TetFillOptions o;
+    o.isolate = isolate;
+    try {
+      tf::fill_interior(bad.V, bad.F, o);
+      ADD_FAILURE() << "no exception";
+    } catch (const curvefem::MeshingError& e) {
+      errors[isolate] = e.what();
+    }
+  }
+  EXPECT_NE(errors[0].find("boundary recovery failed"), std::string::npos) << errors[0];
+  EXPECT_EQ(errors[1], errors[0]);
 }
