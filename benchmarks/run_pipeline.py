@@ -48,6 +48,9 @@ ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/pipeline
 ap.add_argument("--reuse", action="store_true",
                 help="keep a run of a previous invocation (same --work) whose case variant is "
                      "unchanged; only changed or new runs are run again")
+ap.add_argument("--rerun", nargs="*", default=[], metavar="METHOD",
+                help="with --reuse: run these methods again even if unchanged (e.g. curved after a "
+                "mesher change)")
 ap.add_argument("--studies", action=argparse.BooleanOptionalAction, default=True,
                 help="also run cases/study_sphere_curved_p2.json and study_sphere_dense_p1.json "
                      "(error vs DOFs for both pipelines on one shape)")
@@ -102,7 +105,7 @@ PREVIOUS = previous_runs() if args.reuse else {}
 def run(name, method):
     old = PREVIOUS.get((name, method))
     file, out, case = variant(name, method)
-    if old and old.get("case_json") == case and old.get("report"):
+    if old and old.get("case_json") == case and old.get("report") and method not in args.rerun:
         old["reused"] = True
         print("%-28s %-6s reused (%s)" % (name, method, old["uptime"]), file=sys.stderr)
         return old

@@ -339,9 +339,10 @@ def render(records, meta):
         if stalled:
             w("- Simplification removed less than 10%% of the faces (%s): %s." %
               (mode, ", ".join(stalled)))
-    w("- The 2-thread numbers were measured on a 2-core machine whose 1-min load was already "
-      "around 1 from other users' jobs (see the load column of the raw data), so the second "
-      "thread was contended; the speedups are lower bounds for an idle machine.")
+    w("- The 2-thread runs started at the 1-min load given at the top (on a quiet machine, a "
+      "load near 1 is mostly the previous run's own load decaying). On 2 cores the second "
+      "thread competes with anything else running, so the speedups are lower bounds for an "
+      "idle machine.")
     # stage breakdown for the simplified single-thread mode
     for mode in ("simp_t1",):
         reps = [by[(m, mode)]["report"] for m in meshes

@@ -300,8 +300,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   c.method = dense_input ? "curved" : "given";
 
   if (const json* m = r.get(j, "meshing")) {
-    r.only_keys(*m, "/meshing",
-                {"method", "order", "eps", "thickness", "validate", "deterministic"});
+    r.only_keys(
+        *m, "/meshing",
+        {"method", "order", "eps", "thickness", "thickness_per_edge", "validate", "deterministic"});
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
     if (c.method != "given" && c.method != "curved" && c.method != "dense")
       fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
@@ -313,7 +314,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
            "\"" + c.method +
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
-    for (const char* key : {"order", "eps", "thickness", "validate", "deterministic"})
+    for (const char* key :
+         {"order", "eps", "thickness", "thickness_per_edge", "validate", "deterministic"})
       if (r.get(*m, key) && c.method != "curved")
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
@@ -325,6 +327,11 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       c.thickness = r.number(*v, "/meshing/thickness");
       if (!(c.thickness > 0 && c.thickness <= 0.5))
         fail("/meshing/thickness", "must be in (0, 0.5]", r.file);
+    }
+    if (const json* v = r.get(*m, "thickness_per_edge")) {
+      c.thickness_per_edge = r.number(*v, "/meshing/thickness_per_edge");
+      if (!(c.thickness_per_edge >= 0 && c.thickness_per_edge <= 100))
+        fail("/meshing/thickness_per_edge", "must be in [0, 100] (0: off)", r.file);
     }
     if (const json* v = r.get(*m, "validate")) {
       if (!v->is_boolean()) fail("/meshing/validate", "expected true/false", r.file);
@@ -483,6 +490,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     res["meshing"]["order"] = c.order;
     res["meshing"]["eps"] = c.eps;
     res["meshing"]["thickness"] = c.thickness;
+    res["meshing"]["thickness_per_edge"] = c.thickness_per_edge;
     res["meshing"]["validate"] = c.validate;
     res["meshing"]["deterministic"] = c.deterministic;
   }

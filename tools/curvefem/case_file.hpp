@@ -45,12 +45,13 @@ struct CaseSpec {
   std::string features = "auto";  ///< auto | none | angle | file
   double feature_angle = 60.0;
   std::filesystem::path feature_file;
-  std::string method = "given";  ///< given | curved | dense
-  int order = 3;                 ///< curved: geometric order k
-  double eps = 1e-2;             ///< curved: distance bound, relative to the bbox edge
-  double thickness = 0.02;       ///< curved: shell half-thickness cap (relative)
-  bool validate = true;          ///< curved: independent validation of the mesh (report.json)
-  bool deterministic = true;     ///< curved: single-threaded coarsening, bit-identical output
+  std::string method = "given";     ///< given | curved | dense
+  int order = 3;                    ///< curved: geometric order k
+  double eps = 1e-2;                ///< curved: distance bound, relative to the bbox edge
+  double thickness = 0.02;          ///< curved: shell half-thickness cap (relative)
+  double thickness_per_edge = 1.0;  ///< curved: initial cap × each vertex's mean edge (0: off)
+  bool validate = true;             ///< curved: independent validation of the mesh (report.json)
+  bool deterministic = true;        ///< curved: single-threaded coarsening, bit-identical output
   bool dense_surface() const { return method == "curved" || method == "dense"; }
   std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
   Expression kappa;                 ///< poisson

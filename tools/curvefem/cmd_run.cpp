@@ -316,6 +316,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     options.order = spec.order;
     options.eps_rel = spec.eps;
     options.thickness_rel = spec.thickness;
+    options.thickness_per_edge = spec.thickness_per_edge;
     options.threads = threads;
     options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);
