@@ -248,6 +248,12 @@ def fmt(x, spec="%.3g"):
     return "—" if x is None else spec % x
 
 
+def final_energy(rep):
+    """Potential energy at the last Newton iterate of a nonlinear run, or None."""
+    newton = (rep or {}).get("physics_details", {}).get("newton") or []
+    return newton[-1].get("energy") if newton else None
+
+
 def ratio(a, b):
     return None if a is None or b is None or b == 0 else a / b
 
@@ -295,6 +301,7 @@ def main():
              "| total − errors s | L2 error | surface L2 | surface max | exit |")
     L.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     verdicts = []
+    energy_cases = []
     for pair in results:
         for m in [m for m in METHODS if m in pair]:
             r = pair[m]
@@ -355,6 +362,15 @@ def main():
         ref = pair.get("agreement_reference")
         if error_ok is None and ref and ref["curved"] and ref["dense"]:
             error_ok = ref["curved"]["rms_rel"] <= ref["dense"]["rms_rel"]
+        # Hyperelasticity without a reference: conforming approximations of the same minimum
+        # problem have potential energies above the exact one, so the lower final energy is the
+        # better solution in the energy sense (the two domains differ by up to eps).
+        ec, ed = final_energy(c), final_energy(d)
+        if ec is not None and ed is not None:
+            agree += "; final energy curved %.5g, dense %.5g" % (ec, ed)
+            if error_ok is None:
+                error_ok = ec <= ed
+                energy_cases.append(name)
         met = rd >= 50 and rt >= 20 and error_ok is not False
         verdicts.append((name, met))
         L.append("| %s | %.2f× | %.2f× | %.2f× | %.2f× | %s | %s | %s | %s |"
@@ -365,6 +381,11 @@ def main():
                                                         "DOFs, time only)")))
     L.append("")
     L.append("Goal met on %d of %d cases." % (sum(v for _, v in verdicts), len(verdicts)))
+    if energy_cases:
+        L.append("Error for %s (no exact solution, no dense reference): the lower final potential "
+                 "energy counts as the better solution (conforming approximations of the same "
+                 "minimum problem lie above the exact energy; the curved domain differs from the "
+                 "dense one by up to eps)." % ", ".join(energy_cases))
     L.append("")
     if studies:
         L += study_section(studies)
