@@ -38,6 +38,9 @@ ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvef
 ap.add_argument("--tetfill-tool", default=None)
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/curved.md"))
 ap.add_argument("--work", default="/tmp/curved_bench")
+ap.add_argument("--render-from", metavar="JSONL",
+                help="run nothing: render --out from these raw records (the last record per mesh "
+                     "and order wins)")
 args = ap.parse_args()
 command = "/usr/bin/python3 " + " ".join(shlex.quote(a) for a in ["benchmarks/run_curved.py"] + sys.argv[1:])
 
@@ -85,6 +88,16 @@ def dense_baseline(path):
 
 
 def main():
+    if args.render_from:
+        latest = {}
+        with open(args.render_from) as f:
+            for line in f:
+                if line.strip():
+                    r = json.loads(line)
+                    latest[(r["mesh"], r["order"])] = r
+        order = {os.path.splitext(m["file"])[0]: i for i, m in enumerate(manifest())}
+        render(sorted(latest.values(), key=lambda r: (order.get(r["mesh"], 1 << 30), r["order"])))
+        return
     meshes = [m["file"] for m in manifest()]
     if args.meshes:
         meshes = [m for m in meshes if m in args.meshes]
@@ -167,6 +180,27 @@ def render(records):
     w.append("- Valid runs: %d of %d." % (ok, len(records)))
     if times:
         w.append("- Median total time: %.1f s (goal: under 60 s)." % statistics.median(times))
+    # Why coarsening stopped: the collapses the shell refused, by the first failed check.
+    why_rows = []
+    for r in records:
+        refused = ((r["report"] or {}).get("coarsening") or {}).get("collapses_refused")
+        if r["order"] != min(args.orders) or not refused:
+            continue
+        total = sum(refused.values())
+        top = sorted(refused.items(), key=lambda kv: -kv[1])
+        why_rows.append("| %s | %d | %s |" % (r["mesh"], total, ", ".join(
+            "%s %.0f%%" % (k, 100.0 * v / total) for k, v in top if total and v > 0.05 * total)))
+    if why_rows:
+        w.append("\n## Why coarsening stopped (K = %d)\n" % min(args.orders))
+        w.append("Collapses the coarsening refused, by the first check that failed "
+                 "(`coarsening.collapses_refused` in report.json; attempts, not distinct edges: "
+                 "an edge is tried again in every round). shape = the coarse triangle MIPS bound "
+                 "(10); distance = the eps bound at an input vertex; positivity / intersection / "
+                 "section = shell invariants I1 / I3 / I2 of a new prism; coverage = an input "
+                 "face left without a prism. Reasons above 5% are listed.\n")
+        w.append("| mesh | refused | main reasons |")
+        w.append("|---|---|---|")
+        w += why_rows
     w.append("\n## Beside the reference implementation (bichon, P4 tets, measured here)\n")
     w.append("| mesh | bichon s | bichon tets | bichon surface tris | curvefem K=4 s | curvefem K=4 tets | "
              "curvefem boundary tris | speed ratio |")
