@@ -23,11 +23,13 @@ TEST(ShellSimplify, CoarsensASphereShellAndKeepsItValid) {
   const SurfaceMesh sphere = curvefem::make_icosphere(3);  // 1280 faces
   sh::ShellStats stats;
   const sh::Shell shell = build(sphere, stats);
+  int unbounded_faces = 0;
   for (int threads : {1, 2}) {
     sh::SimplifyOptions o;
     o.threads = threads;
     sh::SimplifyStats s;
     const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, s);
+    if (threads == 1) unbounded_faces = s.faces_after;
     EXPECT_EQ(s.faces_before, 1280);
     EXPECT_EQ(s.faces_after, coarse.F.rows());
     EXPECT_LT(coarse.F.rows(), 1280 / 3) << threads << " threads";
@@ -42,7 +44,21 @@ TEST(ShellSimplify, CoarsensASphereShellAndKeepsItValid) {
       ASSERT_GE(coarse.input_vertex[m], 0);
       EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(coarse.input_vertex[m])).norm(), 0.0);
     }
+    // Without a distance bound or a shape guard only shell invariants refuse collapses, and
+    // something must have stopped the coarsening.
+    const auto& why = s.collapse_rejections;
+    EXPECT_EQ(why.distance, 0);
+    EXPECT_EQ(why.shape, 0);
+    EXPECT_GT(why.positivity + why.intersection + why.section + why.coverage, 0) << threads;
   }
+  // With a tight distance bound and the shape guard, both show up among the reasons.
+  sh::SimplifyOptions o;
+  o.max_distance = 0.01 * curvefem::bbox_longest_edge(sphere.V);
+  o.max_mips = 10;
+  sh::SimplifyStats s;
+  sh::simplify_shell(shell, sphere, o, s);
+  EXPECT_GT(s.collapse_rejections.distance, 0);
+  EXPECT_GT(s.faces_after, unbounded_faces) << "a tight bound coarsens less";
 }
 
 TEST(ShellSimplify, CoarsensABoxShellAcrossSharpEdges) {
