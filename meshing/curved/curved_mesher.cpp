@@ -445,6 +445,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   stats.coarsen_flips = simplify_stats.flips;
   stats.coarsen_rotations = simplify_stats.rotations;
   stats.coarsen_zooms = simplify_stats.zooms;
+  stats.coarsen_pans = simplify_stats.pans;
   for (const auto& [name, pass] : simplify_stats.passes) {
     auto it = std::find_if(stats.coarsen_seconds.begin(), stats.coarsen_seconds.end(),
                            [&](const auto& e) { return e.first == name; });

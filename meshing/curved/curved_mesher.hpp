@@ -82,7 +82,8 @@ struct CurvedMeshStats {
   int shell_faces = 0, coarse_faces = 0;
   // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness
   // (the smaller half-pillar per vertex) relative to the longest bbox edge.
-  int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0;
+  int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0,
+      coarsen_pans = 0;
   double coarse_median_thickness_rel = 0, coarse_min_thickness_rel = 0;
   std::vector<std::pair<std::string, double>> coarsen_seconds;  // per operation kind
   // Collapses refused, by reason (shell::SimplifyStats::Rejections): why coarsening stopped.

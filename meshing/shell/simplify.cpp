@@ -39,11 +39,13 @@ class ShellMesh : public TriMesh {
   double max_distance = 0;
   double max_mips = 0;
   const std::vector<char>* frozen = nullptr;
-  enum class Smoothing { rotate, zoom };
+  enum class Smoothing { rotate, zoom, pan };
   Smoothing smoothing_mode = Smoothing::rotate;
   double max_half_thickness = 0, zoom_ray_fraction = 0.45;
   const std::vector<std::vector<int>>* vf = nullptr;  // input vertex -> incident input faces
-  std::array<std::vector<char>, 2> revisit;           // per smoothing kind: vertices to visit next
+  std::array<std::vector<char>, 3> revisit;           // per smoothing kind: vertices to visit next
+  // Pan passes (one thread): input vertex -> 1 if a middle vertex sits or sat on it this pass.
+  std::vector<char> taken;
   // Why operations were refused, counted while `count_rejections` is set (the collapse passes).
   enum Reject { none, shape, distance, positivity, intersection, section, coverage, n_reasons };
   std::array<std::atomic<long>, n_reasons> rejections{};
@@ -55,7 +57,9 @@ class ShellMesh : public TriMesh {
 
   double mips(Id f) const {
     const Cell& c = cell(f);
-    const Eigen::Vector3d a = mid[c[0]], b = mid[c[1]], d = mid[c[2]];
+    return mips(mid[c[0]], mid[c[1]], mid[c[2]]);
+  }
+  static double mips(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& d) {
     const double area2 = (b - a).cross(d - a).norm();  // twice the area
     if (!(area2 > 0)) return HUGE_VAL;
     return ((b - a).squaredNorm() + (d - b).squaredNorm() + (a - d).squaredNorm()) /
@@ -203,6 +207,43 @@ class ShellMesh : public TriMesh {
     const double lt = up.norm(), lb = down.norm();
     if (!(lt > 0) || !(lb > 0)) return false;
     const Eigen::Vector3d d = up / lt;
+    if (smoothing_mode == Smoothing::pan) {
+      // Move the middle vertex to a neighbouring input vertex (the boundary map needs coarse
+      // corners on input vertices) where the star's worst triangle is better shaped; pillar
+      // direction and lengths kept. The invariants re-check the star's prisms, re-home the owned
+      // input vertices under the distance bound and keep the tracked faces covered.
+      const int x = input_vertex[v];
+      if (x < 0 || frozen_vertex(v) || taken.empty()) return false;
+      double now = 0;
+      for (Id f : r.new_cells) now = std::max(now, mips(f));
+      double best = (1 - 1e-2) * now;
+      int best_y = -1;
+      for (int g : (*vf)[x])
+        for (int k = 0; k < 3; ++k) {
+          const int y = input->F()(g, k);
+          if (y == x || taken[y]) continue;
+          const Eigen::Vector3d p = input->V().row(y).transpose();
+          double worst = 0;
+          for (Id f : r.new_cells) {
+            const Cell& c = cell(f);
+            std::array<Eigen::Vector3d, 3> q;
+            for (int j = 0; j < 3; ++j) q[j] = c[j] == v ? p : Eigen::Vector3d(mid[c[j]]);
+            worst = std::max(worst, mips(q[0], q[1], q[2]));
+          }
+          if (worst < best) {
+            best = worst;
+            best_y = y;
+          }
+        }
+      if (best_y < 0) return false;
+      const Eigen::Vector3d p = input->V().row(best_y).transpose();
+      taken[best_y] = 1;  // conservative: stays taken even if the invariants refuse the move
+      mid.set(v, p);
+      top.set(v, p + lt * d);
+      base.set(v, p - lb * d);
+      input_vertex.set(v, best_y);
+      return true;
+    }
     if (smoothing_mode == Smoothing::rotate) {
       std::vector<Eigen::Vector3d> normals;
       for (Id f : r.new_cells) {
@@ -298,6 +339,10 @@ class ShellMesh : public TriMesh {
       for (Id f : *cells)
         for (Id v : cell(f))
           for (auto& flags : revisit) flags[v] = 1;
+    // A collapse refused for the triangle shape asks for a pan (better-shaped stars).
+    if (c == Check::shape)
+      for (Id f : r.old_cells)
+        for (Id v : cell(f)) revisit[2][v] = 1;
     return c == Check::ok;
   }
 };
@@ -421,7 +466,9 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   for (auto& flags : m.revisit) flags.assign(m.vertex_capacity(), 0);
   auto smooth_pass = [&](const std::string& name, ShellMesh::Smoothing mode) {
     m.smoothing_mode = mode;
-    std::vector<char>& flags = m.revisit[mode == ShellMesh::Smoothing::rotate ? 0 : 1];
+    std::vector<char>& flags = m.revisit[mode == ShellMesh::Smoothing::rotate ? 0
+                                         : mode == ShellMesh::Smoothing::zoom ? 1
+                                                                              : 2];
     Pass pass;
     pass.operations[name] = [&m](TriMesh&, const TriMesh::Tuple& t) { return m.smooth_vertex(t); };
     pass.priority = [](const TriMesh&, const std::string&, const TriMesh::Tuple&) { return 0.0; };
@@ -429,7 +476,17 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (const auto& v : m.get_vertices())
       if (flags[v.vid]) work.emplace_back(name, v);
     std::fill(flags.begin(), flags.end(), 0);
-    return run(name, pass, work);
+    if (mode != ShellMesh::Smoothing::pan) return run(name, pass, work);
+    // Pans run on one thread: `taken` is shared by moves whose stars do not overlap.
+    m.taken.assign(std::size_t(input.num_vertices()), 0);
+    for (const auto& v : m.get_vertices())
+      if (m.input_vertex[v.vid] >= 0) m.taken[std::size_t(m.input_vertex[v.vid])] = 1;
+    pass.num_threads = 1;
+    pass.position = [&m](Id v) { return m.mid[v]; };
+    const editing::PassStats st = pass.run(m, work);
+    stats.passes.emplace_back(name, st);
+    m.taken.clear();
+    return int(st.succeeded);
   };
 
   for (int round = 0; round < options.rounds; ++round) {
@@ -437,6 +494,11 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     const int collapsed = collapse_pass();
     stats.collapses += collapsed;
     changed += collapsed;
+    if (options.pan) {
+      const int p = smooth_pass("pan", ShellMesh::Smoothing::pan);
+      stats.pans += p;
+      changed += p;
+    }
     if (options.zoom > 0) {
       const int z = smooth_pass("zoom", ShellMesh::Smoothing::zoom);
       stats.zooms += z;

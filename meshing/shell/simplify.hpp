@@ -43,14 +43,17 @@ struct SimplifyOptions {
   double max_mips = 0;
   bool flips = true;   // flip passes between collapse rounds
   bool rotate = true;  // pillar rotation passes
-  double zoom = 0;     // > 0: thickness growth passes, each half-pillar capped at this length
+  // Pan passes (one thread): a middle vertex next to a collapse refused for the triangle shape
+  // moves to a neighbouring input vertex where its star is better shaped.
+  bool pan = true;
+  double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
 };
 
 struct SimplifyStats {
   int faces_before = 0, faces_after = 0;
   std::vector<std::pair<std::string, editing::PassStats>> passes;  // "collapse", "flip", ...
-  int collapses = 0, flips = 0, rotations = 0, zooms = 0;
+  int collapses = 0, flips = 0, rotations = 0, zooms = 0, pans = 0;
   // Collapses refused, by the first check that failed: the triangle shape bound, the distance
   // bound, then per new prism I1 positivity, I3 intersection, I2 section, and coverage (a prism
   // touching no input face, or an input face the old prisms touched left uncovered). Collapses

@@ -258,6 +258,7 @@ void register_mesh(CLI::App& app) {
           {"flips", stats.coarsen_flips},
           {"pillar_rotations", stats.coarsen_rotations},
           {"thickness_growths", stats.coarsen_zooms},
+          {"pans", stats.coarsen_pans},
           {"median_half_thickness_rel", stats.coarse_median_thickness_rel},
           {"min_half_thickness_rel", stats.coarse_min_thickness_rel},
           {"collapses_refused",

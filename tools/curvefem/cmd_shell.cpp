@@ -198,6 +198,7 @@ void register_shell(CLI::App& app) {
         {"simplify_flips", simplify.flips},
         {"simplify_pillar_rotations", simplify.rotations},
         {"simplify_zooms", simplify.zooms},
+        {"simplify_pans", simplify.pans},
         {"simplify_collapses_refused",
          {{"shape", simplify.collapse_rejections.shape},
           {"distance", simplify.collapse_rejections.distance},

@@ -228,3 +228,40 @@ TEST(ShellSimplify, ThicknessGrowthLeavesRoomForTheFacingShell) {
   sh::SimplifyStats s_uncapped;
   EXPECT_GT(worst_ratio(sh::simplify_shell(shell, two, o, s_uncapped)), 0.5);
 }
+
+TEST(ShellSimplify, PansMoveMiddleVerticesOntoOtherInputVertices) {
+  // A jittered sphere under a distance bound and the shape guard: collapses refused for their
+  // triangle shape make the star's middle vertex move to a neighbouring input vertex. Every
+  // middle vertex must still sit exactly on an input vertex, on a different one each, and the
+  // shell must stay valid.
+  SurfaceMesh sphere = curvefem::make_icosphere(3);
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    Eigen::Vector3d p = sphere.V.row(v).transpose();
+    p += 0.04 * Eigen::Vector3d(std::sin(12.9898 * v), std::cos(78.233 * v), std::sin(3.7 * v));
+    sphere.V.row(v) = p.normalized().transpose();
+  }
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.02 * curvefem::bbox_longest_edge(sphere.V);
+  o.max_mips = 10;
+  o.rounds = 5;
+  ASSERT_TRUE(o.pan);
+  sh::SimplifyStats s;
+  const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, s);
+  EXPECT_GT(s.pans, 0);
+  EXPECT_LE(s.max_distance, o.max_distance);
+  std::set<int> used;
+  for (int m = 0; m < coarse.mid.rows(); ++m) {
+    const int x = coarse.input_vertex[m];
+    ASSERT_GE(x, 0);
+    EXPECT_TRUE(used.insert(x).second) << "input vertex " << x << " used twice";
+    EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(x)).norm(), 0.0);
+  }
+  const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
+  EXPECT_TRUE(v.positive());
+  EXPECT_TRUE(v.separated());
+  EXPECT_TRUE(v.section()) << v.non_section_faces;
+  EXPECT_EQ(v.roundtrip_failures, 0);
+  EXPECT_LT(v.roundtrip_max_error_rel, 1e-12);
+}
