@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <set>
+#include <string>
 
 #include "meshing/core/primitives.hpp"
 #include "meshing/shell/shell.hpp"
@@ -16,6 +17,17 @@ namespace {
 sh::Shell build(const SurfaceMesh& s, sh::ShellStats& stats) {
   sh::ShellOptions o;
   return sh::build_shell(s, o, stats);
+}
+
+// The shell checks of verify_shell (code separate from the simplification): positive, off the
+// input, a section, and every input vertex through P then P^-1 back onto itself.
+void expect_valid(const sh::Shell& shell, const SurfaceMesh& input, const std::string& what = {}) {
+  const sh::ShellVerification v = sh::verify_shell(shell, input);
+  EXPECT_TRUE(v.positive()) << what;
+  EXPECT_TRUE(v.separated()) << what;
+  EXPECT_TRUE(v.section()) << what << ": " << v.non_section_faces << " non-section faces";
+  EXPECT_EQ(v.roundtrip_failures, 0) << what;
+  EXPECT_LT(v.roundtrip_max_error_rel, 1e-12) << what;
 }
 }  // namespace
 
@@ -33,12 +45,7 @@ TEST(ShellSimplify, CoarsensASphereShellAndKeepsItValid) {
     EXPECT_EQ(s.faces_before, 1280);
     EXPECT_EQ(s.faces_after, coarse.F.rows());
     EXPECT_LT(coarse.F.rows(), 1280 / 3) << threads << " threads";
-    const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
-    EXPECT_TRUE(v.positive()) << threads;
-    EXPECT_TRUE(v.separated()) << threads;
-    EXPECT_TRUE(v.section()) << threads;
-    EXPECT_EQ(v.roundtrip_failures, 0) << threads;
-    EXPECT_LT(v.roundtrip_max_error_rel, 1e-12) << threads;
+    expect_valid(coarse, sphere, std::to_string(threads) + " threads");
     // Middle vertices are input vertices (half-edge collapses keep positions).
     for (int m = 0; m < coarse.mid.rows(); ++m) {
       ASSERT_GE(coarse.input_vertex[m], 0);
@@ -71,11 +78,7 @@ TEST(ShellSimplify, CoarsensABoxShellAcrossSharpEdges) {
   sh::SimplifyStats s;
   const sh::Shell coarse = sh::simplify_shell(shell, box, o, s);
   EXPECT_LT(s.faces_after, s.faces_before / 2);
-  const sh::ShellVerification v = sh::verify_shell(coarse, box);
-  EXPECT_TRUE(v.positive());
-  EXPECT_TRUE(v.separated());
-  EXPECT_TRUE(v.section()) << v.non_section_faces;
-  EXPECT_EQ(v.roundtrip_failures, 0);
+  expect_valid(coarse, box);
 }
 
 TEST(ShellSimplify, FlipsRotationsAndGrowthCoarsenFurtherUnderADistanceBound) {
@@ -108,12 +111,7 @@ TEST(ShellSimplify, FlipsRotationsAndGrowthCoarsenFurtherUnderADistanceBound) {
   // Growth: the median half-pillar is above the built shell's, none exceeds the cap.
   EXPECT_GT(s.median_half_thickness, 1.2 * stats.median_thickness_rel * unit);
   EXPECT_LE(s.max_half_thickness, o.zoom * (1 + 1e-12));
-  const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
-  EXPECT_TRUE(v.positive());
-  EXPECT_TRUE(v.separated());
-  EXPECT_TRUE(v.section()) << v.non_section_faces;
-  EXPECT_EQ(v.roundtrip_failures, 0);
-  EXPECT_LT(v.roundtrip_max_error_rel, 1e-12);
+  expect_valid(coarse, sphere);
   // The middle surface still sits on input vertices; the pillars are unit-free but not shorter.
   for (int m = 0; m < coarse.mid.rows(); ++m) {
     ASSERT_GE(coarse.input_vertex[m], 0);
@@ -165,10 +163,7 @@ TEST(ShellSimplify, FlipsNeverRemoveAnEdgeBetweenFrozenVertices) {
       edges.insert({std::min(a, b), std::max(a, b)});
     }
   for (const auto& e : kept) EXPECT_TRUE(edges.count(e)) << e.first << "-" << e.second;
-  const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
-  EXPECT_TRUE(v.positive());
-  EXPECT_TRUE(v.separated());
-  EXPECT_TRUE(v.section()) << v.non_section_faces;
+  expect_valid(coarse, sphere);
 }
 
 TEST(ShellSimplify, ThicknessGrowthLeavesRoomForTheFacingShell) {
@@ -220,10 +215,7 @@ TEST(ShellSimplify, ThicknessGrowthLeavesRoomForTheFacingShell) {
   const sh::Shell capped = sh::simplify_shell(shell, two, o, s);
   EXPECT_GT(s.zooms, 0);
   EXPECT_LE(worst_ratio(capped), 0.5);
-  const sh::ShellVerification v = sh::verify_shell(capped, two);
-  EXPECT_TRUE(v.positive());
-  EXPECT_TRUE(v.separated());
-  EXPECT_TRUE(v.section()) << v.non_section_faces;
+  expect_valid(capped, two);
   o.zoom_ray_fraction = 10;  // no ray cap: the facing shells grow past the middle of the gap
   sh::SimplifyStats s_uncapped;
   EXPECT_GT(worst_ratio(sh::simplify_shell(shell, two, o, s_uncapped)), 0.5);
@@ -258,10 +250,5 @@ TEST(ShellSimplify, PansMoveMiddleVerticesOntoOtherInputVertices) {
     EXPECT_TRUE(used.insert(x).second) << "input vertex " << x << " used twice";
     EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(x)).norm(), 0.0);
   }
-  const sh::ShellVerification v = sh::verify_shell(coarse, sphere);
-  EXPECT_TRUE(v.positive());
-  EXPECT_TRUE(v.separated());
-  EXPECT_TRUE(v.section()) << v.non_section_faces;
-  EXPECT_EQ(v.roundtrip_failures, 0);
-  EXPECT_LT(v.roundtrip_max_error_rel, 1e-12);
+  expect_valid(coarse, sphere);
 }
