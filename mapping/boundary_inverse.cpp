@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <mutex>
@@ -69,9 +70,19 @@ BitsKey bits_of(const Eigen::Vector3d& p) {
 struct TriangleLocator::Impl {
   const LagrangeMesh* tri = nullptr;
   double tolerance = 0;
-  std::vector<Box> boxes;
+  std::vector<Box> boxes;  // node boxes inflated by the bulge margin: the candidate filter
+  // Bounds of the Bernstein control points, whose convex hull contains the whole triangle: their
+  // box, and their slab along the unit normal of the corner triangle (offsets along `slab_normal`).
+  std::vector<Box> hulls;
+  std::vector<Eigen::Vector3d> slab_normal;
+  std::vector<std::array<double, 2>> slab;
   std::vector<int> items;
   std::vector<BvhNode> nodes;
+  // The triangles' nodes, copied face by face (n per face), and the lattice of their order: the
+  // Gauss–Newton loop evaluates the map without allocating or locking.
+  int order = 1, n = 3;
+  std::vector<std::array<int, 4>> lattice;
+  std::vector<Eigen::Vector3d> face_nodes;
 
   int build(int begin, int end) {
     BvhNode n;
@@ -98,12 +109,49 @@ struct TriangleLocator::Impl {
     return id;
   }
 
+  /// T_f(u, v) and, if J is set, its 3 × 2 Jacobian: the arithmetic of LagrangeMesh::map and
+  /// ::jacobian (lagrange_shape_values / _gradients) on the copied nodes.
+  Eigen::Vector3d evaluate(int f, double u, double v, Eigen::Matrix<double, 3, 2>* J) const {
+    const double lambda[3] = {1.0 - u - v - 0.0, u, v};
+    const Eigen::Vector3d* X = face_nodes.data() + static_cast<std::size_t>(f) * n;
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    if (J) J->setZero();
+    for (int i = 0; i < n; ++i) {
+      double value[3], derivative[3];
+      for (int c = 0; c < 3; ++c) {  // Π_{j<a} (kλ − j)/(j + 1) and its derivative
+        value[c] = 1.0;
+        derivative[c] = 0.0;
+        for (int j = 0; j < lattice[i][c]; ++j) {
+          const double fj = (order * lambda[c] - j) / (j + 1.0);
+          const double dfj = order / (j + 1.0);
+          derivative[c] = derivative[c] * fj + value[c] * dfj;
+          value[c] *= fj;
+        }
+      }
+      double phi = 1.0;
+      for (int c = 0; c < 3; ++c) phi *= value[c];
+      x += phi * X[i];
+      if (!J) continue;
+      double dlambda[3];  // ∂φ/∂λ_c
+      for (int c = 0; c < 3; ++c) {
+        double p = derivative[c];
+        for (int j = 0; j < 3; ++j)
+          if (j != c) p *= value[j];
+        dlambda[c] = p;
+      }
+      J->col(0) += X[i] * (dlambda[1] - dlambda[0]);
+      J->col(1) += X[i] * (dlambda[2] - dlambda[0]);
+    }
+    return x;
+  }
+
   /// Gauss–Newton for min |T_f(u, v) − x|², (u, v) kept in the reference triangle.
   BoundaryPoint invert(int f, const Eigen::Vector3d& x) const {
     double u = 1.0 / 3, v = 1.0 / 3;
-    Eigen::Vector3d r = tri->map(f, Eigen::Vector3d(u, v, 0)) - x;
+    Eigen::Vector3d r = evaluate(f, u, v, nullptr) - x;
+    Eigen::Matrix<double, 3, 2> J;
     for (int it = 0; it < 40; ++it) {
-      const Eigen::MatrixXd J = tri->jacobian(f, Eigen::Vector3d(u, v, 0));  // 3 × 2
+      evaluate(f, u, v, &J);
       const Eigen::Matrix2d JtJ = J.transpose() * J;
       const Eigen::Vector2d step = JtJ.ldlt().solve(-(J.transpose() * r));
       if (!step.allFinite()) break;
@@ -112,16 +160,27 @@ struct TriangleLocator::Impl {
       const double moved = std::abs(nu - u) + std::abs(nv - v);
       u = nu;
       v = nv;
-      r = tri->map(f, Eigen::Vector3d(u, v, 0)) - x;
+      r = evaluate(f, u, v, nullptr) - x;
       if (moved < 1e-15) break;
     }
     return {f, u, v, r.norm()};
   }
 
+  /// The candidate with the smallest residual wins (ties: the first in BVH order). A candidate's
+  /// residual is at least the distance from x to its hull box, so candidates are tried by that
+  /// distance and the rest skipped once it exceeds the best residual: same answer, fewer
+  /// inversions.
   std::optional<BoundaryPoint> locate(const Eigen::Vector3d& x) const {
     std::optional<BoundaryPoint> best;
     if (nodes.empty()) return best;
-    std::vector<int> stack{0};
+    struct Candidate {
+      double distance;
+      int face;
+    };
+    thread_local std::vector<int> stack;
+    thread_local std::vector<Candidate> candidates;
+    stack.assign(1, 0);
+    candidates.clear();
     while (!stack.empty()) {
       const BvhNode& n = nodes[stack.back()];
       stack.pop_back();
@@ -134,14 +193,58 @@ struct TriangleLocator::Impl {
       for (int i = n.begin; i < n.end; ++i) {
         const int f = items[i];
         if (!boxes[f].contains(x)) continue;
-        const BoundaryPoint p = invert(f, x);
-        if (!best || p.residual < best->residual) best = p;
+        // A lower bound of |T_f(u, v) − x| over the triangle: x's distance to the hull's box or
+        // to its normal slab.
+        const Eigen::Vector3d gap =
+            (hulls[f].lo - x).cwiseMax(x - hulls[f].hi).cwiseMax(Eigen::Vector3d::Zero());
+        const double offset = slab_normal[f].dot(x);
+        const double slab_gap = std::max({slab[f][0] - offset, offset - slab[f][1], 0.0});
+        candidates.push_back({std::max(gap.norm(), slab_gap), f});
+      }
+    }
+    thread_local std::vector<int> ranks;  // BVH order, stable-sorted by distance
+    ranks.resize(candidates.size());
+    std::iota(ranks.begin(), ranks.end(), 0);
+    for (std::size_t i = 1; i < ranks.size(); ++i)  // insertion sort: stable, few candidates
+      for (std::size_t j = i;
+           j > 0 && candidates[ranks[j]].distance < candidates[ranks[j - 1]].distance; --j)
+        std::swap(ranks[j], ranks[j - 1]);
+    int best_rank = -1;
+    for (const int k : ranks) {
+      if (best && candidates[k].distance > best->residual) break;
+      const BoundaryPoint p = invert(candidates[k].face, x);
+      if (!best || p.residual < best->residual || (p.residual == best->residual && k < best_rank)) {
+        best = p;
+        best_rank = k;
       }
     }
     if (best && best->residual > tolerance) best.reset();
     return best;
   }
 };
+
+namespace {
+
+/// Lagrange-to-Bernstein matrix of order-k triangles: Bernstein coefficients = M · nodes.
+Eigen::MatrixXd lagrange_to_bernstein(const std::vector<std::array<int, 4>>& lattice, int k) {
+  const int n = static_cast<int>(lattice.size());
+  auto factorial = [](int m) {
+    double f = 1;
+    for (int i = 2; i <= m; ++i) f *= i;
+    return f;
+  };
+  Eigen::MatrixXd B(n, n);  // B(node, β) = k!/β! λ(node)^β
+  for (int i = 0; i < n; ++i)
+    for (int b = 0; b < n; ++b) {
+      double value = factorial(k);
+      for (int c = 0; c < 3; ++c)
+        value *= std::pow(double(lattice[i][c]) / k, lattice[b][c]) / factorial(lattice[b][c]);
+      B(i, b) = value;
+    }
+  return B.inverse();
+}
+
+}  // namespace
 
 TriangleLocator::TriangleLocator(const LagrangeMesh& triangles, double tolerance_rel)
     : m_impl(std::make_unique<Impl>()) {
@@ -151,11 +254,24 @@ TriangleLocator::TriangleLocator(const LagrangeMesh& triangles, double tolerance
   const double scale = triangles.num_nodes() > 0 ? bbox_longest_edge(triangles.nodes) : 1.0;
   m.tolerance = tolerance_rel * std::max(scale, 1e-300);
   const int nc = triangles.num_cells();
+  m.order = triangles.order;
+  m.lattice = lagrange_lattice(CellKind::triangle, triangles.order);
+  m.n = static_cast<int>(m.lattice.size());
+  CF_VERIFY(nc == 0 || triangles.cells.cols() == m.n,
+            "TriangleLocator: cells do not match the order of the triangles");
+  const Eigen::MatrixXd to_bernstein = lagrange_to_bernstein(m.lattice, m.order);
+  m.face_nodes.resize(static_cast<std::size_t>(nc) * m.n);
   m.boxes.resize(nc);
+  m.hulls.resize(nc);
+  m.slab_normal.resize(nc);
+  m.slab.resize(nc);
+  Eigen::MatrixXd X(m.n, 3);
   for (int f = 0; f < nc; ++f) {
     Box b;
-    for (int j = 0; j < triangles.cells.cols(); ++j) {
+    for (int j = 0; j < m.n; ++j) {
       const Eigen::Vector3d p = triangles.nodes.row(triangles.cells(f, j)).transpose();
+      m.face_nodes[static_cast<std::size_t>(f) * m.n + j] = p;
+      X.row(j) = p.transpose();
       b.lo = b.lo.cwiseMin(p);
       b.hi = b.hi.cwiseMax(p);
     }
@@ -165,6 +281,25 @@ TriangleLocator::TriangleLocator(const LagrangeMesh& triangles, double tolerance
     b.lo.array() -= pad;
     b.hi.array() += pad;
     m.boxes[f] = b;
+    // The triangle lies in the convex hull of its Bernstein control points; the box is widened
+    // far beyond the round-off of the conversion.
+    const Eigen::MatrixXd control = to_bernstein * X;
+    Box h;
+    h.lo = control.colwise().minCoeff().transpose();
+    h.hi = control.colwise().maxCoeff().transpose();
+    const double margin =
+        1e-9 * ((h.hi - h.lo).maxCoeff() + h.lo.cwiseAbs().cwiseMax(h.hi.cwiseAbs()).maxCoeff());
+    h.lo.array() -= margin;
+    h.hi.array() += margin;
+    m.hulls[f] = h;
+    // Corner nodes are the first three (canonical order). A degenerate corner triangle gets a
+    // zero normal: its slab is [−margin, margin] and bounds nothing.
+    const Eigen::Vector3d e1 = (X.row(1) - X.row(0)).transpose();
+    const Eigen::Vector3d e2 = (X.row(2) - X.row(0)).transpose();
+    const Eigen::Vector3d normal = e1.cross(e2).stableNormalized();
+    const Eigen::VectorXd offsets = control * normal;
+    m.slab_normal[f] = normal;
+    m.slab[f] = {offsets.minCoeff() - margin, offsets.maxCoeff() + margin};
   }
   m.items.resize(nc);
   std::iota(m.items.begin(), m.items.end(), 0);

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <vector>
 
 #include "fem/space/function_space.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
@@ -17,6 +18,28 @@ struct FacePoint {
   double ds_w = 0.0;       ///< surface measure × weight
   const double* phi;       ///< space basis values at the point (num_lagrange_nodes(tet, p))
 };
+
+/// Every quadrature point of the selected boundary faces at once, in the order of
+/// for_each_face_point (faces in boundary_faces order, then rule points), so that boundary data
+/// can be evaluated in parallel and summed serially in a fixed order.
+/// Shapes: x, normal #points × 3; ds_w, face, cell, basis_row #points; basis
+/// (4 · #rule points) × num_lagrange_nodes(tet, p), row-major: basis.row(basis_row[k]) holds the
+/// space basis values at point k.
+struct FacePoints {
+  Eigen::MatrixXd x, normal;
+  Eigen::VectorXd ds_w;
+  std::vector<int> face, cell, basis_row;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> basis;
+
+  int size() const { return static_cast<int>(face.size()); }
+  FacePoint point(int k) const;
+};
+
+/// The quadrature points (exact to `degree` on the reference triangle) of every boundary face
+/// whose flag is set; faces are processed in parallel (oneTBB), the result is independent of the
+/// thread count.
+FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
+                       const std::vector<char>& selected, int degree);
 
 /// Calls `visit(face index, cell, point)` for every quadrature point (exact to `degree` on the
 /// reference triangle) of every boundary face whose flag is set.

@@ -4,6 +4,8 @@
 // the front end builds the flags from selections ("all", mesh tags, boxes, ...) and, later, from
 // selections painted on the dense input through the bijective map. Dirichlet values are imposed
 // strongly at every DOF of a selected face (nodal interpolation at the DOF's physical point).
+// Fields and filters may be called concurrently from several threads (volume data in the parallel
+// element loop, Neumann/traction data at the face quadrature points): they must be thread-safe.
 #pragma once
 
 #include <Eigen/Core>

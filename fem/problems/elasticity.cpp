@@ -1,5 +1,7 @@
 #include "fem/problems/elasticity.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/LU>
 #include <atomic>
 #include <cmath>
@@ -45,7 +47,7 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
   const int n = setup.n;
   if (problem.body_force) {
     const ElementKernel kernel = [&](int cell, Eigen::MatrixXd&, Eigen::VectorXd& Fe) {
-      CellGeometry g;
+      thread_local CellGeometry g;
       setup.geometry.evaluate(cell, g);
       for (int q = 0; q < setup.geometry.num_points(); ++q) {
         const Eigen::Vector3d f = problem.body_force(g.x.row(q).transpose()) * g.det_w[q];
@@ -55,16 +57,29 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
     };
     assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, nullptr, &F);
   }
+  // Tractions: evaluated at every face point in parallel, summed serially in point order.
   const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
-  for (const auto& bc : problem.traction)
-    for_each_face_point(mesh, space, bc.faces, face_degree,
-                        [&](int, int cell, const FacePoint& pt) {
-                          if (bc.where && !bc.where(pt.x)) return;
-                          const Eigen::Vector3d t = bc.traction(pt.x) * pt.ds_w;
-                          for (int a = 0; a < n; ++a)
-                            for (int i = 0; i < 3; ++i)
-                              F[3 * space.cell_dofs(cell, a) + i] += t[i] * pt.phi[a];
-                        });
+  for (const auto& bc : problem.traction) {
+    const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
+    std::vector<char> used(points.size(), 0);
+    std::vector<Eigen::Vector3d> traction(points.size(), Eigen::Vector3d::Zero());
+    tbb::parallel_for(tbb::blocked_range<int>(0, points.size(), 64),
+                      [&](const tbb::blocked_range<int>& range) {
+                        for (int k = range.begin(); k < range.end(); ++k) {
+                          const Eigen::Vector3d x = points.x.row(k).transpose();
+                          if (bc.where && !bc.where(x)) continue;
+                          used[k] = 1;
+                          traction[k] = bc.traction(x);
+                        }
+                      });
+    for (int k = 0; k < points.size(); ++k) {
+      if (!used[k]) continue;
+      const Eigen::Vector3d t = traction[k] * points.ds_w[k];
+      const double* phi = points.basis.row(points.basis_row[k]).data();
+      for (int a = 0; a < n; ++a)
+        for (int i = 0; i < 3; ++i) F[3 * space.cell_dofs(points.cell[k], a) + i] += t[i] * phi[a];
+    }
+  }
   return F;
 }
 
@@ -99,21 +114,34 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
   const int n = setup.n;
   std::vector<double> values(static_cast<std::size_t>(setup.pattern.nonzeros()), 0.0);
+  const int nq = setup.geometry.num_points();
+  // Ke(3a+i, 3b+j) = Σ_q w (λ G_ai G_bj + μ G_aj G_bi + δ_ij μ Σ_k G_ak G_bk), G = ∇φ at q.
+  // With M = Σ_q w g_q g_qᵀ for the stacked gradients g_q (row i·n + a = G_ai), one matrix
+  // product: Ke(3a+i, 3b+j) = λ M(in+a, jn+b) + μ M(jn+a, in+b) + δ_ij μ Σ_k M(kn+a, kn+b).
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd&) {
-    CellGeometry g;
+    thread_local CellGeometry g;  // per-thread scratch: no allocation per cell after the first
+    thread_local Eigen::MatrixXd S, Sw, M, G;
+    S.resize(3 * n, nq);
+    Sw.resize(3 * n, nq);
+    M.resize(3 * n, 3 * n);
+    G.resize(n, 3);
     setup.geometry.evaluate(cell, g);
-    Eigen::MatrixXd G(n, 3);
-    for (int q = 0; q < setup.geometry.num_points(); ++q) {
+    for (int q = 0; q < nq; ++q) {
       G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
-      const double w = g.det_w[q];
-      const Eigen::MatrixXd GG = G * G.transpose();
-      for (int a = 0; a < n; ++a)
-        for (int b = 0; b < n; ++b)
-          for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-              Ke(3 * a + i, 3 * b + j) += w * (lambda * G(a, i) * G(b, j) + mu * G(a, j) * G(b, i) +
-                                               (i == j ? mu * GG(a, b) : 0.0));
+      for (int i = 0; i < 3; ++i) {
+        S.col(q).segment(i * n, n) = G.col(i);
+        Sw.col(q).segment(i * n, n) = g.det_w[q] * G.col(i);
+      }
     }
+    M.noalias() = Sw * S.transpose();
+    for (int b = 0; b < n; ++b)
+      for (int j = 0; j < 3; ++j)
+        for (int a = 0; a < n; ++a) {
+          const double trace = M(a, b) + M(n + a, n + b) + M(2 * n + a, 2 * n + b);
+          for (int i = 0; i < 3; ++i)
+            Ke(3 * a + i, 3 * b + j) = lambda * M(i * n + a, j * n + b) +
+                                       mu * M(j * n + a, i * n + b) + (i == j ? mu * trace : 0.0);
+        }
   };
   assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, &values,
                  nullptr);
@@ -151,9 +179,12 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
   std::vector<double> energy(mesh.num_cells(), 0.0);
   std::atomic<bool> valid{true};
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Re) {
-    CellGeometry g;
+    thread_local CellGeometry g;  // per-thread scratch
+    thread_local Eigen::MatrixXd U, G, H, GP, GG;
+    U.resize(n, 3);
+    G.resize(n, 3);
+    H.resize(n, 3);
     setup.geometry.evaluate(cell, g);
-    Eigen::MatrixXd U(n, 3), G(n, 3), H(n, 3);
     gather(space, u, cell, U);
     double e = 0.0;
     for (int q = 0; q < setup.geometry.num_points(); ++q) {
@@ -170,12 +201,12 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
       e += w *
            (0.5 * mu * ((F.transpose() * F).trace() - 3.0) - mu * lnJ + 0.5 * lambda * lnJ * lnJ);
       const Eigen::Matrix3d P = mu * (F - Finv.transpose()) + lambda * lnJ * Finv.transpose();
-      const Eigen::MatrixXd GP = G * P.transpose();  // (a, i) = Σ_k P_ik G_ak
+      GP.noalias() = G * P.transpose();  // (a, i) = Σ_k P_ik G_ak
       for (int a = 0; a < n; ++a)
         for (int i = 0; i < 3; ++i) Re[3 * a + i] += w * GP(a, i);
       if (!with_matrix) continue;
       H.noalias() = G * Finv;
-      const Eigen::MatrixXd GG = G * G.transpose();
+      GG.noalias() = G * G.transpose();
       const double c1 = mu - lambda * lnJ;
       for (int a = 0; a < n; ++a)
         for (int b = 0; b < n; ++b)

@@ -1,5 +1,7 @@
 #include "fem/problems/poisson.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include "fem/assembly/element_geometry.hpp"
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
@@ -45,15 +47,28 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   };
   assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, &values, &system.F);
 
+  // Neumann data: evaluated at every face point in parallel (the flux may be expensive, e.g. a
+  // point location through φ⁻¹), then summed serially in point order.
   const int face_degree = default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
   for (const auto& bc : problem.neumann) {
-    for_each_face_point(mesh, space, bc.faces, face_degree,
-                        [&](int, int cell, const FacePoint& pt) {
-                          if (bc.where && !bc.where(pt.x)) return;
-                          const double g = bc.flux(pt.x) * pt.ds_w;
-                          for (int a = 0; a < n; ++a)
-                            system.F[space.cell_dofs(cell, a)] += g * pt.phi[a];
-                        });
+    const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
+    std::vector<char> used(points.size(), 0);
+    std::vector<double> flux(points.size(), 0.0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, points.size(), 64),
+                      [&](const tbb::blocked_range<int>& range) {
+                        for (int k = range.begin(); k < range.end(); ++k) {
+                          const Eigen::Vector3d x = points.x.row(k).transpose();
+                          if (bc.where && !bc.where(x)) continue;
+                          used[k] = 1;
+                          flux[k] = bc.flux(x);
+                        }
+                      });
+    for (int k = 0; k < points.size(); ++k) {
+      if (!used[k]) continue;
+      const double g = flux[k] * points.ds_w[k];
+      const double* phi = points.basis.row(points.basis_row[k]).data();
+      for (int a = 0; a < n; ++a) system.F[space.cell_dofs(points.cell[k], a)] += g * phi[a];
+    }
   }
   system.K = pattern.matrix(values);
   return system;
