@@ -145,9 +145,20 @@ struct TriangleLocator::Impl {
     return x;
   }
 
-  /// Gauss–Newton for min |T_f(u, v) − x|², (u, v) kept in the reference triangle.
+  /// Gauss–Newton for min |T_f(u, v) − x|², (u, v) kept in the reference triangle, from the
+  /// centroid; on a strongly curved triangle it can stop at a local minimum on the triangle's
+  /// border, so a residual above the tolerance is retried from the corners and edge midpoints.
   BoundaryPoint invert(int f, const Eigen::Vector3d& x) const {
-    double u = 1.0 / 3, v = 1.0 / 3;
+    BoundaryPoint best = gauss_newton(f, x, 1.0 / 3, 1.0 / 3);
+    if (best.residual <= tolerance) return best;
+    static constexpr double starts[6][2] = {{0, 0}, {1, 0}, {0, 1}, {0.5, 0}, {0.5, 0.5}, {0, 0.5}};
+    for (const auto& s : starts) {
+      const BoundaryPoint p = gauss_newton(f, x, s[0], s[1]);
+      if (p.residual < best.residual) best = p;
+    }
+    return best;
+  }
+  BoundaryPoint gauss_newton(int f, const Eigen::Vector3d& x, double u, double v) const {
     Eigen::Vector3d r = evaluate(f, u, v, nullptr) - x;
     Eigen::Matrix<double, 3, 2> J;
     for (int it = 0; it < 40; ++it) {
@@ -166,10 +177,6 @@ struct TriangleLocator::Impl {
     return {f, u, v, r.norm()};
   }
 
-  /// The candidate with the smallest residual wins (ties: the first in BVH order). A candidate's
-  /// residual is at least the distance from x to its hull box, so candidates are tried by that
-  /// distance and the rest skipped once it exceeds the best residual: same answer, fewer
-  /// inversions.
   std::optional<BoundaryPoint> locate(const Eigen::Vector3d& x) const {
     std::optional<BoundaryPoint> best;
     if (nodes.empty()) return best;

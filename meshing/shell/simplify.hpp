@@ -44,10 +44,10 @@ struct SimplifyOptions {
   bool flips = true;   // flip passes between collapse rounds
   bool rotate = true;  // pillar rotation passes
   // Pan passes (one thread): a middle vertex next to a collapse refused for the triangle shape
-  // moves to a neighbouring input vertex where its star is better shaped. Off by default: with
-  // it on, `curvefem run` of cases/elasticity_curved_elephant.json failed in the surface
-  // transfer (one input vertex's image not located on the mesh boundary) although
-  // `curvefem mesh` validated the mesh and map; not understood yet.
+  // moves to a neighbouring input vertex where its star is better shaped. Off by default until
+  // the benchmarks are re-run with it: with it on, `curvefem run` of
+  // cases/elasticity_curved_elephant.json exposed a boundary-locator bug (Gauss–Newton from the
+  // centroid stuck on a strongly curved triangle, fixed by restarts in mapping/).
   bool pan = false;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input

@@ -164,3 +164,37 @@ TEST(SurfaceTransfer, LinearFieldIsExactAtEveryInputVertexOfTheDenseBaseline) {
     EXPECT_NEAR(off.l2, std::sqrt(6.0), 1e-12);  // area 6, error 1
   }
 }
+
+TEST(TriangleLocator, FindsPointsOnAStronglyCurledTriangle) {
+  // One order-3 triangle bent around a cylinder through about 340 degrees, a curl the boundary
+  // of a coarse curved mesh can have on a thin part. From the centroid alone, Gauss-Newton can
+  // stop at a local minimum on the triangle's border; every point of the triangle must still be
+  // found (the locator restarts from corners and edge midpoints).
+  const int k = 3;
+  const auto& lattice = lagrange_lattice(CellKind::triangle, k);
+  LagrangeMesh t;
+  t.kind = CellKind::triangle;
+  t.order = k;
+  t.cells.resize(1, Eigen::Index(lattice.size()));
+  t.nodes.resize(Eigen::Index(lattice.size()), 3);
+  const double R = 0.25, L = 1.5;  // arc length L on radius R: 344 degrees
+  for (std::size_t n = 0; n < lattice.size(); ++n) {
+    const double u = double(lattice[n][1]) / k, v = double(lattice[n][2]) / k;
+    const double s = L * (u + 0.5 * v), w = 0.8 * v;
+    t.cells(0, Eigen::Index(n)) = int(n);
+    t.nodes.row(Eigen::Index(n)) =
+        Eigen::RowVector3d(R * std::sin(s / R), w, R * (1 - std::cos(s / R)));
+  }
+  const TriangleLocator locator(t);
+  int tested = 0;
+  for (int i = 0; i <= 40; ++i)
+    for (int j = 0; i + j <= 40; ++j) {
+      const double u = i / 40.0, v = j / 40.0;
+      const Eigen::Vector3d x = t.map(0, {u, v, 0});
+      const auto p = locator.locate(x);
+      ASSERT_TRUE(p.has_value()) << "u " << u << " v " << v;
+      EXPECT_LT((t.map(0, {p->u, p->v, 0}) - x).norm(), 1e-10) << "u " << u << " v " << v;
+      ++tested;
+    }
+  EXPECT_EQ(tested, 861);
+}
