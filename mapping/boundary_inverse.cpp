@@ -146,11 +146,11 @@ struct TriangleLocator::Impl {
   }
 
   /// Gauss–Newton for min |T_f(u, v) − x|², (u, v) kept in the reference triangle, from the
-  /// centroid; on a strongly curved triangle it can stop at a local minimum on the triangle's
-  /// border, so a residual above the tolerance is retried from the corners and edge midpoints.
-  BoundaryPoint invert(int f, const Eigen::Vector3d& x) const {
+  /// centroid or, with `restarts`, also from the corners and edge midpoints: on a strongly curved
+  /// triangle the centroid start can stop at a local minimum on the triangle's border.
+  BoundaryPoint invert(int f, const Eigen::Vector3d& x, bool restarts) const {
     BoundaryPoint best = gauss_newton(f, x, 1.0 / 3, 1.0 / 3);
-    if (best.residual <= tolerance) return best;
+    if (!restarts || best.residual <= tolerance) return best;
     static constexpr double starts[6][2] = {{0, 0}, {1, 0}, {0, 1}, {0.5, 0}, {0.5, 0.5}, {0, 0.5}};
     for (const auto& s : starts) {
       const BoundaryPoint p = gauss_newton(f, x, s[0], s[1]);
@@ -216,17 +216,23 @@ struct TriangleLocator::Impl {
       for (std::size_t j = i;
            j > 0 && candidates[ranks[j]].distance < candidates[ranks[j - 1]].distance; --j)
         std::swap(ranks[j], ranks[j - 1]);
-    int best_rank = -1;
-    for (const int k : ranks) {
-      if (best && candidates[k].distance > best->residual) break;
-      const BoundaryPoint p = invert(candidates[k].face, x);
-      if (!best || p.residual < best->residual || (p.residual == best->residual && k < best_rank)) {
-        best = p;
-        best_rank = k;
+    // Centroid starts first; restarts only if no candidate came within the tolerance (most
+    // candidates do not hold x, and restarting on each of them would cost 7x).
+    for (const bool restarts : {false, true}) {
+      int best_rank = -1;
+      for (const int k : ranks) {
+        if (best && candidates[k].distance > best->residual) break;
+        if (restarts && candidates[k].distance > tolerance) break;
+        const BoundaryPoint p = invert(candidates[k].face, x, restarts);
+        if (!best || p.residual < best->residual ||
+            (p.residual == best->residual && k < best_rank)) {
+          best = p;
+          best_rank = k;
+        }
       }
+      if (best && best->residual <= tolerance) return best;
     }
-    if (best && best->residual > tolerance) best.reset();
-    return best;
+    return std::nullopt;
   }
 };
 
