@@ -95,6 +95,22 @@ FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
   return out;
 }
 
+std::vector<char> evaluate_at_face_points(
+    const FacePoints& points, const std::function<bool(const Eigen::Vector3d&)>& where,
+    const std::function<void(int k, const Eigen::Vector3d& x)>& evaluate) {
+  std::vector<char> used(std::size_t(points.size()), 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, points.size(), 64),
+                    [&](const tbb::blocked_range<int>& range) {
+                      for (int k = range.begin(); k < range.end(); ++k) {
+                        const Eigen::Vector3d x = points.x.row(k).transpose();
+                        if (where && !where(x)) continue;
+                        used[std::size_t(k)] = 1;
+                        evaluate(k, x);
+                      }
+                    });
+  return used;
+}
+
 void for_each_face_point(const LagrangeMesh& mesh, const FunctionSpace& space,
                          const std::vector<char>& selected, int degree,
                          const std::function<void(int, int, const FacePoint&)>& visit) {

@@ -41,6 +41,13 @@ struct FacePoints {
 FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
                        const std::vector<char>& selected, int degree);
 
+/// Calls `evaluate(k, x)` in parallel (oneTBB) for every point k of `points` where `where` is
+/// empty or true, and returns those points' flags. `evaluate` writes its result to its own slot
+/// k; summing the results afterwards in point order keeps assembly independent of the threads.
+std::vector<char> evaluate_at_face_points(
+    const FacePoints& points, const std::function<bool(const Eigen::Vector3d&)>& where,
+    const std::function<void(int k, const Eigen::Vector3d& x)>& evaluate);
+
 /// Calls `visit(face index, cell, point)` for every quadrature point (exact to `degree` on the
 /// reference triangle) of every boundary face whose flag is set.
 void for_each_face_point(const LagrangeMesh& mesh, const FunctionSpace& space,

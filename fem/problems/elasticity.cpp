@@ -1,7 +1,5 @@
 #include "fem/problems/elasticity.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <Eigen/LU>
 #include <atomic>
 #include <cmath>
@@ -61,17 +59,10 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
   const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
   for (const auto& bc : problem.traction) {
     const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
-    std::vector<char> used(points.size(), 0);
     std::vector<Eigen::Vector3d> traction(points.size(), Eigen::Vector3d::Zero());
-    tbb::parallel_for(tbb::blocked_range<int>(0, points.size(), 64),
-                      [&](const tbb::blocked_range<int>& range) {
-                        for (int k = range.begin(); k < range.end(); ++k) {
-                          const Eigen::Vector3d x = points.x.row(k).transpose();
-                          if (bc.where && !bc.where(x)) continue;
-                          used[k] = 1;
-                          traction[k] = bc.traction(x);
-                        }
-                      });
+    const std::vector<char> used = evaluate_at_face_points(
+        points, bc.where,
+        [&](int k, const Eigen::Vector3d& x) { traction[std::size_t(k)] = bc.traction(x); });
     for (int k = 0; k < points.size(); ++k) {
       if (!used[k]) continue;
       const Eigen::Vector3d t = traction[k] * points.ds_w[k];

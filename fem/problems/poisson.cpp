@@ -1,7 +1,5 @@
 #include "fem/problems/poisson.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include "fem/assembly/element_geometry.hpp"
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
@@ -52,17 +50,10 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   const int face_degree = default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
   for (const auto& bc : problem.neumann) {
     const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
-    std::vector<char> used(points.size(), 0);
     std::vector<double> flux(points.size(), 0.0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, points.size(), 64),
-                      [&](const tbb::blocked_range<int>& range) {
-                        for (int k = range.begin(); k < range.end(); ++k) {
-                          const Eigen::Vector3d x = points.x.row(k).transpose();
-                          if (bc.where && !bc.where(x)) continue;
-                          used[k] = 1;
-                          flux[k] = bc.flux(x);
-                        }
-                      });
+    const std::vector<char> used = evaluate_at_face_points(
+        points, bc.where,
+        [&](int k, const Eigen::Vector3d& x) { flux[std::size_t(k)] = bc.flux(x); });
     for (int k = 0; k < points.size(); ++k) {
       if (!used[k]) continue;
       const double g = flux[k] * points.ds_w[k];

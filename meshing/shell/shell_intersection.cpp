@@ -397,7 +397,9 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
     const CGAL::Bbox_3& fb = m_impl->boxes[std::size_t(f)];
     for (std::size_t i = 0; i < T.size(); ++i) {
       if (!CGAL::do_overlap(fb, tb[i])) continue;
-      // A triangle corner that IS a tet corner touches the closed tet (see faces_touching_tet).
+      // A triangle corner that IS a tet corner touches the closed tet: decided without the exact
+      // fallback CGAL's filtered predicate takes for such degenerate contacts (the shell's middle
+      // surface starts on the input vertices, so they are the common case).
       bool shared = false;
       for (int a = 0; a < 3 && !shared; ++a)
         for (int j = 0; j < 4 && !shared; ++j) shared = tri.vertex(a) == T[i].vertex(j);
@@ -413,21 +415,7 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
 
 std::vector<int> InputSurfaceIndex::faces_touching_tet(
     const std::array<Eigen::Vector3d, 4>& t) const {
-  const K::Tetrahedron_3 tet(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
-  std::vector<std::vector<Triangle>::const_iterator> hits;
-  m_impl->tree.all_intersected_primitives(tet.bbox(), std::back_inserter(hits));
-  std::vector<int> out;
-  for (const auto& it : hits) {
-    // A triangle corner that IS a tet corner touches the closed tet: decided without the exact
-    // fallback that CGAL's filtered predicate takes for such degenerate contacts (the shell's
-    // middle surface starts on the input vertices, so they are the common case).
-    bool shared = false;
-    for (int i = 0; i < 3 && !shared; ++i)
-      for (int j = 0; j < 4 && !shared; ++j) shared = it->vertex(i) == tet.vertex(j);
-    if (shared || (!strictly_separated(*it, tet) && CGAL::do_intersect(*it, tet)))
-      out.push_back(m_impl->id(it));
-  }
-  return out;
+  return faces_touching_tets({t});
 }
 
 std::vector<int> InputSurfaceIndex::faces_in_box(const Eigen::Vector3d& lo,

@@ -71,7 +71,7 @@ class InputSurfaceIndex {
                            const std::array<bool, 3>& singular,
                            const Eigen::Vector3i& corner_ids) const;
 
-  // Input faces whose triangle intersects the (closed) tetrahedron (exact).
+  // Input faces whose triangle intersects the (closed) tetrahedron (exact), in increasing order.
   std::vector<int> faces_touching_tet(const std::array<Eigen::Vector3d, 4>& tet) const;
   // Input faces intersecting at least one of the closed tetrahedra (exact), in increasing order
   // (one tree traversal for all of them).
