@@ -334,7 +334,7 @@ class Builder {
     bool clean = false;
     for (int round = 0; round < 40 && !clean; ++round) {
       std::vector<char> ok(nf, 1);
-      tbb::parallel_for(0, nf, [&](int f) { ok[f] = face_ok(f, eps); });
+      tbb::parallel_for(0, nf, [&](int f) { ok[f] = face_check(f, eps) == 0; });
       std::vector<char> shrink(nv, 0);
       const Eigen::MatrixXi F = s.F;
       const std::vector<char> degenerate = check::exactly_degenerate_faces(inner, F);
@@ -368,21 +368,54 @@ class Builder {
       throw MeshingError(
           "thicken: the inner surface of the slab layer could not be made free of "
           "self-intersections with certified slabs in 40 rounds");
+    if (recurve) raise_alpha(eps);
     int moved = 0;
     for (int v = 0; v < nv; ++v) moved += depth[v] > base_depth[v];
     return moved;
   }
 
-  // Certified slab tets and the distance bound at the face's input vertices.
-  bool face_ok(int f, double eps) const {
-    if (!slabs_certified(f)) return false;
+  // Curving was decided on slabs down to the shell's base; the deeper inner surface leaves the
+  // curved patch room. Each face below α = 1 tries 1, 1/2, ... down to (not including) its α,
+  // kept when its slabs and those of the faces across its edges (which share its edge nodes)
+  // still certify and the distance bound holds. The inner surface does not change. Sequential:
+  // neighbouring faces interact through their edges.
+  int raise_alpha(double eps) {
+    int raised = 0;
+    for (int f = 0; f < nf; ++f) {
+      if (alpha[f] == 1) continue;
+      const double old = alpha[f];
+      std::vector<int> around;
+      for (int e = 0; e < 3; ++e) {
+        const int p = s.F(f, e), q = s.F(f, (e + 1) % 3);
+        for (int g : edge_faces.at({std::min(p, q), std::max(p, q)}))
+          if (g != f) around.push_back(g);
+      }
+      for (double a = 1; a > old && a >= 1.0 / 64; a /= 2) {
+        alpha[f] = a;
+        bool ok = face_check(f, eps) == 0;
+        for (std::size_t i = 0; i < around.size() && ok; ++i) ok = face_check(around[i], eps) == 0;
+        if (ok) break;
+        alpha[f] = old;
+      }
+      raised += alpha[f] > old;
+    }
+    alpha_raised = raised;
+    return raised;
+  }
+  int alpha_raised = 0;
+  bool recurve = true;
+
+  // Certified slab tets and the distance bound at the face's input vertices: 0 when both hold,
+  // 1 when the slabs are not certified, 2 when an input vertex is farther than eps.
+  int face_check(int f, double eps) const {
+    if (!slabs_certified(f)) return 1;
     const auto d = node_displacements(f);
-    if (alpha[f] == 0) return true;  // the linear shell's bound was enforced by simplification
+    if (alpha[f] == 0) return 0;  // the linear shell's bound was enforced by simplification
     for (const Owned& o : owned[f]) {
       const Eigen::Vector3d p = linear_mid(f, o.u, o.v) + evaluate(d, k, o.u, o.v);
-      if ((p - in.V.row(o.vertex).transpose()).norm() > eps) return false;
+      if ((p - in.V.row(o.vertex).transpose()).norm() > eps) return 2;
     }
-    return true;
+    return 0;
   }
 };
 
@@ -483,6 +516,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   const int k = options.order;
   Builder b(shell, surface, k);
   b.exterior = options.exterior;
+  b.recurve = options.recurve;
   b.compute_targets(progress);
   b.locate_input(progress);
   stats.fiber_misses = b.fiber_misses;
@@ -492,12 +526,16 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   for (int f = 0; f < nf; ++f) work[f] = f;
   while (!work.empty()) {
     ++stats.curving_rounds;
-    std::vector<char> ok(work.size(), 0);
+    std::vector<char> verdict(work.size(), 0);
     tbb::parallel_for(std::size_t(0), work.size(),
-                      [&](std::size_t i) { ok[i] = b.face_ok(work[i], eps); });
+                      [&](std::size_t i) { verdict[i] = char(b.face_check(work[i], eps)); });
     std::vector<int> failing;
     for (std::size_t i = 0; i < work.size(); ++i)
-      if (!ok[i]) failing.push_back(work[i]);
+      if (verdict[i] != 0) failing.push_back(work[i]);
+    if (stats.curving_rounds == 1) {
+      stats.curve_refused_certificate = int(std::count(verdict.begin(), verdict.end(), 1));
+      stats.curve_refused_distance = int(std::count(verdict.begin(), verdict.end(), 2));
+    }
     if (failing.empty()) break;
     std::vector<int> next;
     for (int f : failing) {
@@ -529,14 +567,6 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     work = std::move(next);
     if (progress) progress("curve: certify", 1.0 - double(work.size()) / nf);
   }
-  for (int f = 0; f < nf; ++f) {
-    if (b.alpha[f] == 1)
-      ++stats.faces_fully_curved;
-    else if (b.alpha[f] == 0)
-      ++stats.faces_linear;
-    else
-      ++stats.faces_blended;
-  }
   stats.stage_seconds.emplace_back("curve", watch.seconds());
 
   // 4. Thicken the slab layer, then fill the inside of its inner surface. Gmsh's boundary
@@ -549,6 +579,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   for (int attempt = 0;; ++attempt) {
     watch = Stopwatch();
     stats.thickened_vertices = b.thicken(depth, eps);
+    stats.faces_recurved = b.alpha_raised;
     stats.stage_seconds.emplace_back(attempt ? "thicken (retry)" : "thicken", watch.seconds());
     watch = Stopwatch();
     if (progress) progress("fill interior", 0.0);
@@ -562,6 +593,15 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
                 ")");
       depth = depth > 0.1 ? depth / 2 : 0.0;
     }
+  }
+
+  for (int f = 0; f < nf; ++f) {
+    if (b.alpha[f] == 1)
+      ++stats.faces_fully_curved;
+    else if (b.alpha[f] == 0)
+      ++stats.faces_linear;
+    else
+      ++stats.faces_blended;
   }
 
   // 5. Flip the straight interior toward better tets (its boundary, the inner surface, is kept).

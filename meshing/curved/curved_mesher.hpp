@@ -51,6 +51,9 @@ struct CurvedMeshOptions {
   // Depth of the slab layer below the curved surface, relative to the mean coarse edge length at
   // each vertex (0: keep the shell's base, whose thin slabs make needle tets).
   double slab_depth = 0.4;
+  // Once the slab layer is deeper, faces curved below α = 1 try a larger α again (Builder::
+  // raise_alpha in curved_mesher.cpp).
+  bool recurve = true;
   // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
   double max_triangle_mips = 10;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
@@ -91,6 +94,11 @@ struct CurvedMeshStats {
   bool shell_section_verified = false;
   int shell_non_section_prisms = 0;
   int faces_fully_curved = 0, faces_blended = 0, faces_linear = 0;
+  // Faces whose fully curved patch (first curving round) was refused: slab tets not certified
+  // positive, or an input vertex farther than eps from the patch (why faces end blended).
+  int curve_refused_certificate = 0, curve_refused_distance = 0;
+  // Faces whose α rose again once the slab layer was deepened (the counts above are final).
+  int faces_recurved = 0;
   int fiber_misses = 0;  // curved nodes whose fiber found no input point (kept linear)
   int curving_rounds = 0;
   int slab_tets = 0, interior_tets = 0, nodes = 0;

@@ -117,7 +117,7 @@ struct MeshArgs {
   std::string input, output, features;
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
-  bool no_features = false, exterior = false, nondeterministic = false;
+  bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
   GlobalOptions global;
@@ -172,6 +172,9 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::Range(0, 100));
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
+  sub->add_flag("--no-recurve", args->no_recurve,
+                "keep the curving decided on the shell's slabs (no second try on the deeper slab "
+                "layer)");
   sub->add_flag("--exterior", args->exterior,
                 "also mesh the space between the surface and a padded box (tags 3, 4)");
   sub->add_option("--padding", args->padding,
@@ -197,6 +200,7 @@ void register_mesh(CLI::App& app) {
     options.deterministic = !args->nondeterministic;
     options.optimize.sweeps = args->optimize_sweeps;
     options.exterior = args->exterior;
+    options.recurve = !args->no_recurve;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {
@@ -280,6 +284,10 @@ void register_mesh(CLI::App& app) {
         {"faces_fully_curved", stats.faces_fully_curved},
         {"faces_blended", stats.faces_blended},
         {"faces_linear", stats.faces_linear},
+        {"curve_refused",
+         {{"certificate", stats.curve_refused_certificate},
+          {"distance", stats.curve_refused_distance}}},
+        {"faces_recurved", stats.faces_recurved},
         {"fiber_misses", stats.fiber_misses},
         {"linear_max_distance_rel", stats.linear_max_distance_rel},
         {"optimize", optimize_json(stats.optimize)},

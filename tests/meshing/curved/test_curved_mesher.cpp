@@ -231,3 +231,30 @@ TEST(CurvedMesher, CraterPinchPointsMapBackThroughTheShell) {
     EXPECT_LE(worst, 1e-9) << order;
   }
 }
+
+// Curving is first decided on slabs down to the shell's base; once the slab layer is deeper,
+// faces below α = 1 try again. The counts are taken after that (they were once taken before the
+// slab layer could lower α further, and undercounted).
+TEST(CurvedMesher, DeeperSlabsLetRefusedFacesCurveAgain) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.25, 48, 12);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.eps_rel = 1e-2;
+  o.threads = 2;
+  std::array<cv::CurvedMeshStats, 2> stats;
+  for (int recurve = 0; recurve < 2; ++recurve) {
+    o.recurve = recurve == 1;
+    cv::CurvedMeshStats& s = stats[std::size_t(recurve)];
+    const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, s);
+    const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+    SCOPED_TRACE("recurve " + std::to_string(recurve));
+    EXPECT_TRUE(check.valid(1e-2));
+    EXPECT_EQ(s.faces_fully_curved + s.faces_blended + s.faces_linear, s.coarse_faces);
+  }
+  EXPECT_EQ(stats[0].faces_recurved, 0);
+  EXPECT_GT(stats[0].curve_refused_certificate, 0);  // the shape needs it
+  EXPECT_GT(stats[1].faces_recurved, 0);
+  // The same coarse shell (deterministic coarsening), so the counts compare face for face.
+  EXPECT_EQ(stats[0].coarse_faces, stats[1].coarse_faces);
+  EXPECT_GT(stats[1].faces_fully_curved, stats[0].faces_fully_curved);
+}
