@@ -465,6 +465,8 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   simplify_options.max_distance = eps;
   simplify_options.max_mips = options.max_triangle_mips;
   simplify_options.flips = options.shell_flips;
+  simplify_options.pan = options.shell_pan;
+  simplify_options.split_mips = options.shell_split_mips;
   simplify_options.rotate = options.shell_rotate;
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
@@ -479,6 +481,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   stats.coarsen_rotations = simplify_stats.rotations;
   stats.coarsen_zooms = simplify_stats.zooms;
   stats.coarsen_pans = simplify_stats.pans;
+  stats.coarsen_splits = simplify_stats.splits;
   for (const auto& [name, pass] : simplify_stats.passes) {
     auto it = std::find_if(stats.coarsen_seconds.begin(), stats.coarsen_seconds.end(),
                            [&](const auto& e) { return e.first == name; });

@@ -62,6 +62,10 @@ struct CurvedMeshOptions {
   bool shell_flips = true;
   bool shell_rotate = true;
   double shell_zoom_rel = 0.1;
+  // Pan passes (simplify.hpp; off by default until the benchmarks are re-run with them) and split
+  // passes on middle triangles with a 2-D MIPS above shell_split_mips (0: off).
+  bool shell_pan = false;
+  double shell_split_mips = 0;
   int threads = 0;  // 0: oneTBB default
   // The coarsening is the only stage whose result depends on thread timing (the editing
   // scheduler's try-locks). Deterministic runs coarsen on one thread, so the same input and
@@ -86,7 +90,7 @@ struct CurvedMeshStats {
   // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness
   // (the smaller half-pillar per vertex) relative to the longest bbox edge.
   int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0,
-      coarsen_pans = 0;
+      coarsen_pans = 0, coarsen_splits = 0;
   double coarse_median_thickness_rel = 0, coarse_min_thickness_rel = 0;
   std::vector<std::pair<std::string, double>> coarsen_seconds;  // per operation kind
   // Collapses refused, by reason (shell::SimplifyStats::Rejections): why coarsening stopped.

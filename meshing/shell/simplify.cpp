@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <set>
 
@@ -46,6 +47,10 @@ class ShellMesh : public TriMesh {
   std::array<std::vector<char>, 3> revisit;           // per smoothing kind: vertices to visit next
   // Pan passes (one thread): input vertex -> 1 if a middle vertex sits or sat on it this pass.
   std::vector<char> taken;
+  // Split passes: input vertex -> 1 if a middle vertex sits on it. Set from the live vertices
+  // before the pass; a split claims its input vertex, which only it can see (the vertex is owned
+  // by one of its two locked faces), and gives it back if the invariants refuse the split.
+  std::unique_ptr<std::atomic<char>[]> occupied;
   // Why operations were refused, counted while `count_rejections` is set (the collapse passes).
   enum Reject { none, shape, distance, positivity, intersection, section, coverage, n_reasons };
   std::array<std::atomic<long>, n_reasons> rejections{};
@@ -198,6 +203,56 @@ class ShellMesh : public TriMesh {
     return after < (1 - 1e-3) * before;
   }
 
+  // Split (thesis §4.3.2, Fig. 4.12; with the boundary map in mind, §5.3: "the new vertex is
+  // queried among the pre-image of the current edge, as an existing vertex of the input"): the
+  // new middle vertex sits on the input vertex owned by the two old prisms that is nearest to the
+  // edge's midpoint, within a quarter of the edge length; its pillar is the normalized sum of the
+  // two end pillars' directions, each half as long as the shorter of the two ends' halves.
+  // Accepted only if the worst MIPS of the new middle triangles is strictly below that of the
+  // old ones (a split is a shape repair here) and the invariants hold.
+  bool split_edge_before(const Tuple& t) override {
+    return occupied && !singular[t.vid] && !singular[other_vertex(t)];
+  }
+  bool split_edge_after(const OperationRecord& r) override {
+    const Id a = r.v0, b = r.v1, v = r.new_vertex;
+    const Eigen::Vector3d ma = mid[a], mb = mid[b], centre = 0.5 * (ma + mb);
+    int best = -1;
+    double best_d = 0.25 * (mb - ma).norm();
+    for (Id f : r.old_cells)
+      for (int x : owned[f]) {
+        if (occupied[std::size_t(x)].load(std::memory_order_relaxed)) continue;
+        const double d = (input->V().row(x).transpose() - centre).norm();
+        if (d < best_d) {
+          best_d = d;
+          best = x;
+        }
+      }
+    if (best < 0) return false;
+    const Eigen::Vector3d p = input->V().row(best).transpose();
+    double before = 0, after = 0;
+    for (Id f : r.old_cells) before = std::max(before, mips(f));
+    for (Id f : r.new_cells) {
+      const Cell& c = cell(f);
+      std::array<Eigen::Vector3d, 3> q;
+      for (int j = 0; j < 3; ++j) q[j] = c[j] == v ? p : Eigen::Vector3d(mid[c[j]]);
+      after = std::max(after, mips(q[0], q[1], q[2]));
+    }
+    if (!(after < (1 - 1e-3) * before)) return false;
+    const Eigen::Vector3d da = top[a] - base[a], db = top[b] - base[b];
+    if (!(da.norm() > 0) || !(db.norm() > 0)) return false;
+    const Eigen::Vector3d d = (da.normalized() + db.normalized()).normalized();
+    if (!std::isfinite(d.squaredNorm())) return false;
+    const double lt = std::min((top[a] - ma).norm(), (top[b] - mb).norm());
+    const double lb = std::min((ma - base[a]).norm(), (mb - base[b]).norm());
+    mid.set(v, p);
+    top.set(v, p + lt * d);
+    base.set(v, p - lb * d);
+    singular.set(v, 0);
+    input_vertex.set(v, best);
+    occupied[std::size_t(best)].store(1, std::memory_order_relaxed);
+    return true;
+  }
+
   // Smoothing is one of two moves of vertex r.v0's pillar, chosen by `smoothing_mode`.
   bool smooth_before(const Tuple& t) override { return !singular[t.vid]; }
   bool smooth_after(const OperationRecord& r) override {
@@ -329,6 +384,10 @@ class ShellMesh : public TriMesh {
   }
   bool invariants(const OperationRecord& r) override {
     const Check c = check(r);
+    if (c != Check::ok && r.new_vertex != editing::k_no_id && occupied) {
+      const int x = input_vertex[r.new_vertex];
+      if (x >= 0) occupied[std::size_t(x)].store(0, std::memory_order_relaxed);
+    }
     // Worth a smoothing visit: the vertices whose prisms changed, and those of a collapse or
     // flip the shell refused (a thicker or re-aimed pillar may let it through next round). They
     // are locked by this operation, so each flag is written by one thread.
@@ -461,6 +520,37 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     };
     return run("flip", pass, edge_work("flip", m.get_edges(), false));
   };
+  // Splits: the longest edge of every middle triangle worse than split_mips, worst first, no
+  // renewal. New vertices get flags slots first (the invariants flag the changed vertices).
+  auto split_pass = [&] {
+    std::vector<std::pair<double, TriMesh::Tuple>> bad;
+    for (const auto& t : m.get_faces()) {
+      const double q = m.mips(t.fid);
+      if (!(q > options.split_mips)) continue;
+      TriMesh::Tuple e = t, longest = t;
+      for (int k = 0; k < 3; ++k) {
+        if (length2(e) > length2(longest)) longest = e;
+        e = m.switch_vertex(m.switch_edge(e));
+      }
+      bad.emplace_back(q, longest);
+    }
+    if (bad.empty()) return 0;
+    std::stable_sort(bad.begin(), bad.end(),
+                     [](const auto& x, const auto& y) { return x.first > y.first; });
+    std::vector<Pass::Work> work;
+    for (const auto& [q, e] : bad) work.emplace_back("split", e);
+    for (auto& flags : m.revisit) flags.resize(m.vertex_capacity() + work.size(), 0);
+    m.occupied = std::make_unique<std::atomic<char>[]>(std::size_t(input.num_vertices()));
+    for (const auto& v : m.get_vertices())
+      if (m.input_vertex[v.vid] >= 0)
+        m.occupied[std::size_t(m.input_vertex[v.vid])].store(1, std::memory_order_relaxed);
+    Pass pass;
+    pass.operations["split"] = [&m](TriMesh&, const TriMesh::Tuple& t) { return m.split_edge(t); };
+    pass.priority = [](const TriMesh&, const std::string&, const TriMesh::Tuple&) { return 0.0; };
+    const int n = run("split", pass, work);
+    m.occupied.reset();
+    return n;
+  };
   // One smoothing move per vertex, no renewal (the next round re-seeds).
   // Only vertices flagged since the last pass of this kind (see ShellMesh::invariants).
   for (auto& flags : m.revisit) flags.assign(m.vertex_capacity(), 0);
@@ -494,6 +584,11 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     const int collapsed = collapse_pass();
     stats.collapses += collapsed;
     changed += collapsed;
+    if (options.split_mips > 0 && m.max_distance > 0) {
+      const int sp = split_pass();
+      stats.splits += sp;
+      changed += sp;
+    }
     if (options.pan) {
       const int p = smooth_pass("pan", ShellMesh::Smoothing::pan);
       stats.pans += p;

@@ -2,6 +2,8 @@
 // Shell simplification on meshing/editing (thesis §4.3.2; reference-notes §3.6): rounds of
 //   collapse  shortest-first half-edge collapses of the middle surface that keep the kept
 //             vertex's pillar,
+//   split     (split_mips > 0) the longest edge of a badly shaped middle triangle, at an input
+//             vertex near its midpoint,
 //   flip      edge swaps of the middle surface that lower the worst 2-D MIPS of the two faces,
 //   rotate    pillar re-orientation: a vertex's pillar turns to the most visible direction
 //             (extrusion_direction.hpp, floating-point active set only: a star it cannot
@@ -49,6 +51,11 @@ struct SimplifyOptions {
   // cases/elasticity_curved_elephant.json exposed a boundary-locator bug (Gauss–Newton from the
   // centroid stuck on a strongly curved triangle, fixed by restarts in mapping/).
   bool pan = false;
+  // > 0 (needs max_distance, whose owned input vertices it picks from): split passes after each
+  // collapse pass. The longest edge of every middle triangle with a 2-D MIPS above this gets a
+  // new middle vertex on the input vertex of its two prisms nearest to its midpoint, kept when
+  // the worst MIPS of the new triangles is strictly lower and the invariants hold.
+  double split_mips = 0;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
 };
@@ -56,7 +63,7 @@ struct SimplifyOptions {
 struct SimplifyStats {
   int faces_before = 0, faces_after = 0;
   std::vector<std::pair<std::string, editing::PassStats>> passes;  // "collapse", "flip", ...
-  int collapses = 0, flips = 0, rotations = 0, zooms = 0, pans = 0;
+  int collapses = 0, flips = 0, rotations = 0, zooms = 0, pans = 0, splits = 0;
   // Collapses refused, by the first check that failed: the triangle shape bound, the distance
   // bound, then per new prism I1 positivity, I3 intersection, I2 section, and coverage (a prism
   // touching no input face, or an input face the old prisms touched left uncovered). Collapses

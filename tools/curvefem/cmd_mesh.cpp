@@ -117,7 +117,9 @@ struct MeshArgs {
   std::string input, output, features;
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
-  bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false;
+  bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
+       pan = false;
+  double split_mips = 0;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
   GlobalOptions global;
@@ -172,6 +174,13 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::Range(0, 100));
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
+  sub->add_flag("--pan", args->pan,
+                "coarsening also moves middle vertices to neighbouring input vertices where "
+                "their star is better shaped (one thread)");
+  sub->add_option("--split-mips", args->split_mips,
+                  "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
+                  "exceeds this (2 = equilateral; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -201,6 +210,8 @@ void register_mesh(CLI::App& app) {
     options.optimize.sweeps = args->optimize_sweeps;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
+    options.shell_pan = args->pan;
+    options.shell_split_mips = args->split_mips;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {
@@ -263,6 +274,7 @@ void register_mesh(CLI::App& app) {
           {"pillar_rotations", stats.coarsen_rotations},
           {"thickness_growths", stats.coarsen_zooms},
           {"pans", stats.coarsen_pans},
+          {"splits", stats.coarsen_splits},
           {"median_half_thickness_rel", stats.coarse_median_thickness_rel},
           {"min_half_thickness_rel", stats.coarse_min_thickness_rel},
           {"collapses_refused",

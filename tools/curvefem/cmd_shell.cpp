@@ -199,6 +199,7 @@ void register_shell(CLI::App& app) {
         {"simplify_pillar_rotations", simplify.rotations},
         {"simplify_zooms", simplify.zooms},
         {"simplify_pans", simplify.pans},
+        {"simplify_splits", simplify.splits},
         {"simplify_collapses_refused",
          {{"shape", simplify.collapse_rejections.shape},
           {"distance", simplify.collapse_rejections.distance},

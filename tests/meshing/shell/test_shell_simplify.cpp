@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
 #include <set>
 #include <string>
 
@@ -251,4 +253,51 @@ TEST(ShellSimplify, PansMoveMiddleVerticesOntoOtherInputVertices) {
     EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(x)).norm(), 0.0);
   }
   expect_valid(coarse, sphere);
+}
+
+namespace {
+double worst_mips(const sh::Shell& s) {
+  double worst = 0;
+  for (int f = 0; f < s.F.rows(); ++f) {
+    const Eigen::Vector3d a = s.mid.row(s.F(f, 0)), b = s.mid.row(s.F(f, 1)),
+                          c = s.mid.row(s.F(f, 2));
+    const double area2 = (b - a).cross(c - a).norm();
+    worst =
+        std::max(worst, ((b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm()) /
+                            (std::sqrt(3.0) * area2));
+  }
+  return worst;
+}
+}  // namespace
+
+TEST(ShellSimplify, SplitsRepairBadlyShapedMiddleTriangles) {
+  // Coarsened without the shape guard, a dense sphere keeps badly shaped middle triangles; split
+  // passes put a middle vertex on an input vertex near the longest edge's midpoint. Every middle
+  // vertex must still sit exactly on a distinct input vertex, the distance bound must hold and
+  // the shell must stay valid; the worst triangle must be better than without splits.
+  // Measured: 5 splits, 210 faces (214 without), worst MIPS 5.4 (8.4 without).
+  const SurfaceMesh sphere = curvefem::make_icosphere(4);  // 5120 faces
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.03 * curvefem::bbox_longest_edge(sphere.V);
+  o.rounds = 3;
+  o.flips = false;  // leave the repair to the splits
+  sh::SimplifyStats plain_stats;
+  const sh::Shell plain = sh::simplify_shell(shell, sphere, o, plain_stats);
+  EXPECT_EQ(plain_stats.splits, 0);
+  o.split_mips = 4;
+  sh::SimplifyStats s;
+  const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, s);
+  EXPECT_GT(s.splits, 0);
+  EXPECT_LE(s.max_distance, o.max_distance);
+  EXPECT_LT(worst_mips(coarse), worst_mips(plain));
+  std::set<int> used;
+  for (int m = 0; m < coarse.mid.rows(); ++m) {
+    const int x = coarse.input_vertex[m];
+    ASSERT_GE(x, 0);
+    EXPECT_TRUE(used.insert(x).second) << "input vertex " << x << " used twice";
+    EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(x)).norm(), 0.0);
+  }
+  expect_valid(coarse, sphere, "with splits");
 }
