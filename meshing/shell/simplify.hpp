@@ -46,10 +46,8 @@ struct SimplifyOptions {
   bool flips = true;   // flip passes between collapse rounds
   bool rotate = true;  // pillar rotation passes
   // Pan passes (one thread): a middle vertex next to a collapse refused for the triangle shape
-  // moves to a neighbouring input vertex where its star is better shaped. Off by default until
-  // the benchmarks are re-run with it: with it on, `curvefem run` of
-  // cases/elasticity_curved_elephant.json exposed a boundary-locator bug (Gauss–Newton from the
-  // centroid stuck on a strongly curved triangle, fixed by restarts in mapping/).
+  // moves to a neighbouring input vertex where its star is better shaped. Needs max_mips (pans
+  // follow shape refusals). The curved mesher turns them on (CurvedMeshOptions::shell_pan).
   bool pan = false;
   // > 0 (needs max_distance, whose owned input vertices it picks from): split passes after each
   // collapse pass. The longest edge of every middle triangle with a 2-D MIPS above this gets a

@@ -118,7 +118,7 @@ struct MeshArgs {
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
-       pan = false;
+       no_pan = false;
   double split_mips = 0;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
@@ -174,9 +174,9 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::Range(0, 100));
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
-  sub->add_flag("--pan", args->pan,
-                "coarsening also moves middle vertices to neighbouring input vertices where "
-                "their star is better shaped (one thread)");
+  sub->add_flag("--no-pan", args->no_pan,
+                "coarsening does not move middle vertices to neighbouring input vertices where "
+                "their star is better shaped");
   sub->add_option("--split-mips", args->split_mips,
                   "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
                   "exceeds this (2 = equilateral; 0: off)")
@@ -210,7 +210,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.sweeps = args->optimize_sweeps;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
-    options.shell_pan = args->pan;
+    options.shell_pan = !args->no_pan;
     options.shell_split_mips = args->split_mips;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
