@@ -13,6 +13,10 @@ Eigen::Vector3d BoundaryMap::image(int v) const {
   return boundary.map(f, Eigen::Vector3d(vertex_uv(v, 0), vertex_uv(v, 1), 0.0));
 }
 
+Eigen::Vector3d BoundaryMap::point_image(int i) const {
+  return boundary.map(point_face[i], Eigen::Vector3d(point_uv(i, 0), point_uv(i, 1), 0.0));
+}
+
 void validate_structure(const BoundaryMap& map, double tol) {
   if (map.boundary.kind != CellKind::triangle)
     throw InputError("boundary map: the boundary must be made of triangles");
@@ -24,6 +28,23 @@ void validate_structure(const BoundaryMap& map, double tol) {
                      " boundary nodes");
   if (map.vertex_uv.rows() != map.vertex_face.size() || map.vertex_uv.cols() != 2)
     throw InputError("boundary map: vertex coordinates must be #vertices x 2");
+  const Eigen::Index np = map.point_face.size();
+  if (map.point_input_face.size() != np || map.point_bary.rows() != np ||
+      map.point_uv.rows() != np ||
+      (np > 0 && (map.point_bary.cols() != 3 || map.point_uv.cols() != 2)))
+    throw InputError("boundary map: distance point arrays differ in size");
+  for (int i = 0; i < int(np); ++i) {
+    const int f = map.point_face[i];
+    if (f < 0 || f >= map.boundary.num_cells())
+      throw InputError("boundary map: distance point " + std::to_string(i) + ": face id " +
+                       std::to_string(f) + " out of range");
+    const double a = map.point_uv(i, 0), b = map.point_uv(i, 1);
+    const Eigen::Vector3d w = map.point_bary.row(i);
+    if (!std::isfinite(a) || !std::isfinite(b) || a < -tol || b < -tol || a + b > 1 + tol ||
+        !w.allFinite() || w.minCoeff() < -tol || std::abs(w.sum() - 1) > tol)
+      throw InputError("boundary map: distance point " + std::to_string(i) +
+                       ": coordinates outside the reference triangle");
+  }
   for (int v = 0; v < map.num_input_vertices(); ++v) {
     const int f = map.vertex_face[v];
     if (f < -1 || f >= map.boundary.num_cells())

@@ -19,6 +19,17 @@ struct BoundaryMap {
   Eigen::VectorXi boundary_node_to_volume;
   Eigen::VectorXi vertex_face;  // #input V: boundary triangle of φ(v), -1 for unreferenced vertices
   Eigen::MatrixXd vertex_uv;    // #input V × 2: reference coordinates (ξ, η) in that triangle
+  // Distance points besides the input vertices (optional; constraint points and samples where the
+  // mesher enforced ε): the input point (input face, barycentric coordinates in input vertex
+  // order) and the boundary triangle and (ξ, η) of its image.
+  Eigen::VectorXi point_input_face;
+  Eigen::MatrixXd point_bary;  // #points × 3
+  Eigen::VectorXi point_face;
+  Eigen::MatrixXd point_uv;  // #points × 2
+
+  int num_points() const { return static_cast<int>(point_face.size()); }
+  /// The image of distance point i.
+  Eigen::Vector3d point_image(int i) const;
 
   int num_input_vertices() const { return static_cast<int>(vertex_face.size()); }
   /// φ(v): the curved boundary triangle evaluated at the vertex's coordinates.
@@ -26,7 +37,8 @@ struct BoundaryMap {
 };
 
 /// Throws InputError naming the first structural defect (sizes, ids, coordinates outside the
-/// reference triangle by more than `uv_tolerance`).
+/// reference triangle by more than `uv_tolerance`). Input face ids of distance points are checked
+/// against the input by the validator (the map does not know the input).
 void validate_structure(const BoundaryMap& map, double uv_tolerance = 1e-9);
 
 }  // namespace curvefem

@@ -26,6 +26,7 @@
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/shell_geometry.hpp"
+#include "meshing/shell/shell_intersection.hpp"
 #include "meshing/shell/simplify.hpp"
 #include "meshing/shell/verify.hpp"
 #include "meshing/tetfill/tetfill.hpp"
@@ -154,6 +155,13 @@ class Builder {
     }
   }
 
+  // Distance points besides the vertices of `in`: index #V + i in `owned`.
+  std::vector<Eigen::Vector3d> extra;
+  Eigen::Vector3d point(int x) const {
+    return x < in.num_vertices() ? Eigen::Vector3d(in.V.row(x).transpose())
+                                 : extra[std::size_t(x - in.num_vertices())];
+  }
+
   void locate_input(const ProgressFn& progress) {
     owned.assign(nf, {});
     std::vector<char> referenced(in.num_vertices(), 0);
@@ -168,6 +176,15 @@ class Builder {
       if (!where[x])
         throw MeshingError("curve: input vertex is outside the coarse shell", {.vertex = x});
       owned[where[x]->face].push_back({x, where[x]->u, where[x]->v});
+    }
+    std::vector<std::optional<sh::PrismPoint>> at(extra.size());
+    tbb::parallel_for(std::size_t(0), extra.size(),
+                      [&](std::size_t i) { at[i] = projection.locate(extra[i]); });
+    for (std::size_t i = 0; i < extra.size(); ++i) {
+      if (!at[i])
+        throw MeshingError("curve: distance point " + std::to_string(i) +
+                           " is outside the coarse shell");
+      owned[at[i]->face].push_back({in.num_vertices() + int(i), at[i]->u, at[i]->v});
     }
     if (progress) progress("curve: locate input", 1.0);
   }
@@ -413,7 +430,7 @@ class Builder {
     if (alpha[f] == 0) return 0;  // the linear shell's bound was enforced by simplification
     for (const Owned& o : owned[f]) {
       const Eigen::Vector3d p = linear_mid(f, o.u, o.v) + evaluate(d, k, o.u, o.v);
-      if ((p - in.V.row(o.vertex).transpose()).norm() > eps) return 2;
+      if ((p - point(o.vertex)).norm() > eps) return 2;
     }
     return 0;
   }
@@ -457,6 +474,73 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   stats.shell_faces = int(shell.F.rows());
   stats.stage_seconds.emplace_back("shell", watch.seconds());
 
+  // Distance points besides the input vertices, on the shell's middle surface (the input): their
+  // position, the shell face whose prism holds them, and the input face / barycentric
+  // coordinates they stand for.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> point_faces, point_input_face;
+  std::vector<Eigen::Vector3d> point_bary;
+  {
+    auto bary_in = [](const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                      const Eigen::Vector3d& c) {
+      const Eigen::Vector3d v0 = b - a, v1 = c - a, v2 = p - a;
+      const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0),
+                   d21 = v2.dot(v1), den = d00 * d11 - d01 * d01;
+      const double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
+      return Eigen::Vector3d(1 - v - w, v, w);
+    };
+    auto add = [&](const Eigen::Vector3d& p, int f) {
+      const int t = shell.face_parent[std::size_t(f)];
+      Eigen::Vector3d w = bary_in(p, surface.V.row(surface.F(t, 0)), surface.V.row(surface.F(t, 1)),
+                                  surface.V.row(surface.F(t, 2)));
+      w = w.cwiseMax(0.0);
+      w /= w.sum();
+      const auto [face, bary] = beveled.surface.to_input(t, w);
+      points.push_back(p);
+      point_faces.push_back(f);
+      point_input_face.push_back(face);
+      point_bary.push_back(bary);
+    };
+    auto corner = [&](int f, int c) { return Eigen::Vector3d(shell.mid.row(shell.F(f, c))); };
+    const int L = options.eps_samples;
+    if (L >= 2)
+      for (int f = 0; f < int(shell.F.rows()); ++f)
+        for (int i = 0; i <= L; ++i)
+          for (int j = 0; i + j <= L; ++j) {
+            const int l = L - i - j;
+            if (i == L || j == L || l == L) continue;  // a corner
+            if (i == 0 || j == 0 || l == 0) {          // on an edge: once, from its p < q side
+              const int zero = i == 0 ? 0 : j == 0 ? 1 : 2;
+              const int p = shell.F(f, (zero + 1) % 3), q = shell.F(f, (zero + 2) % 3);
+              if (!(p < q)) continue;
+            }
+            add((i * corner(f, 0) + j * corner(f, 1) + l * corner(f, 2)) / double(L), f);
+          }
+    if (!options.constraint_points.empty()) {
+      const sh::InputSurfaceIndex index(surface.V, surface.F);
+      std::vector<std::vector<int>> shell_faces(std::size_t(surface.num_faces()));
+      for (int f = 0; f < int(shell.F.rows()); ++f)
+        shell_faces[std::size_t(shell.face_parent[std::size_t(f)])].push_back(f);
+      for (std::size_t i = 0; i < options.constraint_points.size(); ++i) {
+        const Eigen::Vector3d& q = options.constraint_points[i];
+        Eigen::Vector3d p;
+        const int t = index.closest_face(q, p);
+        if (t < 0 || !((p - q).norm() <= 1e-6 * unit))
+          throw InputError("mesh: constraint point " + std::to_string(i) + " (" +
+                           std::to_string(q.x()) + ", " + std::to_string(q.y()) + ", " +
+                           std::to_string(q.z()) + ") is not on the input surface");
+        int best = -1;
+        double best_w = -HUGE_VAL;
+        for (int f : shell_faces[std::size_t(t)]) {
+          const double w = bary_in(p, corner(f, 0), corner(f, 1), corner(f, 2)).minCoeff();
+          if (w > best_w) best_w = w, best = f;
+        }
+        add(p, best);
+      }
+    }
+  }
+  stats.distance_points = int(points.size());
+
   // 2. Coarsen under the distance bound.
   watch = Stopwatch();
   sh::SimplifyOptions simplify_options;
@@ -467,6 +551,8 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   simplify_options.flips = options.shell_flips;
   simplify_options.pan = options.shell_pan;
   simplify_options.split_mips = options.shell_split_mips;
+  simplify_options.extra_points = points;
+  simplify_options.extra_point_faces = point_faces;
   simplify_options.rotate = options.shell_rotate;
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
@@ -520,6 +606,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   Builder b(shell, surface, k);
   b.exterior = options.exterior;
   b.recurve = options.recurve;
+  b.extra = points;
   b.compute_targets(progress);
   b.locate_input(progress);
   stats.fiber_misses = b.fiber_misses;
@@ -766,8 +853,24 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   }
   map.vertex_face = Eigen::VectorXi::Constant(input.num_vertices(), -1);
   map.vertex_uv = Eigen::MatrixXd::Zero(input.num_vertices(), 2);
+  const int np = int(points.size());
+  map.point_input_face.resize(np);
+  map.point_bary.resize(np, 3);
+  map.point_face = Eigen::VectorXi::Constant(np, -1);
+  map.point_uv.resize(np, 2);
+  for (int i = 0; i < np; ++i) {
+    map.point_input_face[i] = point_input_face[std::size_t(i)];
+    map.point_bary.row(i) = point_bary[std::size_t(i)].transpose();
+  }
   for (int f = 0; f < nf; ++f)
     for (const Owned& o : b.owned[f]) {
+      if (o.vertex >= surface.num_vertices()) {  // a distance point
+        const int i = o.vertex - surface.num_vertices();
+        map.point_face[i] = f;
+        map.point_uv(i, 0) = o.u;
+        map.point_uv(i, 1) = o.v;
+        continue;
+      }
       if (o.vertex >= input.num_vertices()) continue;  // added by beveling
       map.vertex_face[o.vertex] = f;
       map.vertex_uv(o.vertex, 0) = o.u;

@@ -47,6 +47,16 @@ struct CurvedMeshOptions {
   // ε = 1% change by -5% to +3%.
   double thickness_per_edge = 1.0;
   std::vector<std::array<int, 2>> feature_edges;  // input vertex pairs (validated by the caller)
+  // The distance bound holds at every input vertex, and also at
+  //   - constraint points: points on the input surface (within 1e-6 of the bbox edge of it;
+  //     InputError otherwise), snapped onto it;
+  //   - eps_samples = L >= 2: the points of the degree-L barycentric lattice of every input
+  //     triangle that are not its corners (on shared edges once), L = 2 the edge midpoints,
+  //     L = 3 two points per edge and the centroid.
+  // Enforced by the coarsening and the curving like the input vertices; written into the
+  // boundary map (distance_points) and re-checked by the validator.
+  std::vector<Eigen::Vector3d> constraint_points;
+  int eps_samples = 0;
   int simplify_rounds = 5;
   // Depth of the slab layer below the curved surface, relative to the mean coarse edge length at
   // each vertex (0: keep the shell's base, whose thin slabs make needle tets).
@@ -105,7 +115,8 @@ struct CurvedMeshStats {
   int curve_refused_certificate = 0, curve_refused_distance = 0;
   // Faces whose α rose again once the slab layer was deepened (the counts above are final).
   int faces_recurved = 0;
-  int fiber_misses = 0;  // curved nodes whose fiber found no input point (kept linear)
+  int distance_points = 0;  // constraint points + samples (besides the input vertices)
+  int fiber_misses = 0;     // curved nodes whose fiber found no input point (kept linear)
   int curving_rounds = 0;
   int slab_tets = 0, interior_tets = 0, nodes = 0;
   int outer_slab_tets = 0, exterior_tets = 0;  // --exterior

@@ -201,6 +201,24 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         r.max_distance_vertex = v;
       }
     }
+    // Distance points: the input point from its input face and barycentric coordinates (its
+    // position is not taken from the mesher), against its image.
+    r.distance_points = map.num_points();
+    for (int i = 0; i < map.num_points(); ++i) {
+      const int t = map.point_input_face[i];
+      if (t < 0 || t >= input.num_faces()) {
+        ++r.bad_distance_points;
+        continue;
+      }
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 3; ++c)
+        p += map.point_bary(i, c) * input.V.row(input.F(t, c)).transpose();
+      const double d = (map.point_image(i) - p).norm() / unit;
+      if (d > r.points_max_distance_rel) {
+        r.points_max_distance_rel = d;
+        r.points_max_distance_point = i;
+      }
+    }
     if (r.unmapped_vertices == 0 && map.num_input_vertices() >= input.num_vertices())
       for (int f = 0; f < input.num_faces(); ++f) {
         const int a = input.F(f, 0), b = input.F(f, 1), c = input.F(f, 2);

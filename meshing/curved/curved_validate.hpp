@@ -47,6 +47,11 @@ struct CurvedValidation {
   int unmapped_vertices = 0;
   double max_distance_rel = 0;
   int max_distance_vertex = -1;
+  // Distance points of the map (constraint points, samples): how many, the largest distance from
+  // the input point to its image (relative), where, and ids that do not name an input face.
+  int distance_points = 0, bad_distance_points = 0;
+  double points_max_distance_rel = 0;
+  int points_max_distance_point = -1;
   int input_faces_checked = 0, flipped_input_faces = 0;
   double seconds = 0;
   bool certified() const { return non_positive_tets == 0 && undecided_tets == 0; }
@@ -56,7 +61,8 @@ struct CurvedValidation {
            exterior_faces_off_box == 0;
   }
   bool valid(double eps_rel) const {
-    return certified() && boundary_ok() && unmapped_vertices == 0 && max_distance_rel <= eps_rel;
+    return certified() && boundary_ok() && unmapped_vertices == 0 && max_distance_rel <= eps_rel &&
+           bad_distance_points == 0 && points_max_distance_rel <= eps_rel;
   }
 };
 

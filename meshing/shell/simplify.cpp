@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 
+#include "meshing/core/error.hpp"
 #include "meshing/editing/tri_mesh.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
 #include "meshing/shell/prism_location.hpp"
@@ -34,7 +35,14 @@ class ShellMesh : public TriMesh {
   Attribute<char> singular{*this, 0, 0};
   Attribute<int> input_vertex{*this, 0, -1};
   Attribute<std::vector<int>> track{*this, 2, {}};  // input faces touching the prism
-  Attribute<std::vector<int>> owned{*this, 2, {}};  // input vertices located in the prism
+  // Distance points located in the prism: input vertex x, or extra point x - #input V.
+  Attribute<std::vector<int>> owned{*this, 2, {}};
+  const std::vector<Eigen::Vector3d>* extra_points = nullptr;
+  Eigen::Vector3d distance_point(int x) const {
+    const int nv = int(input->V().rows());
+    return x < nv ? Eigen::Vector3d(input->V().row(x).transpose()) : (*extra_points)[x - nv];
+  }
+  bool is_input_vertex(int x) const { return x < int(input->V().rows()); }
   const InputSurfaceIndex* input = nullptr;
   double section_cos = 0;
   double max_distance = 0;
@@ -103,7 +111,7 @@ class ShellMesh : public TriMesh {
     for (Id f : from) points.insert(points.end(), owned[f].begin(), owned[f].end());
     std::vector<std::vector<int>> next(r.new_cells.size());
     for (int x : points) {
-      const Eigen::Vector3d p = input->V().row(x);
+      const Eigen::Vector3d p = distance_point(x);
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
         const auto d = owned_distance(r.new_cells[i], p);
@@ -220,7 +228,8 @@ class ShellMesh : public TriMesh {
     double best_d = 0.25 * (mb - ma).norm();
     for (Id f : r.old_cells)
       for (int x : owned[f]) {
-        if (occupied[std::size_t(x)].load(std::memory_order_relaxed)) continue;
+        if (!is_input_vertex(x) || occupied[std::size_t(x)].load(std::memory_order_relaxed))
+          continue;
         const double d = (input->V().row(x).transpose() - centre).norm();
         if (d < best_d) {
           best_d = d;
@@ -446,6 +455,31 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
           own[f].push_back(x);
         }
       }
+    // Extra distance points, each in the prism of the shell face the caller gives or of a face
+    // sharing a vertex with it (a point on a face's edge may round into the neighbour).
+    if (options.extra_points.size() != options.extra_point_faces.size())
+      throw MeshingError("simplify: extra_points and extra_point_faces differ in length");
+    m.extra_points = &options.extra_points;
+    for (std::size_t i = 0; i < options.extra_points.size(); ++i) {
+      const int f = options.extra_point_faces[i];
+      if (f < 0 || f >= nf)
+        throw MeshingError("simplify: extra distance point " + std::to_string(i) +
+                           " names shell face " + std::to_string(f) + ", not a face");
+      const Eigen::Vector3d& p = options.extra_points[i];
+      int home = -1;
+      if (const auto d = m.owned_distance(Id(f), p); d && *d <= m.max_distance) home = f;
+      for (int k = 0; k < 3 && home < 0; ++k)
+        for (Id g : m.vertex_cells(Id(shell.F(f, k))))
+          if (const auto d = m.owned_distance(g, p); d && *d <= m.max_distance) {
+            home = int(g);
+            break;
+          }
+      if (home < 0)
+        throw MeshingError("simplify: extra distance point " + std::to_string(i) +
+                           " is not within the bound in the prism of shell face " +
+                           std::to_string(f) + " or of a face next to it");
+      own[home].push_back(input.num_vertices() + int(i));
+    }
     for (int f = 0; f < nf; ++f) m.owned.set(Id(f), own[f]);
   }
 
@@ -658,7 +692,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   if (m.max_distance > 0)
     for (std::size_t f = 0; f < faces.size(); ++f)
       for (int x : m.owned[Id(f)]) {
-        const auto d = m.owned_distance(Id(f), input.V.row(x).transpose());
+        const auto d = m.owned_distance(Id(f), m.distance_point(x));
         stats.max_distance = std::max(stats.max_distance, d ? *d : HUGE_VAL);
       }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -36,6 +36,11 @@ struct SimplifyOptions {
   // accepted only if each owned vertex x lies in one of the new prisms, at prism coordinates
   // (u, v, h), with |x - mid(u, v)| <= max_distance (mid: the linear middle triangle).
   double max_distance = 0;
+  // Further points on the input where the distance bound holds too (constraint points, dense
+  // samples between the input vertices), each with the face of the given shell whose prism holds
+  // it (within the bound of that face's middle triangle). Owned and re-homed like input vertices.
+  std::vector<Eigen::Vector3d> extra_points;
+  std::vector<int> extra_point_faces;
   // #input vertices or empty: input vertices whose middle vertex must never be collapsed away
   // (feature vertices, user constraints).
   std::vector<char> frozen_input_vertices;
@@ -71,7 +76,7 @@ struct SimplifyStats {
   } collapse_rejections;
   // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
   double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;
-  double max_distance = 0;  // max |x - mid(u, v)| over owned input vertices at the end (if bounded)
+  double max_distance = 0;  // max |x - mid(u, v)| over owned points at the end (if bounded)
   double seconds = 0;
 };
 

@@ -264,3 +264,47 @@ TEST(Cli, ShellReportsBeveling) {
   EXPECT_EQ(s["beveling"], "not needed");
   EXPECT_EQ(s["beveled_faces"], 0);
 }
+
+TEST(Cli, MeshWithDistancePointsWritesAndValidatesThem) {
+  const auto dir = test::scratch_dir("cli_mesh_points");
+  const SurfaceMesh sphere = make_icosphere(2);  // 320 faces, 480 edges
+  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  {
+    std::ofstream(dir / "points.json") << "[[0, 0, 1], [" << sphere.V(7, 0) << ", "
+                                       << sphere.V(7, 1) << ", " << sphere.V(7, 2) << "]]";
+  }
+  const std::string in = (dir / "sphere.obj").string(), out_dir = (dir / "m").string();
+  std::string out;
+  // (0, 0, 1) is a vertex of the icosphere; both points are on it.
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
+                                  " --order 2 --eps 0.01 --threads 2 --eps-samples 2 "
+                                  "--constraints " +
+                                  (dir / "points.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto j = read_json(dir / "m" / "report.json");
+  EXPECT_EQ(j["distance_points"], 480 + 2);  // edge midpoints + the two constraint points
+  EXPECT_EQ(j["validation"]["distance_points"], 482);
+  EXPECT_LE(j["distance_points_max_distance_rel"].get<double>(), 0.01);
+  EXPECT_TRUE(j["valid"].get<bool>());
+  ASSERT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 0) << out;
+  EXPECT_NE(out.find("distance points      482"), std::string::npos) << out;
+  // The validator reads the points back from boundary_map.json: one moved to another input face
+  // fails it.
+  auto map = read_json(dir / "m" / "boundary_map.json");
+  const int t = map["distance_points"]["input_face"][0].get<int>();
+  map["distance_points"]["input_face"][0] = (t + 160) % 320;
+  { std::ofstream(dir / "m" / "boundary_map.json") << map.dump(); }
+  EXPECT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 3) << out;
+  EXPECT_NE(out.find("EXCEEDS"), std::string::npos) << out;
+  // A constraint point off the surface: exit 2, the point named, nothing written.
+  { std::ofstream(dir / "off.json") << "[[0, 0, 0]]"; }
+  EXPECT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + (dir / "x").string() +
+                                  " --constraints " + (dir / "off.json").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("constraint point 0"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x"));
+}

@@ -43,11 +43,29 @@ void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& ma
   auto& vol = j["boundary"]["volume_node"] = nlohmann::ordered_json::array();
   for (int n = 0; n < map.boundary_node_to_volume.size(); ++n)
     vol.push_back(map.boundary_node_to_volume[n]);
-  auto& vf = j["vertex_face"] = nlohmann::ordered_json::array();
-  auto& uv = j["vertex_uv"] = nlohmann::ordered_json::array();
+  // Filled apart, then moved in: a reference to one member of an ordered_json object does not
+  // survive adding the next (members live in a vector).
+  auto vf = nlohmann::ordered_json::array(), uv = nlohmann::ordered_json::array();
   for (int v = 0; v < map.num_input_vertices(); ++v) {
     vf.push_back(map.vertex_face[v]);
     uv.push_back({map.vertex_uv(v, 0), map.vertex_uv(v, 1)});
+  }
+  j["vertex_face"] = std::move(vf);
+  j["vertex_uv"] = std::move(uv);
+  if (map.num_points() > 0) {
+    auto in_face = nlohmann::ordered_json::array(), bary = nlohmann::ordered_json::array(),
+         face = nlohmann::ordered_json::array(), puv = nlohmann::ordered_json::array();
+    for (int i = 0; i < map.num_points(); ++i) {
+      in_face.push_back(map.point_input_face[i]);
+      bary.push_back({map.point_bary(i, 0), map.point_bary(i, 1), map.point_bary(i, 2)});
+      face.push_back(map.point_face[i]);
+      puv.push_back({map.point_uv(i, 0), map.point_uv(i, 1)});
+    }
+    auto& pts = j["distance_points"];
+    pts["input_face"] = std::move(in_face);
+    pts["bary"] = std::move(bary);
+    pts["face"] = std::move(face);
+    pts["uv"] = std::move(puv);
   }
   if (shell) {
     auto& s = j["shell"];
@@ -111,6 +129,27 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
       map.vertex_face[Eigen::Index(v)] = vf[v];
       map.vertex_uv(Eigen::Index(v), 0) = uv[v].at(0);
       map.vertex_uv(Eigen::Index(v), 1) = uv[v].at(1);
+    }
+    if (j.contains("distance_points")) {
+      const auto& pts = j.at("distance_points");
+      const auto& in_face = pts.at("input_face");
+      const auto& bary = pts.at("bary");
+      const auto& face = pts.at("face");
+      const auto& puv = pts.at("uv");
+      const std::size_t n = face.size();
+      if (in_face.size() != n || bary.size() != n || puv.size() != n)
+        throw InputError(path.string() + ": distance_points arrays differ in length");
+      map.point_input_face.resize(Eigen::Index(n));
+      map.point_bary.resize(Eigen::Index(n), 3);
+      map.point_face.resize(Eigen::Index(n));
+      map.point_uv.resize(Eigen::Index(n), 2);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Index r = Eigen::Index(i);
+        map.point_input_face[r] = in_face[i];
+        map.point_face[r] = face[i];
+        for (int c = 0; c < 3; ++c) map.point_bary(r, c) = bary[i].at(c);
+        for (int c = 0; c < 2; ++c) map.point_uv(r, c) = puv[i].at(c);
+      }
     }
     if (j.contains("shell")) {
       const auto& s = j.at("shell");

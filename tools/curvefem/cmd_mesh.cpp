@@ -82,6 +82,10 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"unmapped_vertices", v.unmapped_vertices},
           {"max_distance_rel", v.max_distance_rel},
           {"max_distance_vertex", v.max_distance_vertex},
+          {"distance_points", v.distance_points},
+          {"distance_points_bad", v.bad_distance_points},
+          {"distance_points_max_distance_rel", v.points_max_distance_rel},
+          {"distance_points_max_distance_point", v.points_max_distance_point},
           {"eps_rel", eps_rel},
           {"input_faces_orientation_checked", v.input_faces_checked},
           {"flipped_input_faces", v.flipped_input_faces},
@@ -114,7 +118,8 @@ namespace {
 namespace cv = meshing::curved;
 
 struct MeshArgs {
-  std::string input, output, features;
+  std::string input, output, features, constraints;
+  int eps_samples = 0;
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
@@ -124,6 +129,29 @@ struct MeshArgs {
   double padding = 0.25;
   GlobalOptions global;
 };
+
+// Constraint points: a JSON list of [x, y, z], or {"points": [...]}.
+std::vector<Eigen::Vector3d> read_constraint_file(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw IoError(path + ": cannot open the constraint point file");
+  std::vector<Eigen::Vector3d> points;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(f);
+    const nlohmann::json& list = j.is_object() ? j.at("points") : j;
+    if (!list.is_array()) throw InputError(path + ": expected a list of [x, y, z] points");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      if (!list[i].is_array() || list[i].size() != 3 || !list[i][0].is_number() ||
+          !list[i][1].is_number() || !list[i][2].is_number())
+        throw InputError(path + ": constraint point " + std::to_string(i) +
+                         " is not a list of three numbers");
+      points.emplace_back(list[i][0].get<double>(), list[i][1].get<double>(),
+                          list[i][2].get<double>());
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not a JSON list of [x, y, z] points: " + e.what());
+  }
+  return points;
+}
 
 std::vector<std::array<int, 2>> read_feature_file(const std::string& path) {
   std::ifstream f(path);
@@ -174,6 +202,13 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::Range(0, 100));
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
+  sub->add_option("--constraints", args->constraints,
+                  "JSON list of [x, y, z] points on the input where the distance bound must also "
+                  "hold");
+  sub->add_option("--eps-samples", args->eps_samples,
+                  "also bound the distance at the non-corner points of the degree-L barycentric "
+                  "lattice of every input triangle (L >= 2; 0: vertices only)")
+      ->check(CLI::Range(0, 16));
   sub->add_flag("--no-pan", args->no_pan,
                 "coarsening does not move middle vertices to neighbouring input vertices where "
                 "their star is better shaped");
@@ -211,6 +246,9 @@ void register_mesh(CLI::App& app) {
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.shell_pan = !args->no_pan;
+    options.eps_samples = args->eps_samples;
+    if (!args->constraints.empty())
+      options.constraint_points = read_constraint_file(args->constraints);
     options.shell_split_mips = args->split_mips;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
@@ -304,6 +342,8 @@ void register_mesh(CLI::App& app) {
         {"linear_max_distance_rel", stats.linear_max_distance_rel},
         {"optimize", optimize_json(stats.optimize)},
         {"max_distance_rel", check.max_distance_rel},
+        {"distance_points", stats.distance_points},
+        {"distance_points_max_distance_rel", check.points_max_distance_rel},
         {"min_jacobian_certified", check.certified()},
         {"min_scaled_jacobian", check.min_scaled_jacobian},
         {"boundary_self_intersections", check.boundary_self_intersections},

@@ -317,6 +317,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     options.eps_rel = spec.eps;
     options.thickness_rel = spec.thickness;
     options.thickness_per_edge = spec.thickness_per_edge;
+    options.eps_samples = spec.eps_samples;
     options.threads = threads;
     options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);

@@ -109,6 +109,12 @@ void register_validate(CLI::App& app) {
       std::printf("  distance             max %.4g (eps %.4g) at input vertex %d%s\n",
                   v.max_distance_rel, eps, v.max_distance_vertex,
                   v.max_distance_rel <= eps ? "" : "  EXCEEDS eps");
+      if (v.distance_points > 0)
+        std::printf("  distance points      %d, max %.4g at point %d%s\n", v.distance_points,
+                    v.points_max_distance_rel, v.points_max_distance_point,
+                    v.bad_distance_points > 0          ? "  BAD INPUT FACE IDS"
+                    : v.points_max_distance_rel <= eps ? ""
+                                                       : "  EXCEEDS eps");
       std::printf("  unmapped vertices    %d\n", v.unmapped_vertices);
       std::printf(
           "  phi chart (diag.)    %d of %d input faces inside one boundary face have a "

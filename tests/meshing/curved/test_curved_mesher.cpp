@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "mapping/boundary_inverse.hpp"
+#include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -257,4 +258,106 @@ TEST(CurvedMesher, DeeperSlabsLetRefusedFacesCurveAgain) {
   // The same coarse shell (deterministic coarsening), so the counts compare face for face.
   EXPECT_EQ(stats[0].coarse_faces, stats[1].coarse_faces);
   EXPECT_GT(stats[1].faces_fully_curved, stats[0].faces_fully_curved);
+}
+
+namespace {
+// Max |p − φ(p)| / bbox edge over the degree-L lattice points of every input triangle, φ(p)
+// through the returned shell's projection (P⁻¹ gives the prism coordinates; boundary triangle f
+// is shell face f in the same rotated frame).
+double sample_distance_rel(const cv::CurvedMesh& m, const SurfaceMesh& s, int L) {
+  const sh::ShellProjection projection(m.shell, s);
+  double worst = 0;
+  for (int t = 0; t < s.num_faces(); ++t)
+    for (int i = 0; i <= L; ++i)
+      for (int j = 0; i + j <= L; ++j) {
+        const Eigen::Vector3d p =
+            (i * s.V.row(s.F(t, 0)) + j * s.V.row(s.F(t, 1)) + (L - i - j) * s.V.row(s.F(t, 2)))
+                .transpose() /
+            double(L);
+        const auto q = projection.unproject(p);
+        if (!q) return HUGE_VAL;
+        const Eigen::Vector3d image = m.map.boundary.map(q->face, Eigen::Vector3d(q->u, q->v, 0.0));
+        worst = std::max(worst, (image - p).norm());
+      }
+  return worst / curvefem::bbox_longest_edge(s.V);
+}
+}  // namespace
+
+// ε is enforced at the input vertices; with eps_samples it also holds at lattice points of every
+// input triangle, and the validator re-checks them from the map's distance points.
+TEST(CurvedMesher, SamplesBoundTheDistanceBetweenInputVertices) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.4, 32, 12);  // 768 faces
+  const double eps = 6e-3;
+  cv::CurvedMeshOptions o;
+  o.order = 2;
+  o.eps_rel = eps;
+  o.threads = 2;
+  cv::CurvedMeshStats plain_stats;
+  const cv::CurvedMesh plain = cv::build_curved_mesh(torus, o, plain_stats);
+  const cv::CurvedValidation plain_check = cv::validate_curved_mesh(plain.mesh, plain.map, torus);
+  EXPECT_TRUE(plain_check.valid(eps));
+  EXPECT_EQ(plain_check.distance_points, 0);
+  const double plain_gap = sample_distance_rel(plain, torus, 3);
+
+  o.eps_samples = 3;
+  cv::CurvedMeshStats stats;
+  const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
+  const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+  EXPECT_TRUE(check.valid(eps));
+  // 2 points per edge (576 edges) and one per face.
+  EXPECT_EQ(stats.distance_points, 2 * 1152 + 768);
+  EXPECT_EQ(check.distance_points, stats.distance_points);
+  EXPECT_EQ(check.bad_distance_points, 0);
+  EXPECT_LE(check.points_max_distance_rel, eps);
+  const double gap = sample_distance_rel(m, torus, 3);
+  // Measured: 450 faces without samples, whose images of the samples reach 1.04e-2 (the bound
+  // held only at the vertices); 494 faces with them, samples within 5.3e-3.
+  EXPECT_GT(plain_gap, eps) << "the samples are needed on this shape";
+  EXPECT_LE(gap, eps);
+  // φ of the samples through the shell agrees with the (face, u, v) the map stores for them.
+  EXPECT_NEAR(gap, check.points_max_distance_rel, 1e-12);
+  EXPECT_LT(stats.coarse_faces, 768 * 3 / 4);
+}
+
+TEST(CurvedMesher, ConstraintPointsAreEnforcedAndCheckedByTheValidator) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.4, 32, 12);
+  const double eps = 6e-3;
+  cv::CurvedMeshOptions o;
+  o.order = 2;
+  o.eps_rel = eps;
+  o.threads = 2;
+  // Face centroids of every 7th input face, and one point 1e-9 off the surface (snapped onto it).
+  for (int t = 0; t < torus.num_faces(); t += 7)
+    o.constraint_points.push_back(
+        (torus.V.row(torus.F(t, 0)) + torus.V.row(torus.F(t, 1)) + torus.V.row(torus.F(t, 2)))
+            .transpose() /
+        3.0);
+  o.constraint_points.push_back(torus.V.row(5).transpose() * (1 + 1e-9));
+  cv::CurvedMeshStats stats;
+  const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
+  EXPECT_EQ(stats.distance_points, int(o.constraint_points.size()));
+  const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+  EXPECT_TRUE(check.valid(eps));
+  EXPECT_EQ(check.distance_points, stats.distance_points);
+  EXPECT_LE(check.points_max_distance_rel, eps);
+  // The validator computes each point from its input face and barycentric coordinates: a point
+  // claimed on another face, or on no face, fails it.
+  curvefem::BoundaryMap moved = m.map;
+  moved.point_input_face[0] =
+      (moved.point_input_face[0] + torus.num_faces() / 2) % torus.num_faces();
+  const cv::CurvedValidation bad = cv::validate_curved_mesh(m.mesh, moved, torus);
+  EXPECT_GT(bad.points_max_distance_rel, eps);
+  EXPECT_EQ(bad.points_max_distance_point, 0);
+  EXPECT_FALSE(bad.valid(eps));
+  moved.point_input_face[0] = -3;
+  EXPECT_EQ(cv::validate_curved_mesh(m.mesh, moved, torus).bad_distance_points, 1);
+  // A point off the surface is an input error naming it.
+  o.constraint_points = {Eigen::Vector3d(0, 0, 0)};  // the torus's hole
+  cv::CurvedMeshStats off;
+  try {
+    (void)cv::build_curved_mesh(torus, o, off);
+    ADD_FAILURE() << "a constraint point off the surface was accepted";
+  } catch (const curvefem::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("constraint point 0"), std::string::npos) << e.what();
+  }
 }
