@@ -190,7 +190,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   const Reader r{path.string()};
   r.only_keys(j, "",
               {"geometry", "meshing", "physics", "discretization", "rhs", "boundary_conditions",
-               "exact", "solver", "output"});
+               "exact", "exact_gradient", "solver", "output"});
   CaseSpec c;
   c.case_file = path;
   const auto base = path.parent_path();
@@ -386,6 +386,40 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   const int comps = c.components();
   if (const json* v = r.get(j, "rhs")) c.rhs = r.expressions(*v, "/rhs", comps);
   if (const json* v = r.get(j, "exact")) c.exact = r.expressions(*v, "/exact", comps);
+  if (const json* v = r.get(j, "exact_gradient")) {
+    if (c.exact.empty()) fail("/exact_gradient", "needs \"exact\"", r.file);
+    if (comps == 1) {
+      c.exact_gradient = r.expressions(*v, "/exact_gradient", 3);
+    } else {
+      if (!v->is_array() || v->size() != 3)
+        fail("/exact_gradient", "expected three arrays of three expressions (vector problem)",
+             r.file);
+      for (int i = 0; i < 3; ++i) {
+        const auto g =
+            r.expressions((*v)[std::size_t(i)], "/exact_gradient/" + std::to_string(i), 3);
+        c.exact_gradient.insert(c.exact_gradient.end(), g.begin(), g.end());
+      }
+    }
+    // A typo in a derivative would silently change the H1 error: compare with 4th-order
+    // differences of `exact` at a few points (skipping points where either is not finite).
+    const Eigen::Vector3d probes[] = {
+        {0.13, -0.27, 0.31}, {-0.41, 0.22, -0.17}, {0.37, 0.45, -0.29}, {-0.23, -0.36, 0.44}};
+    for (int i = 0; i < comps; ++i)
+      for (const Eigen::Vector3d& x : probes) {
+        const Eigen::Vector3d fd = c.exact[std::size_t(i)].gradient(x);
+        for (int d = 0; d < 3; ++d) {
+          const double g = c.exact_gradient[std::size_t(3 * i + d)](x);
+          if (!std::isfinite(g) || !std::isfinite(fd[d])) continue;
+          if (std::abs(g - fd[d]) > 1e-5 * (1 + std::abs(fd[d])))
+            fail("/exact_gradient" + (comps == 1 ? "" : "/" + std::to_string(i)) + "/" +
+                     std::to_string(d),
+                 "is not the derivative of exact: " + std::to_string(g) + " vs " +
+                     std::to_string(fd[d]) + " by finite differences at (" + std::to_string(x.x()) +
+                     ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + ")",
+                 r.file);
+        }
+      }
+  }
 
   const json* bcs = r.get(j, "boundary_conditions");
   if (bcs) {
@@ -517,6 +551,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     res["boundary_conditions"].push_back(b);
   }
   if (!c.exact.empty()) res["exact"] = exprs(c.exact);
+  if (!c.exact_gradient.empty()) {
+    if (c.components() == 1) {
+      res["exact_gradient"] = exprs(c.exact_gradient);
+    } else {
+      res["exact_gradient"] = json::array();
+      for (int i = 0; i < 3; ++i)
+        res["exact_gradient"].push_back(exprs(std::vector<Expression>(
+            c.exact_gradient.begin() + 3 * i, c.exact_gradient.begin() + 3 * i + 3)));
+    }
+  }
   res["solver"] = {
       {"type", c.solver}, {"rtol", c.solver_rtol}, {"max_iterations", c.solver_max_iterations}};
   res["output"] = {{"dir", c.output_dir.string()}};

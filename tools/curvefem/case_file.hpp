@@ -63,6 +63,9 @@ struct CaseSpec {
   std::vector<Expression> rhs;  ///< empty, 1 or 3
   std::vector<BoundaryConditionSpec> boundary_conditions;
   std::vector<Expression> exact;  ///< empty, 1 or 3
+  /// Empty, or 3 per component of `exact` (∂/∂x, ∂/∂y, ∂/∂z of component 0, then 1, 2): the H1
+  /// error uses them instead of finite differences of `exact`.
+  std::vector<Expression> exact_gradient;
   std::string solver = "auto";
   double solver_rtol = 1e-10;
   int solver_max_iterations = 5000;
