@@ -169,16 +169,30 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
   std::vector<double> values(with_matrix ? setup.pattern.nonzeros() : 0, 0.0);
   std::vector<double> energy(mesh.num_cells(), 0.0);
   std::atomic<bool> valid{true};
+  // Tangent: Ke(3a+i, 3b+j) = Σ_q w [μ δij (G Gᵀ)(a,b) + c1 H(a,j) H(b,i) + λ H(a,i) H(b,j)]
+  // with G the physical basis gradients, H = G F⁻¹ and c1 = μ − λ ln J. The three sums are
+  // products of per-point rows stacked over the quadrature points (h_q = H row-major, one row per
+  // point): Σ λw h hᵀ = Hsᵀ Hl, Σ c1 w h hᵀ = Hsᵀ Hc whose 3×3 blocks are transposed, and
+  // Σ μ w G Gᵀ = Gsᵀ Gm — three matrix products per cell instead of a loop over 9n² entries at
+  // every point.
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Re) {
     thread_local CellGeometry g;  // per-thread scratch
-    thread_local Eigen::MatrixXd U, G, H, GP, GG;
+    thread_local Eigen::MatrixXd U, G, H, GP, Hs, Hl, Hc, Gs, Gm, Y, GG;
+    const int Q = setup.geometry.num_points();
     U.resize(n, 3);
     G.resize(n, 3);
     H.resize(n, 3);
+    if (with_matrix) {
+      Hs.resize(Q, 3 * n);
+      Hl.resize(Q, 3 * n);
+      Hc.resize(Q, 3 * n);
+      Gs.resize(3 * Q, n);
+      Gm.resize(3 * Q, n);
+    }
     setup.geometry.evaluate(cell, g);
     gather(space, u, cell, U);
     double e = 0.0;
-    for (int q = 0; q < setup.geometry.num_points(); ++q) {
+    for (int q = 0; q < Q; ++q) {
       G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
       const Eigen::Matrix3d F = Eigen::Matrix3d::Identity() + U.transpose() * G;
       const double J = F.determinant();
@@ -197,14 +211,25 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
         for (int i = 0; i < 3; ++i) Re[3 * a + i] += w * GP(a, i);
       if (!with_matrix) continue;
       H.noalias() = G * Finv;
-      GG.noalias() = G * G.transpose();
       const double c1 = mu - lambda * lnJ;
       for (int a = 0; a < n; ++a)
-        for (int b = 0; b < n; ++b)
-          for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-              Ke(3 * a + i, 3 * b + j) += w * ((i == j ? mu * GG(a, b) : 0.0) +
-                                               c1 * H(b, i) * H(a, j) + lambda * H(a, i) * H(b, j));
+        for (int i = 0; i < 3; ++i) {
+          Hs(q, 3 * a + i) = H(a, i);
+          Hl(q, 3 * a + i) = lambda * w * H(a, i);
+          Hc(q, 3 * a + i) = c1 * w * H(a, i);
+        }
+      Gs.middleRows(3 * q, 3) = G.transpose();
+      Gm.middleRows(3 * q, 3) = (mu * w) * G.transpose();
+    }
+    if (with_matrix) {
+      Ke.noalias() += Hs.transpose() * Hl;
+      Y.noalias() = Hs.transpose() * Hc;
+      GG.noalias() = Gs.transpose() * Gm;
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+          Ke.block<3, 3>(3 * a, 3 * b) += Y.block<3, 3>(3 * a, 3 * b).transpose();
+          for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += GG(a, b);
+        }
     }
     energy[cell] = e;
   };
