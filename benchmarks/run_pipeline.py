@@ -1,5 +1,7 @@
 #!/usr/bin/python3
-"""Whole-pipeline benchmark: curved vs dense-linear on the shipped dense-surface cases.
+"""Whole-pipeline benchmark: curved vs dense-linear on the shipped dense-surface cases, plus the
+benchmark-only cases of benchmarks/cases/ on the real meshes of ../shared/data (DATA_CASES; run
+by default when that data is there, skipped otherwise).
 
 For every case it runs `curvefem run CASE -o DIR` (log in WORK/CASE/METHOD.log) twice, one after
 the other:
