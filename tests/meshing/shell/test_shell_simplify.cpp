@@ -31,6 +31,16 @@ void expect_valid(const sh::Shell& shell, const SurfaceMesh& input, const std::s
   EXPECT_EQ(v.roundtrip_failures, 0) << what;
   EXPECT_LT(v.roundtrip_max_error_rel, 1e-12) << what;
 }
+// The boundary map needs every coarse corner exactly on an input vertex, each on its own.
+void expect_on_distinct_input_vertices(const sh::Shell& coarse, const SurfaceMesh& input) {
+  std::set<int> used;
+  for (int m = 0; m < coarse.mid.rows(); ++m) {
+    const int x = coarse.input_vertex[m];
+    ASSERT_GE(x, 0);
+    EXPECT_TRUE(used.insert(x).second) << "input vertex " << x << " used twice";
+    EXPECT_EQ((coarse.mid.row(m) - input.V.row(x)).norm(), 0.0);
+  }
+}
 }  // namespace
 
 TEST(ShellSimplify, CoarsensASphereShellAndKeepsItValid) {
@@ -245,13 +255,7 @@ TEST(ShellSimplify, PansMoveMiddleVerticesOntoOtherInputVertices) {
   const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, s);
   EXPECT_GT(s.pans, 0);
   EXPECT_LE(s.max_distance, o.max_distance);
-  std::set<int> used;
-  for (int m = 0; m < coarse.mid.rows(); ++m) {
-    const int x = coarse.input_vertex[m];
-    ASSERT_GE(x, 0);
-    EXPECT_TRUE(used.insert(x).second) << "input vertex " << x << " used twice";
-    EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(x)).norm(), 0.0);
-  }
+  expect_on_distinct_input_vertices(coarse, sphere);
   expect_valid(coarse, sphere);
 }
 
@@ -292,12 +296,6 @@ TEST(ShellSimplify, SplitsRepairBadlyShapedMiddleTriangles) {
   EXPECT_GT(s.splits, 0);
   EXPECT_LE(s.max_distance, o.max_distance);
   EXPECT_LT(worst_mips(coarse), worst_mips(plain));
-  std::set<int> used;
-  for (int m = 0; m < coarse.mid.rows(); ++m) {
-    const int x = coarse.input_vertex[m];
-    ASSERT_GE(x, 0);
-    EXPECT_TRUE(used.insert(x).second) << "input vertex " << x << " used twice";
-    EXPECT_EQ((coarse.mid.row(m) - sphere.V.row(x)).norm(), 0.0);
-  }
+  expect_on_distinct_input_vertices(coarse, sphere);
   expect_valid(coarse, sphere, "with splits");
 }
