@@ -396,7 +396,7 @@ class Builder {
   // kept when its slabs and those of the faces across its edges (which share its edge nodes)
   // still certify and the distance bound holds. The inner surface does not change. Sequential:
   // neighbouring faces interact through their edges.
-  int raise_alpha(double eps) {
+  void raise_alpha(double eps) {
     int raised = 0;
     for (int f = 0; f < nf; ++f) {
       if (alpha[f] == 1) continue;
@@ -417,7 +417,6 @@ class Builder {
       raised += alpha[f] > old;
     }
     alpha_raised = raised;
-    return raised;
   }
   int alpha_raised = 0;
   bool recurve = true;
