@@ -169,7 +169,10 @@ class Builder {
       for (int c = 0; c < 3; ++c) referenced[in.F(f, c)] = 1;
     std::vector<std::optional<sh::PrismPoint>> where(in.num_vertices());
     tbb::parallel_for(0, in.num_vertices(), [&](int x) {
-      if (referenced[x]) where[x] = projection.locate(in.V.row(x).transpose());
+      // The vertex's point of the shell's reference copy (the input vertex itself unless a
+      // feature chain snapped it).
+      if (referenced[x])
+        where[x] = projection.locate(projection.reference_vertices().row(x).transpose());
     });
     for (int x = 0; x < in.num_vertices(); ++x) {
       if (!referenced[x]) continue;
@@ -556,6 +559,18 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
+  if (options.feature_chains && !options.feature_edges.empty()) {
+    if (!points.empty())
+      log::warn(
+          "mesh: feature chains are not coarsened with distance points (constraints, "
+          "eps_samples): feature vertices stay");
+    else if (stats.beveled_faces > 0)
+      log::warn("mesh: feature chains are not coarsened on a beveled shell: feature vertices stay");
+    else {
+      simplify_options.feature_edges = options.feature_edges;
+      simplify_options.collapse_chains = true;
+    }
+  }
   sh::SimplifyStats simplify_stats;
   if (progress) progress("coarsen", 0.0);
   shell = sh::simplify_shell(shell, surface, simplify_options, simplify_stats);
@@ -567,6 +582,9 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   stats.coarsen_zooms = simplify_stats.zooms;
   stats.coarsen_pans = simplify_stats.pans;
   stats.coarsen_splits = simplify_stats.splits;
+  stats.coarsen_chain_collapses = simplify_stats.chain_collapses;
+  stats.snapped_vertices = simplify_stats.snapped_vertices;
+  stats.chain_max_distance_rel = simplify_stats.chain_max_distance / unit;
   for (const auto& [name, pass] : simplify_stats.passes) {
     auto it = std::find_if(stats.coarsen_seconds.begin(), stats.coarsen_seconds.end(),
                            [&](const auto& e) { return e.first == name; });
@@ -592,11 +610,13 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   const sh::ShellVerification shell_check = sh::verify_shell(shell, surface);
   stats.shell_section_verified = shell_check.section();
   stats.shell_non_section_prisms = shell_check.non_section_faces;
-  if (!shell_check.positive() || !shell_check.separated())
+  if (!shell_check.positive() || !shell_check.separated() || !shell_check.embedded_reference())
     throw MeshingError("coarsen: the coarse shell failed verification (" +
                        std::to_string(shell_check.non_positive_faces) + " non-positive prisms, " +
                        std::to_string(shell_check.intersecting_input_faces) +
-                       " input faces crossing base/top)");
+                       " input faces crossing base/top, " +
+                       std::to_string(shell_check.reference_self_intersections) +
+                       " self-intersecting faces of the feature chains' reference copy)");
   stats.stage_seconds.emplace_back("shell verification", watch.seconds());
 
   // 3. Curve.

@@ -78,6 +78,12 @@ struct CurvedMeshOptions {
   // down on fandisk 0.015 -> 0.011; time within 10%. Splits lower the slab quality (simplify.hpp).
   bool shell_pan = true;
   double shell_split_mips = 0;
+  // Coarsening along feature chains (SimplifyOptions::collapse_chains): chain vertices collapse
+  // along their coarse feature edge, whose input vertices are snapped onto it in the shell's
+  // reference copy; the curved feature edge then follows the input chain through P. Not with
+  // distance points (constraints, eps_samples) or a beveled shell (the coarsening then keeps
+  // the feature vertices, with a warning).
+  bool feature_chains = false;
   int threads = 0;  // 0: oneTBB default
   // The coarsening is the only stage whose result depends on thread timing (the editing
   // scheduler's try-locks). Deterministic runs coarsen on one thread, so the same input and
@@ -102,7 +108,11 @@ struct CurvedMeshStats {
   // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness
   // (the smaller half-pillar per vertex) relative to the longest bbox edge.
   int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0,
-      coarsen_pans = 0, coarsen_splits = 0;
+      coarsen_pans = 0, coarsen_splits = 0, coarsen_chain_collapses = 0;
+  // Input feature vertices inside coarse feature edges (snapped in the reference copy), and the
+  // largest distance between one and its snapped point, relative to the longest bbox edge.
+  int snapped_vertices = 0;
+  double chain_max_distance_rel = 0;
   double coarse_median_thickness_rel = 0, coarse_min_thickness_rel = 0;
   std::vector<std::pair<std::string, double>> coarsen_seconds;  // per operation kind
   // Collapses refused, by reason (shell::SimplifyStats::Rejections): why coarsening stopped.

@@ -21,7 +21,9 @@ struct ShellProjection::Impl {
   std::unordered_map<std::int64_t, std::vector<int>> grid;
   std::vector<Eigen::AlignedBox3d> boxes;  // per prism
 
-  Impl(const Shell& s, const SurfaceMesh& in) : shell(s), input(in.V, in.F) {}
+  // With a reference copy (Shell::reference) the fibers cross that copy, and each crossing is
+  // reported as the input point with the same face and barycentric coordinates.
+  Impl(const Shell& s, const SurfaceMesh& in) : shell(s), input(in.V, in.F, s.reference) {}
 
   // Corner c (0..5) of half `half` (0: base→mid, 1: mid→top) of face f, rotated order.
   Eigen::Vector3d corner(int f, int half, int c) const {
@@ -337,6 +339,10 @@ const Shell& ShellProjection::shell() const { return m_impl->shell; }
 
 bool ShellProjection::is_section(const SurfaceMesh& m) const {
   return SectionChecker(*this).check(m).is_section();
+}
+
+const Eigen::MatrixXd& ShellProjection::reference_vertices() const {
+  return m_impl->input.reference_V();
 }
 
 }  // namespace curvefem::meshing::shell

@@ -63,6 +63,11 @@ class ShellProjection {
   // Prisms whose bounding box meets the box [lo, hi] (a superset of the prisms meeting it).
   std::vector<int> prisms_in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   const Shell& shell() const;
+  // With a reference copy (Shell::reference, feature chains) P crosses the fibers with that copy
+  // and reports the input point of the same face and barycentric coordinates, so P composes the
+  // shell's projection with the copy's correspondence to the input; locate and unproject take
+  // points of the copy, whose vertices these are (the input's vertices without one).
+  const Eigen::MatrixXd& reference_vertices() const;
   // is_section(T) of thesis §4.4: is the closed triangle mesh m a section of the shell (every
   // fiber crosses it exactly once, transversally)? What is checked: section.hpp.
   bool is_section(const SurfaceMesh& m) const;

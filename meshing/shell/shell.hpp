@@ -15,6 +15,7 @@
 #include "meshing/core/progress.hpp"
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
+#include "meshing/shell/shell_intersection.hpp"
 
 namespace curvefem::meshing::shell {
 
@@ -25,6 +26,11 @@ struct Shell {
   std::vector<int> face_parent;    // #F: an input face under this prism (the one it was built on)
   std::vector<int>
       input_vertex;  // #V: the input vertex a middle vertex sits on, -1 for pinch points
+  // The reference copy of the input (thesis §5.3): input vertices inside a coarse feature edge,
+  // snapped onto it (empty: the reference copy is the input). The shell's invariants hold for
+  // that copy, exactly; P projects onto it, and a point of it stands for the input point with
+  // the same face and barycentric coordinates.
+  std::vector<SnappedVertex> reference;
 };
 
 struct ShellOptions {

@@ -11,6 +11,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
 
 namespace curvefem::meshing::shell {
 
@@ -139,25 +142,113 @@ constexpr int k_tet_facets[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0
 constexpr int k_tet_edges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2},
                                    {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
 
+// ---- Snapped points (the reference copy of feature chains) ---------------------------------
+// A snapped point is a + s (b − a) with double a, b, s: its coordinates are sums and products of
+// doubles, so the interval filter encloses them and CGAL::Mpzf evaluates them exactly.
+template <class NT>
+NT coord(const ExactPoint& q, int k) {
+  if (!q.snapped) return NT(q.p[k]);
+  return NT(q.a[k]) + NT(q.s) * (NT(q.b[k]) - NT(q.a[k]));
+}
+template <class NT>
+NT det_of_differences(const ExactPoint& u1, const ExactPoint& u0, const ExactPoint& v1,
+                      const ExactPoint& v0, const ExactPoint& w1, const ExactPoint& w0) {
+  NT u[3], v[3], w[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = coord<NT>(u1, k) - coord<NT>(u0, k);
+    v[k] = coord<NT>(v1, k) - coord<NT>(v0, k);
+    w[k] = coord<NT>(w1, k) - coord<NT>(w0, k);
+  }
+  return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+         u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+int sign_det(const ExactPoint& u1, const ExactPoint& u0, const ExactPoint& v1, const ExactPoint& v0,
+             const ExactPoint& w1, const ExactPoint& w0) {
+  if (!u1.snapped && !u0.snapped && !v1.snapped && !v0.snapped && !w1.snapped && !w0.snapped)
+    return sign_det(u1.p, u0.p, v1.p, v0.p, w1.p, w0.p);
+  {
+    CGAL::Protect_FPU_rounding<true> guard;
+    const CGAL::Interval_nt<false> d =
+        det_of_differences<CGAL::Interval_nt<false>>(u1, u0, v1, v0, w1, w0);
+    if (d.inf() > 0) return 1;
+    if (d.sup() < 0) return -1;
+  }
+  return int(CGAL::sign(det_of_differences<CGAL::Mpzf>(u1, u0, v1, v0, w1, w0)));
+}
+// All-double arguments take the filtered double version; any snapped one the version above.
+template <class A, class B, class C, class D, class E, class F>
+int sdet(const A& u1, const B& u0, const C& v1, const D& v0, const E& w1, const F& w0) {
+  if constexpr (std::is_same_v<A, V3> && std::is_same_v<B, V3> && std::is_same_v<C, V3> &&
+                std::is_same_v<D, V3> && std::is_same_v<E, V3> && std::is_same_v<F, V3>)
+    return sign_det(u1, u0, v1, v0, w1, w0);
+  else
+    return sign_det(ExactPoint(u1), ExactPoint(u0), ExactPoint(v1), ExactPoint(v0), ExactPoint(w1),
+                    ExactPoint(w0));
+}
+// The point with coordinate `drop` set to 0 (exact for snapped points too: a and b are).
+template <class P>
+P dropped(const P& q, int drop) {
+  P out = q;
+  if constexpr (std::is_same_v<P, V3>) {
+    out[drop] = 0;
+  } else {
+    out.p[drop] = 0;
+    out.a[drop] = 0;
+    out.b[drop] = 0;
+  }
+  return out;
+}
+// orient2d of (a, b, c) in the coordinates ((drop + 1) % 3, (drop + 2) % 3): det[b − a, c − a,
+// e_drop] of the points with coordinate `drop` zeroed.
+template <class P, class Q, class R>
+int orient2(int drop, const P& a, const Q& b, const R& c) {
+  V3 e = V3::Zero();
+  e[drop] = 1;
+  const P a0 = dropped(a, drop);
+  return sdet(dropped(b, drop), a0, dropped(c, drop), a0, e, V3(V3::Zero()));
+}
+
 }  // namespace
+
+ExactPoint ExactPoint::on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double s) {
+  ExactPoint q(a + s * (b - a));
+  q.snapped = true;
+  q.a = a;
+  q.b = b;
+  q.s = s;
+  return q;
+}
 
 int normal_dot_sign(const std::array<V3, 3>& tri, const V3& from, const V3& to) {
   return sign_det(tri[1], tri[0], tri[2], tri[0], to, from);
 }
+
+int exact_normal_dot_sign(const std::array<ExactPoint, 3>& tri, const V3& from, const V3& to) {
+  return sdet(tri[1], tri[0], tri[2], tri[0], to, from);
+}
+
+bool exact_collinear(const std::array<ExactPoint, 3>& t) {
+  for (int drop = 0; drop < 3; ++drop)
+    if (orient2(drop, t[0], t[1], t[2]) != 0) return false;
+  return true;
+}
+
+namespace {
 
 // int(T) ∩ t = ∅ iff 0 ∉ int(T − t), i.e. iff some facet of the Minkowski difference T − t has
 // 0 on its outer closed side: a plane weakly separating T and t. The facet normals of T − t are
 // the facet normals of T, the normal of t, and the cross products of an edge of T with an edge
 // of t, so testing these candidates is complete. A candidate counts only if some corner of T is
 // strictly off it (a zero normal, from parallel edges or a degenerate t, puts every corner on it).
-bool triangle_meets_open_tet(const std::array<V3, 3>& t, const std::array<V3, 4>& T) {
+template <class P>
+bool meets_open_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
   for (const auto& f : k_tet_facets) {
     const V3 &a = T[f[0]], &b = T[f[1]], &c = T[f[2]];
     const int side = sign_det(b, a, c, a, T[f[3]], a);
     if (side == 0) return false;  // degenerate tet: no interior
     bool separated = true;
-    for (const V3& q : t)
-      if (sign_det(b, a, c, a, q, a) * side > 0) {
+    for (const P& q : t)
+      if (sdet(b, a, c, a, q, a) * side > 0) {
         separated = false;
         break;
       }
@@ -166,7 +257,7 @@ bool triangle_meets_open_tet(const std::array<V3, 3>& t, const std::array<V3, 4>
   {
     int pos = 0, neg = 0;
     for (const V3& p : T) {
-      const int s = sign_det(t[1], t[0], t[2], t[0], p, t[0]);
+      const int s = sdet(t[1], t[0], t[2], t[0], p, t[0]);
       pos += s > 0;
       neg += s < 0;
     }
@@ -175,12 +266,53 @@ bool triangle_meets_open_tet(const std::array<V3, 3>& t, const std::array<V3, 4>
   for (const auto& e : k_tet_edges) {
     const V3 &a = T[e[0]], &b = T[e[1]];
     for (int k = 0; k < 3; ++k) {
-      const V3 &q0 = t[k], &q1 = t[(k + 1) % 3], &q2 = t[(k + 2) % 3];
-      const int s1 = sign_det(b, a, q1, q0, T[e[2]], a), s2 = sign_det(b, a, q1, q0, T[e[3]], a);
+      const P &q0 = t[k], &q1 = t[(k + 1) % 3], &q2 = t[(k + 2) % 3];
+      const int s1 = sdet(b, a, q1, q0, T[e[2]], a), s2 = sdet(b, a, q1, q0, T[e[3]], a);
       if ((s1 == 0 && s2 == 0) || s1 * s2 < 0) continue;
       const int side = s1 != 0 ? s1 : s2;
       // q0 and q1 lie on a line parallel to the plane: one sign for both.
-      if (sign_det(b, a, q1, q0, q0, a) * side <= 0 && sign_det(b, a, q1, q0, q2, a) * side <= 0)
+      if (sdet(b, a, q1, q0, q0, a) * side <= 0 && sdet(b, a, q1, q0, q2, a) * side <= 0)
+        return false;
+    }
+  }
+  return true;
+}
+
+// The closed version: the same candidate planes, each through the tet's supporting facet or
+// edge (or the triangle's plane), separating only if the other set lies strictly beyond it. The
+// closed sets are disjoint iff 0 lies strictly outside a facet of T − t, whose supporting
+// features on T and t generate its normal, so the list is complete for a non-degenerate tet.
+template <class P>
+bool meets_closed_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
+  for (const auto& f : k_tet_facets) {
+    const V3 &a = T[f[0]], &b = T[f[1]], &c = T[f[2]];
+    const int side = sign_det(b, a, c, a, T[f[3]], a);
+    if (side == 0) return true;  // degenerate tet: callers never pass one (conservative)
+    bool separated = true;
+    for (const P& q : t)
+      if (sdet(b, a, c, a, q, a) * side >= 0) {
+        separated = false;
+        break;
+      }
+    if (separated) return false;
+  }
+  {
+    int pos = 0, neg = 0;
+    for (const V3& p : T) {
+      const int s = sdet(t[1], t[0], t[2], t[0], p, t[0]);
+      pos += s > 0;
+      neg += s < 0;
+    }
+    if ((pos == 4) || (neg == 4)) return false;
+  }
+  for (const auto& e : k_tet_edges) {
+    const V3 &a = T[e[0]], &b = T[e[1]];
+    for (int k = 0; k < 3; ++k) {
+      const P &q0 = t[k], &q1 = t[(k + 1) % 3], &q2 = t[(k + 2) % 3];
+      const int s1 = sdet(b, a, q1, q0, T[e[2]], a), s2 = sdet(b, a, q1, q0, T[e[3]], a);
+      if ((s1 == 0 && s2 == 0) || s1 * s2 < 0) continue;
+      const int side = s1 != 0 ? s1 : s2;
+      if (sdet(b, a, q1, q0, q0, a) * side < 0 && sdet(b, a, q1, q0, q2, a) * side < 0)
         return false;
     }
   }
@@ -189,55 +321,112 @@ bool triangle_meets_open_tet(const std::array<V3, 3>& t, const std::array<V3, 4>
 
 // Coplanar case in 2-D: project along an axis that keeps the facet non-degenerate (exact
 // orient2d), then the same weak separating-axis test with the edge lines of both triangles.
-bool triangle_meets_open_facet(const std::array<V3, 3>& t, const std::array<V3, 3>& F) {
-  for (const V3& q : t)
-    if (sign_det(F[1], F[0], F[2], F[0], q, F[0]) != 0) return false;
-  using P2 = K::Point_2;
+template <class P>
+bool meets_open_facet(const std::array<P, 3>& t, const std::array<V3, 3>& F) {
+  for (const P& q : t)
+    if (sdet(F[1], F[0], F[2], F[0], q, F[0]) != 0) return false;
   for (int drop : {2, 0, 1}) {
-    const int i = (drop + 1) % 3, j = (drop + 2) % 3;
-    const std::array<P2, 3> f{P2(F[0][i], F[0][j]), P2(F[1][i], F[1][j]), P2(F[2][i], F[2][j])};
-    if (CGAL::orientation(f[0], f[1], f[2]) == CGAL::COLLINEAR) continue;
-    const std::array<P2, 3> q{P2(t[0][i], t[0][j]), P2(t[1][i], t[1][j]), P2(t[2][i], t[2][j])};
+    if (orient2(drop, F[0], F[1], F[2]) == 0) continue;
     for (int k = 0; k < 3; ++k) {
-      const P2 &a = f[k], &b = f[(k + 1) % 3];
-      const int side = int(CGAL::orientation(a, b, f[(k + 2) % 3]));
+      const V3 &a = F[k], &b = F[(k + 1) % 3];
+      const int side = orient2(drop, a, b, F[(k + 2) % 3]);
       bool separated = true;
-      for (const P2& p : q)
-        if (int(CGAL::orientation(a, b, p)) * side > 0) {
+      for (const P& p : t)
+        if (orient2(drop, a, b, p) * side > 0) {
           separated = false;
           break;
         }
       if (separated) return false;
     }
     for (int k = 0; k < 3; ++k) {
-      const P2 &a = q[k], &b = q[(k + 1) % 3];
+      const P &a = t[k], &b = t[(k + 1) % 3];
       int pos = 0, neg = 0;
-      for (const P2& p : f) {
-        const int s = int(CGAL::orientation(a, b, p));
+      for (const V3& p : F) {
+        const int s = orient2(drop, a, b, p);
         pos += s > 0;
         neg += s < 0;
       }
       if ((pos == 0) == (neg == 0)) continue;  // zero edge, or the facet on both sides
       const int side = pos > 0 ? 1 : -1;
-      if (int(CGAL::orientation(a, b, q[(k + 2) % 3])) * side <= 0) return false;
+      if (orient2(drop, a, b, t[(k + 2) % 3]) * side <= 0) return false;
     }
     return true;
   }
   return false;  // degenerate facet: no relative interior
 }
 
-bool triangle_section_contact(const std::array<V3, 3>& t, const std::array<V3, 4>& T) {
-  for (int k = 0; k < 3; ++k) {  // bounding boxes (exact comparisons)
-    const double tlo = std::min({t[0][k], t[1][k], t[2][k]}),
-                 thi = std::max({t[0][k], t[1][k], t[2][k]});
-    const double lo = std::min({T[0][k], T[1][k], T[2][k], T[3][k]}),
-                 hi = std::max({T[0][k], T[1][k], T[2][k], T[3][k]});
-    if (thi < lo || tlo > hi) return false;  // no contact (a face in a facet plane touches)
+template <class P>
+bool section_contact(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
+  if constexpr (std::is_same_v<P, V3>) {
+    for (int k = 0; k < 3; ++k) {  // bounding boxes (exact comparisons)
+      const double tlo = std::min({t[0][k], t[1][k], t[2][k]}),
+                   thi = std::max({t[0][k], t[1][k], t[2][k]});
+      const double lo = std::min({T[0][k], T[1][k], T[2][k], T[3][k]}),
+                   hi = std::max({T[0][k], T[1][k], T[2][k], T[3][k]});
+      if (thi < lo || tlo > hi) return false;  // no contact (a face in a facet plane touches)
+    }
   }
-  if (triangle_meets_open_tet(t, T)) return true;
+  if (meets_open_tet(t, T)) return true;
   for (const auto& f : k_tet_facets)
-    if (triangle_meets_open_facet(t, {T[f[0]], T[f[1]], T[f[2]]})) return true;
+    if (meets_open_facet(t, {T[f[0]], T[f[1]], T[f[2]]})) return true;
   return false;
+}
+
+// Closed triangles, a against b, by the separating planes of their normals and of the 9 edge
+// pairs (each through a's edge, b strictly beyond it); coplanar triangles count as meeting.
+template <class P>
+bool triangles_meet_closed(const std::array<P, 3>& a, const std::array<V3, 3>& b) {
+  {
+    int pos = 0, neg = 0;
+    for (const V3& q : b) {
+      const int s = sdet(a[1], a[0], a[2], a[0], q, a[0]);
+      pos += s > 0;
+      neg += s < 0;
+    }
+    if (pos == 3 || neg == 3) return false;
+    if (pos == 0 && neg == 0) return true;  // coplanar (conservative)
+  }
+  {
+    int pos = 0, neg = 0;
+    for (const P& q : a) {
+      const int s = sdet(b[1], b[0], b[2], b[0], q, b[0]);
+      pos += s > 0;
+      neg += s < 0;
+    }
+    if (pos == 3 || neg == 3) return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const P &p0 = a[i], &p1 = a[(i + 1) % 3], &p2 = a[(i + 2) % 3];
+    for (int j = 0; j < 3; ++j) {
+      const V3 &q0 = b[j], &q1 = b[(j + 1) % 3], &q2 = b[(j + 2) % 3];
+      const int sa = sdet(p1, p0, q1, q0, p2, p0);
+      const int s0 = sdet(p1, p0, q1, q0, q0, p0), s2 = sdet(p1, p0, q1, q0, q2, p0);
+      if (s0 == 0 || s0 != s2) continue;
+      if (sa == 0 || sa == -s0) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool triangle_meets_open_tet(const std::array<V3, 3>& t, const std::array<V3, 4>& T) {
+  return meets_open_tet(t, T);
+}
+bool triangle_meets_open_facet(const std::array<V3, 3>& t, const std::array<V3, 3>& F) {
+  return meets_open_facet(t, F);
+}
+bool triangle_section_contact(const std::array<V3, 3>& t, const std::array<V3, 4>& T) {
+  return section_contact(t, T);
+}
+bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& tet) {
+  return meets_closed_tet(tri, tet);
+}
+bool exact_triangles_meet(const std::array<ExactPoint, 3>& a, const std::array<V3, 3>& b) {
+  return triangles_meet_closed(a, b);
+}
+bool exact_section_contact(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& tet) {
+  return section_contact(tri, tet);
 }
 
 bool segment_crosses_wedge(const V3& p, const V3& q, const V3& apex, const V3& a, const V3& b) {
@@ -261,6 +450,37 @@ struct InputSurfaceIndex::Impl {
   int id(const std::vector<Triangle>::const_iterator& it) const {
     return int(it - triangles.cbegin());
   }
+  // The reference copy: rounded positions, the snaps (vertex -1: not snapped) and the faces with
+  // a snapped corner (`moved`, with each face's place in it or -1 and its snapped corner count).
+  Eigen::MatrixXd Vref;
+  std::vector<SnappedVertex> snap;
+  std::vector<CGAL::Bbox_3> snap_box;  // enclosure of each snapped point
+  std::vector<int> moved, moved_at, moved_corners;
+  std::vector<std::vector<int>> vf;  // vertex -> faces (built at the first snap)
+  bool is_moved(int f) const { return !moved_at.empty() && moved_at[std::size_t(f)] >= 0; }
+  ExactPoint corner(int f, int k) const {
+    const int x = F(f, k);
+    if (!snap.empty() && snap[std::size_t(x)].vertex >= 0) {
+      const SnappedVertex& q = snap[std::size_t(x)];
+      return ExactPoint::on_segment(V.row(q.a).transpose(), V.row(q.b).transpose(), q.s);
+    }
+    return ExactPoint(V.row(x).transpose());
+  }
+  std::array<ExactPoint, 3> exact_face(int f) const {
+    return {corner(f, 0), corner(f, 1), corner(f, 2)};
+  }
+  CGAL::Bbox_3 face_box(int f) const {
+    if (!is_moved(f)) return boxes[std::size_t(f)];
+    CGAL::Bbox_3 out;
+    for (int k = 0; k < 3; ++k) {
+      const int x = F(f, k);
+      if (snap[std::size_t(x)].vertex >= 0)
+        out += snap_box[std::size_t(x)];
+      else
+        out += CGAL::Bbox_3(V(x, 0), V(x, 1), V(x, 2), V(x, 0), V(x, 1), V(x, 2));
+    }
+    return out;
+  }
 };
 
 InputSurfaceIndex::InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F)
@@ -275,6 +495,245 @@ InputSurfaceIndex::InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::Matr
   m_impl->tree.insert(m_impl->triangles.cbegin(), m_impl->triangles.cend());
   m_impl->tree.build();
   m_impl->tree.accelerate_distance_queries();
+}
+
+InputSurfaceIndex::InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                     const std::vector<SnappedVertex>& snaps)
+    : InputSurfaceIndex(V, F) {
+  for (const SnappedVertex& q : snaps) snap_vertex(q);
+}
+
+void InputSurfaceIndex::snap_vertex(const SnappedVertex& q) {
+  Impl& m = *m_impl;
+  const int nv = int(m.V.rows());
+  if (q.vertex < 0 || q.vertex >= nv || q.a < 0 || q.a >= nv || q.b < 0 || q.b >= nv ||
+      q.a == q.vertex || q.b == q.vertex || !(q.s > 0 && q.s < 1))
+    throw std::invalid_argument("InputSurfaceIndex::snap_vertex: bad snap of vertex " +
+                                std::to_string(q.vertex));
+  if (m.snap.empty()) {
+    m.Vref = m.V;
+    m.snap.assign(std::size_t(nv), SnappedVertex{});
+    m.snap_box.assign(std::size_t(nv), CGAL::Bbox_3());
+    m.moved_at.assign(std::size_t(m.F.rows()), -1);
+    m.moved_corners.assign(std::size_t(m.F.rows()), 0);
+    m.vf.assign(std::size_t(nv), {});
+    for (int f = 0; f < m.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) m.vf[std::size_t(m.F(f, k))].push_back(f);
+  }
+  const bool was = m.snap[std::size_t(q.vertex)].vertex >= 0;
+  m.snap[std::size_t(q.vertex)] = q;
+  const ExactPoint p =
+      ExactPoint::on_segment(m.V.row(q.a).transpose(), m.V.row(q.b).transpose(), q.s);
+  m.Vref.row(q.vertex) = p.p.transpose();
+  {
+    CGAL::Protect_FPU_rounding<true> guard;
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      const CGAL::Interval_nt<false> c = coord<CGAL::Interval_nt<false>>(p, k);
+      lo[k] = c.inf();
+      hi[k] = c.sup();
+    }
+    m.snap_box[std::size_t(q.vertex)] = CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  }
+  if (was) return;
+  for (int f : m.vf[std::size_t(q.vertex)])
+    if (m.moved_corners[std::size_t(f)]++ == 0) {
+      m.moved_at[std::size_t(f)] = int(m.moved.size());
+      m.moved.push_back(f);
+    }
+}
+
+void InputSurfaceIndex::unsnap_vertex(int x) {
+  Impl& m = *m_impl;
+  if (m.snap.empty() || x < 0 || x >= int(m.V.rows()) || m.snap[std::size_t(x)].vertex < 0) return;
+  m.snap[std::size_t(x)] = SnappedVertex{};
+  m.Vref.row(x) = m.V.row(x);
+  for (int f : m.vf[std::size_t(x)])
+    if (--m.moved_corners[std::size_t(f)] == 0) {
+      const int at = m.moved_at[std::size_t(f)];
+      m.moved[std::size_t(at)] = m.moved.back();
+      m.moved_at[std::size_t(m.moved.back())] = at;
+      m.moved.pop_back();
+      m.moved_at[std::size_t(f)] = -1;
+    }
+}
+
+const SnappedVertex* InputSurfaceIndex::snap_of(int x) const {
+  const Impl& m = *m_impl;
+  if (m.snap.empty() || x < 0 || x >= int(m.V.rows()) || m.snap[std::size_t(x)].vertex < 0)
+    return nullptr;
+  return &m.snap[std::size_t(x)];
+}
+
+std::vector<SnappedVertex> InputSurfaceIndex::snaps() const {
+  std::vector<SnappedVertex> out;
+  for (const SnappedVertex& q : m_impl->snap)
+    if (q.vertex >= 0) out.push_back(q);
+  return out;
+}
+
+const Eigen::MatrixXd& InputSurfaceIndex::reference_V() const {
+  return m_impl->snap.empty() ? m_impl->V : m_impl->Vref;
+}
+const std::vector<int>& InputSurfaceIndex::moved_faces() const { return m_impl->moved; }
+std::array<ExactPoint, 3> InputSurfaceIndex::exact_face(int f) const {
+  return m_impl->exact_face(f);
+}
+
+int InputSurfaceIndex::face_normal_dot_sign(int f, const Eigen::Vector3d& from,
+                                            const Eigen::Vector3d& to) const {
+  if (m_impl->is_moved(f)) return exact_normal_dot_sign(m_impl->exact_face(f), from, to);
+  return normal_dot_sign(face_triangle(f), from, to);
+}
+
+bool InputSurfaceIndex::face_degenerate(int f) const {
+  return exact_collinear(m_impl->exact_face(f));
+}
+
+namespace {
+// Does the closed segment [p, q] meet the closed triangle t (exact; a segment in t's plane
+// counts as meeting, conservatively)?
+bool segment_meets_triangle(const ExactPoint& p, const ExactPoint& q,
+                            const std::array<ExactPoint, 3>& t) {
+  const int sp = sdet(t[1], t[0], t[2], t[0], p, t[0]), sq = sdet(t[1], t[0], t[2], t[0], q, t[0]);
+  if (sp == 0 && sq == 0) return true;
+  if (sp * sq > 0) return false;
+  // The line p→q crosses the plane inside the closed triangle iff the three signs of the edge
+  // orientations agree (zeros allowed).
+  int pos = 0, neg = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int s = sdet(q, p, t[k], p, t[(k + 1) % 3], p);
+    pos += s > 0;
+    neg += s < 0;
+  }
+  return pos == 0 || neg == 0;
+}
+}  // namespace
+
+namespace {
+// Coplanar closed triangles, in the first projection that keeps a non-degenerate: separated iff
+// an edge line of one has the other strictly outside.
+bool coplanar_triangles_meet(const std::array<ExactPoint, 3>& a,
+                             const std::array<ExactPoint, 3>& b) {
+  for (int drop : {2, 0, 1}) {
+    if (orient2(drop, a[0], a[1], a[2]) == 0) continue;
+    for (int side = 0; side < 2; ++side) {
+      const auto& x = side ? b : a;
+      const auto& y = side ? a : b;
+      for (int k = 0; k < 3; ++k) {
+        const int inner = orient2(drop, x[k], x[(k + 1) % 3], x[(k + 2) % 3]);
+        if (inner == 0) break;
+        bool outside = true;
+        for (const auto& q : y)
+          outside = outside && orient2(drop, x[k], x[(k + 1) % 3], q) == -inner;
+        if (outside) return false;
+      }
+    }
+    return true;
+  }
+  return true;  // degenerate in every projection (conservative)
+}
+// Is point d in the closed cone at p spanned by u and v (a proper triangle's corner), in the
+// projection dropping `drop`?
+bool in_closed_cone(int drop, const ExactPoint& p, const ExactPoint& u, const ExactPoint& v,
+                    const ExactPoint& d) {
+  const int o = orient2(drop, p, u, v);
+  return o * orient2(drop, p, u, d) >= 0 && o * orient2(drop, p, d, v) >= 0;
+}
+}  // namespace
+
+bool InputSurfaceIndex::face_self_intersects(int g) const {
+  const Impl& m = *m_impl;
+  const auto a = m.exact_face(g);
+  const CGAL::Bbox_3 box = m.face_box(g);
+  for (int h : faces_in_box(Eigen::Vector3d(box.xmin(), box.ymin(), box.zmin()),
+                            Eigen::Vector3d(box.xmax(), box.ymax(), box.zmax()))) {
+    if (h == g || !CGAL::do_overlap(box, m.face_box(h))) continue;
+    const auto b = m.exact_face(h);
+    int shared = 0, ka = -1, kb = -1;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (m.F(g, i) == m.F(h, j)) {
+          ++shared;
+          ka = i;
+          kb = j;
+        }
+    if (shared == 0) {
+      // Closed triangles: the separating planes of triangles_meet_closed, both sides exact.
+      bool apart = false;
+      for (int side = 0; side < 2 && !apart; ++side) {
+        const auto& x = side ? b : a;
+        const auto& y = side ? a : b;
+        int pos = 0, neg = 0;
+        for (const auto& q : y) {
+          const int sg = sdet(x[1], x[0], x[2], x[0], q, x[0]);
+          pos += sg > 0;
+          neg += sg < 0;
+        }
+        apart = pos == 3 || neg == 3;
+        if (side == 0 && pos == 0 && neg == 0) {  // coplanar
+          if (coplanar_triangles_meet(a, b)) return true;
+          apart = true;
+        }
+      }
+      for (int i = 0; i < 3 && !apart; ++i)
+        for (int j = 0; j < 3 && !apart; ++j) {
+          const ExactPoint &p0 = a[i], &p1 = a[(i + 1) % 3], &p2 = a[(i + 2) % 3];
+          const ExactPoint &q0 = b[j], &q1 = b[(j + 1) % 3], &q2 = b[(j + 2) % 3];
+          const int sa = sdet(p1, p0, q1, q0, p2, p0);
+          const int s0 = sdet(p1, p0, q1, q0, q0, p0), s2 = sdet(p1, p0, q1, q0, q2, p0);
+          if (s0 == 0 || s0 != s2) continue;
+          apart = sa == 0 || sa == -s0;
+        }
+      if (!apart) return true;
+    } else if (shared == 1) {
+      // Only the common corner: neither opposite edge may meet the other triangle; coplanar
+      // triangles sharing a corner count as meeting.
+      bool coplanar = true;
+      for (const auto& q : b) coplanar = coplanar && sdet(a[1], a[0], a[2], a[0], q, a[0]) == 0;
+      if (!coplanar) {
+        if (segment_meets_triangle(a[(ka + 1) % 3], a[(ka + 2) % 3], b) ||
+            segment_meets_triangle(b[(kb + 1) % 3], b[(kb + 2) % 3], a))
+          return true;
+        continue;
+      }
+      // Coplanar: their corners' closed cones at the common corner meet beyond it iff a
+      // boundary ray of one lies in the other.
+      const ExactPoint& p = a[ka];
+      const ExactPoint &a1 = a[(ka + 1) % 3], &a2 = a[(ka + 2) % 3];
+      const ExactPoint &b1 = b[(kb + 1) % 3], &b2 = b[(kb + 2) % 3];
+      int drop = 0;
+      while (drop < 3 && orient2(drop, p, a1, a2) == 0) ++drop;
+      if (drop == 3 || orient2(drop, p, b1, b2) == 0) return true;  // degenerate (conservative)
+      if (in_closed_cone(drop, p, a1, a2, b1) || in_closed_cone(drop, p, a1, a2, b2) ||
+          in_closed_cone(drop, p, b1, b2, a1) || in_closed_cone(drop, p, b1, b2, a2))
+        return true;
+    } else if (shared == 2) {
+      // A common edge: they overlap only if coplanar with both far corners on one side of it.
+      int c = 0, d = 0;
+      for (int i = 0; i < 3; ++i) {
+        bool in_h = false;
+        for (int j = 0; j < 3; ++j) in_h = in_h || m.F(g, i) == m.F(h, j);
+        if (!in_h) c = i;
+      }
+      for (int j = 0; j < 3; ++j) {
+        bool in_g = false;
+        for (int i = 0; i < 3; ++i) in_g = in_g || m.F(g, i) == m.F(h, j);
+        if (!in_g) d = j;
+      }
+      const ExactPoint &e0 = a[(c + 1) % 3], &e1 = a[(c + 2) % 3];
+      if (sdet(e1, e0, a[c], e0, b[d], e0) != 0) continue;
+      for (int drop = 0; drop < 3; ++drop) {
+        const int sc = orient2(drop, e0, e1, a[c]), sd = orient2(drop, e0, e1, b[d]);
+        if (sc == 0 && sd == 0) continue;  // this projection flattens the plane
+        if (sc * sd >= 0) return true;
+        break;
+      }
+    } else {
+      return true;  // a duplicate face
+    }
+  }
+  return false;
 }
 
 InputSurfaceIndex::~InputSurfaceIndex() = default;
@@ -319,6 +778,7 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   m_impl->tree.all_intersected_primitives(tri, std::back_inserter(hits));
   for (const auto& it : hits) {
     const int f = m_impl->id(it);
+    if (m_impl->is_moved(f)) continue;  // below
     int pinch = -1, shared = -1;  // the triangle's corner at a singular input vertex of face f
     for (int k = 0; k < 3; ++k)
       if (singular[k])
@@ -328,6 +788,17 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
             shared = j;
           }
     if (pinch < 0 || triangles_meet_beyond_pinch(c, pinch, face_triangle(f), shared)) return true;
+  }
+  // Moved faces of the reference copy, exactly; a pinch at one of their corners is refused
+  // (conservative: no exact pinch test for snapped corners).
+  const CGAL::Bbox_3 box = tri.bbox();
+  for (int f : m_impl->moved) {
+    if (!CGAL::do_overlap(box, m_impl->face_box(f))) continue;
+    for (int k = 0; k < 3; ++k)
+      if (singular[k])
+        for (int j = 0; j < 3; ++j)
+          if (m_impl->F(f, j) == corner_ids[k]) return true;
+    if (exact_triangles_meet(m_impl->exact_face(f), c)) return true;
   }
   return false;
 }
@@ -392,7 +863,18 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
   std::vector<int> candidates;
   BoxOverlapTraits traits{&m_impl->triangles, &m_impl->boxes, &candidates};
   m_impl->tree.traversal(all, traits);
+  for (int f : m_impl->moved) {
+    const CGAL::Bbox_3 fb = m_impl->face_box(f);
+    if (!CGAL::do_overlap(fb, all)) continue;
+    const auto tri = m_impl->exact_face(f);
+    for (std::size_t i = 0; i < T.size(); ++i)
+      if (CGAL::do_overlap(fb, tb[i]) && exact_triangle_meets_tet(tri, tets[i])) {
+        out.push_back(f);
+        break;
+      }
+  }
   for (int f : candidates) {
+    if (m_impl->is_moved(f)) continue;  // above
     const Triangle& tri = m_impl->triangles[std::size_t(f)];
     const CGAL::Bbox_3& fb = m_impl->boxes[std::size_t(f)];
     for (std::size_t i = 0; i < T.size(); ++i) {
@@ -426,16 +908,24 @@ std::vector<int> InputSurfaceIndex::faces_in_box(const Eigen::Vector3d& lo,
   std::vector<int> out;
   out.reserve(hits.size());
   for (const auto& it : hits) out.push_back(m_impl->id(it));
+  if (!m_impl->moved.empty()) {
+    for (int f : m_impl->moved)
+      if (CGAL::do_overlap(box, m_impl->face_box(f))) out.push_back(f);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
   return out;
 }
 
 std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) const {
   std::vector<int> out;
+  const Eigen::MatrixXd& V = reference_V();
   for (int f : faces_in_box(p, p)) {
-    const Triangle& t = m_impl->triangles[std::size_t(f)];
+    const auto r = face_triangle(f);  // rounded where moved
+    const Triangle t(pt(r[0]), pt(r[1]), pt(r[2]));
     if (t.is_degenerate()) continue;
     bool corner = false;
-    for (int k = 0; k < 3; ++k) corner |= m_impl->V.row(m_impl->F(f, k)) == p.transpose();
+    for (int k = 0; k < 3; ++k) corner |= V.row(m_impl->F(f, k)) == p.transpose();
     if (corner || t.has_on(pt(p))) out.push_back(f);
   }
   std::sort(out.begin(), out.end());
@@ -443,18 +933,21 @@ std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) c
 }
 
 bool InputSurfaceIndex::face_touches_tet(int f, const std::array<Eigen::Vector3d, 4>& t) const {
+  if (m_impl->is_moved(f)) return exact_triangle_meets_tet(m_impl->exact_face(f), t);
   const K::Tetrahedron_3 tet(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
   const Triangle& tri = m_impl->triangles[std::size_t(f)];
   return !strictly_separated(tri, tet) && CGAL::do_intersect(tri, tet);
 }
 
 bool InputSurfaceIndex::face_section_contact(int f, const std::array<Eigen::Vector3d, 4>& t) const {
+  if (m_impl->is_moved(f)) return exact_section_contact(m_impl->exact_face(f), t);
   return triangle_section_contact(face_triangle(f), t);
 }
 
 std::array<Eigen::Vector3d, 3> InputSurfaceIndex::face_triangle(int f) const {
-  return {m_impl->V.row(m_impl->F(f, 0)).transpose(), m_impl->V.row(m_impl->F(f, 1)).transpose(),
-          m_impl->V.row(m_impl->F(f, 2)).transpose()};
+  const Eigen::MatrixXd& V = m_impl->snap.empty() ? m_impl->V : m_impl->Vref;
+  return {V.row(m_impl->F(f, 0)).transpose(), V.row(m_impl->F(f, 1)).transpose(),
+          V.row(m_impl->F(f, 2)).transpose()};
 }
 
 int InputSurfaceIndex::closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& closest) const {
@@ -465,15 +958,26 @@ int InputSurfaceIndex::closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& c
 
 int InputSurfaceIndex::segment_hit(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                    Eigen::Vector3d& bary) const {
+  // A zero-length segment (consecutive fiber corners can coincide) crosses nothing; CGAL's
+  // segment tests assume a proper segment.
+  if (a == b) return -1;
   const Segment seg(pt(a), pt(b));
   std::vector<std::vector<Triangle>::const_iterator> hits;
   m_impl->tree.all_intersected_primitives(seg, std::back_inserter(hits));
+  std::vector<int> candidates;
+  for (const auto& it : hits)
+    if (!m_impl->is_moved(m_impl->id(it))) candidates.push_back(m_impl->id(it));
+  // Moved faces of the reference copy as their rounded triangles (shared corners keep the
+  // rounded copy watertight, so a segment crossing near a chain hits one side or the other).
+  for (int f : m_impl->moved) {
+    const auto t = face_triangle(f);
+    if (CGAL::do_intersect(seg, Triangle(pt(t[0]), pt(t[1]), pt(t[2])))) candidates.push_back(f);
+  }
   int best = -1;
   double best_t = std::numeric_limits<double>::infinity();
-  for (const auto& it : hits) {
-    const int f = m_impl->id(it);
-    const Eigen::Vector3d p0 = m_impl->V.row(m_impl->F(f, 0)), p1 = m_impl->V.row(m_impl->F(f, 1)),
-                          p2 = m_impl->V.row(m_impl->F(f, 2));
+  for (const int f : candidates) {
+    const auto tri = face_triangle(f);
+    const Eigen::Vector3d p0 = tri[0], p1 = tri[1], p2 = tri[2];
     const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     const double denom = n.dot(b - a);
     double t = 0.0;

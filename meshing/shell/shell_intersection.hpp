@@ -52,9 +52,47 @@ bool segment_crosses_wedge(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                            const Eigen::Vector3d& apex, const Eigen::Vector3d& a,
                            const Eigen::Vector3d& b);
 
+// A vertex of the reference copy of the input (feature chains, thesis §5.3) moved onto the
+// straight coarse feature edge between input vertices a and b: it stands for the point
+// V[a] + s (V[b] − V[a]) itself, which is decided on exactly, not for its rounding to doubles.
+struct SnappedVertex {
+  int vertex = -1, a = -1, b = -1;
+  double s = 0;  // in (0, 1)
+};
+
+// Exact closed-set tests with corners of the reference copy given as snapped points (above) or
+// plain doubles; the closed triangle–tet test and the triangle–triangle test by separating axes
+// over orientation signs. Exposed for tests.
+struct ExactPoint {
+  Eigen::Vector3d p{0, 0, 0};  // the point, or its rounding when snapped
+  bool snapped = false;
+  Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+  double s = 0;
+  ExactPoint() = default;
+  ExactPoint(const Eigen::Vector3d& q) : p(q) {}  // NOLINT: a plain point converts implicitly
+  static ExactPoint on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double s);
+};
+// Does the closed (non-degenerate) triangle meet the closed non-degenerate tetrahedron?
+bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri,
+                              const std::array<Eigen::Vector3d, 4>& tet);
+// Do the closed triangles meet? Coplanar triangles, and a degenerate (collinear) first triangle,
+// count as meeting (conservative; the shell never keeps a degenerate reference face).
+bool exact_triangles_meet(const std::array<ExactPoint, 3>& a,
+                          const std::array<Eigen::Vector3d, 3>& b);
+// triangle_section_contact and normal_dot_sign with exact corners.
+bool exact_section_contact(const std::array<ExactPoint, 3>& tri,
+                           const std::array<Eigen::Vector3d, 4>& tet);
+int exact_normal_dot_sign(const std::array<ExactPoint, 3>& tri, const Eigen::Vector3d& from,
+                          const Eigen::Vector3d& to);
+// Are the three points collinear (exact)?
+bool exact_collinear(const std::array<ExactPoint, 3>& tri);
+
 class InputSurfaceIndex {
  public:
   InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
+  // The same over the reference copy with these vertices snapped.
+  InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                    const std::vector<SnappedVertex>& snaps);
   ~InputSurfaceIndex();
   InputSurfaceIndex(const InputSurfaceIndex&) = delete;
   InputSurfaceIndex& operator=(const InputSurfaceIndex&) = delete;
@@ -80,14 +118,41 @@ class InputSurfaceIndex {
 
   // Non-degenerate input faces whose closed triangle contains p (exact), in increasing order.
   std::vector<int> faces_containing(const Eigen::Vector3d& p) const;
-  // Input faces whose bounding box overlaps [lo, hi] (a superset of the faces meeting the box).
+  // Input faces whose bounding box overlaps [lo, hi] (a superset of the faces meeting the box;
+  // moved faces of the reference copy are found where they are now, and where they were).
   std::vector<int> faces_in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   // Does input face f intersect the closed tetrahedron (exact)?
   bool face_touches_tet(int f, const std::array<Eigen::Vector3d, 4>& tet) const;
   // triangle_section_contact of input face f with a non-degenerate tet (exact).
   bool face_section_contact(int f, const std::array<Eigen::Vector3d, 4>& tet) const;
-  // Input face f as a triangle.
+  // Input face f as a triangle (of the reference copy, rounded where snapped).
   std::array<Eigen::Vector3d, 3> face_triangle(int f) const;
+  // Exact sign of n_f · (to − from), n_f the normal of face f of the reference copy.
+  int face_normal_dot_sign(int f, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const;
+  // Is face f of the reference copy degenerate (collinear corners, exact)?
+  bool face_degenerate(int f) const;
+  // Does face f of the reference copy meet another face of it anywhere but at their common
+  // corners and edge (exact; coplanar faces sharing a corner, or overlapping, count as meeting)?
+  // Snapping can fold the reference copy over itself, and the section argument needs it embedded.
+  bool face_self_intersects(int f) const;
+
+  // ---- The reference copy ----------------------------------------------------------------------
+  // Snapped vertices change what triangle_intersects, faces_touching_tet(s), face_touches_tet,
+  // face_section_contact, face_triangle, face_normal_dot_sign and faces_in_box see; faces with a
+  // snapped corner ("moved") are tested exactly against the snapped points. faces_containing and
+  // segment_hit see the moved faces as their rounded triangles; ray_distance and closest_face
+  // see the unmoved input. V() stays the input's. Snapping is
+  // not thread-safe: no query may run meanwhile.
+  void snap_vertex(const SnappedVertex& snap);
+  void unsnap_vertex(int x);  // back to its input position
+  // The snap of x, if snapped.
+  const SnappedVertex* snap_of(int x) const;
+  std::vector<SnappedVertex> snaps() const;  // in increasing vertex order
+  // Vertex positions of the reference copy (rounded where snapped; V() while nothing is).
+  const Eigen::MatrixXd& reference_V() const;
+  // The faces with a snapped corner, and face f with its exact corners.
+  const std::vector<int>& moved_faces() const;
+  std::array<ExactPoint, 3> exact_face(int f) const;
 
   // Closest input point: face id and the point.
   int closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& closest) const;

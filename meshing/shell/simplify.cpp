@@ -44,6 +44,25 @@ class ShellMesh : public TriMesh {
   }
   bool is_input_vertex(int x) const { return x < int(input->V().rows()); }
   const InputSurfaceIndex* input = nullptr;
+  // Feature chains (SimplifyOptions::collapse_chains). A coarse feature edge carries the input
+  // vertices strictly inside it, in order from its end on the smaller input vertex id; they are
+  // snapped in `reference` (the same index as `input`, written only by the one-thread chain
+  // passes).
+  struct ChainEdge {
+    bool feature = false;
+    std::vector<int> interior;
+    bool operator==(const ChainEdge&) const = default;
+  };
+  Attribute<ChainEdge> chain{*this, 1, {}};
+  InputSurfaceIndex* reference = nullptr;
+  std::vector<char> chain_vertex;  // input vertex with exactly two input feature edges
+  std::vector<char> on_chain;      // input vertex inside a coarse feature edge (snapped)
+  bool chain_mode = false;         // collapses are chain collapses (one thread)
+  struct PendingChain {
+    Id w = editing::k_no_id, u = editing::k_no_id;
+    int x = -1;
+    std::vector<int> path;  // input vertices inside the new edge, from w to u
+  } pending;
   double section_cos = 0;
   double max_distance = 0;
   double max_mips = 0;
@@ -111,6 +130,7 @@ class ShellMesh : public TriMesh {
     for (Id f : from) points.insert(points.end(), owned[f].begin(), owned[f].end());
     std::vector<std::vector<int>> next(r.new_cells.size());
     for (int x : points) {
+      if (!on_chain.empty() && is_input_vertex(x) && on_chain[std::size_t(x)]) continue;
       const Eigen::Vector3d p = distance_point(x);
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
@@ -173,7 +193,8 @@ class ShellMesh : public TriMesh {
         // The cosine bound, and the exact sign on both half-pillars as the verifier checks it.
         seen = d > 0 &&
                d * d > section_cos * section_cos * n.squaredNorm() * pillar.squaredNorm() &&
-               normal_dot_sign(tri, b[k], m[k]) > 0 && normal_dot_sign(tri, m[k], t[k]) > 0;
+               input->face_normal_dot_sign(x, b[k], m[k]) > 0 &&
+               input->face_normal_dot_sign(x, m[k], t[k]) > 0;
       }
       if (seen) continue;
       for (const auto& q : tets)
@@ -188,7 +209,146 @@ class ShellMesh : public TriMesh {
     return frozen && x >= 0 && std::size_t(x) < frozen->size() && (*frozen)[x];
   }
   bool collapse_edge_before(const Tuple& t) override {
+    if (chain_mode) return chain_before(t);
     return !singular[t.vid] && !frozen_vertex(t.vid);
+  }
+
+  // A chain collapse removes v (on a chain vertex x) along its coarse feature edge to w; v's
+  // other coarse feature edge goes to u, and the new edge w–u holds the input vertices of both
+  // edges and x.
+  bool chain_before(const Tuple& t) {
+    const Id v = t.vid, w = other_vertex(t);
+    const int x = input_vertex[v];
+    if (singular[v] || singular[w] || x < 0 || !chain_vertex[std::size_t(x)] ||
+        input_vertex[w] < 0 || !get_edge(chain, t).feature)
+      return false;
+    std::optional<Tuple> other;
+    int n = 0;
+    for (const Tuple& e : vertex_edges(v))
+      if (get_edge(chain, e).feature) {
+        ++n;
+        if (other_vertex(e) != w) other = e;
+      }
+    if (n != 2 || !other) return false;
+    const Id u = other_vertex(*other);
+    if (singular[u] || input_vertex[u] < 0) return false;
+    // w–u already a coarse feature edge (a loop of three): the collapse would merge two chains.
+    if (const auto wu = edge_tuple(w, u); wu && get_edge(chain, *wu).feature) return false;
+    std::vector<int> wv = get_edge(chain, t).interior, vu = get_edge(chain, *other).interior;
+    if (input_vertex[w] > x) std::reverse(wv.begin(), wv.end());
+    if (x > input_vertex[u]) std::reverse(vu.begin(), vu.end());
+    pending.w = w;
+    pending.u = u;
+    pending.x = x;
+    pending.path = std::move(wv);
+    pending.path.push_back(x);
+    pending.path.insert(pending.path.end(), vu.begin(), vu.end());
+    return true;
+  }
+  bool collapse_edge_after(const OperationRecord&) override {
+    if (!chain_mode) return true;
+    const auto e = edge_tuple(pending.w, pending.u);
+    if (!e) return false;
+    std::vector<int> interior = pending.path;
+    if (input_vertex[pending.w] > input_vertex[pending.u])
+      std::reverse(interior.begin(), interior.end());
+    set_edge(chain, *e, ChainEdge{true, std::move(interior)});
+    return true;
+  }
+
+  // The chain collapse's invariants: the triangle shape; the chain's input vertices snapped by
+  // arc length onto the straight edge w–u, each within the distance bound of its snapped point;
+  // no reference face made degenerate; the owned points re-homed; every prism of w and u (the
+  // only ones next to the moved reference faces' chain) passing I1–I3 on the reference copy,
+  // with the coverage kept. The snaps are undone if anything fails.
+  bool chain_invariants(const OperationRecord& r) {
+    if (max_mips > 0 && !shape_ok(r)) {
+      note(shape);
+      return false;
+    }
+    const int iw = input_vertex[pending.w], iu = input_vertex[pending.u];
+    const Eigen::Vector3d W = input->V().row(iw).transpose(), U = input->V().row(iu).transpose();
+    std::vector<double> at;
+    double total = 0;
+    Eigen::Vector3d prev = W;
+    for (int y : pending.path) {
+      const Eigen::Vector3d q = input->V().row(y).transpose();
+      total += (q - prev).norm();
+      at.push_back(total);
+      prev = q;
+    }
+    total += (U - prev).norm();
+    if (!(total > 0)) return false;
+    double last = 0;
+    for (double& a : at) {
+      a /= total;
+      if (!(a > last && a < 1)) return false;
+      last = a;
+    }
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      const Eigen::Vector3d q = W + at[i] * (U - W);
+      if ((input->V().row(pending.path[i]).transpose() - q).norm() > max_distance) {
+        note(distance);
+        return false;
+      }
+    }
+    std::vector<std::pair<int, std::optional<SnappedVertex>>> saved;
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      const int y = pending.path[i];
+      const SnappedVertex* old = reference->snap_of(y);
+      saved.emplace_back(y, old ? std::optional<SnappedVertex>(*old) : std::nullopt);
+      reference->snap_vertex({y, iw, iu, at[i]});
+    }
+    on_chain[std::size_t(pending.x)] = 1;
+    const bool ok = chain_geometry_ok(r);
+    if (!ok) {
+      for (auto it = saved.rbegin(); it != saved.rend(); ++it)
+        if (it->second)
+          reference->snap_vertex(*it->second);
+        else
+          reference->unsnap_vertex(it->first);
+      on_chain[std::size_t(pending.x)] = 0;
+    }
+    return ok;
+  }
+  bool chain_geometry_ok(const OperationRecord& r) {
+    std::vector<int> moved;
+    for (int y : pending.path) moved.insert(moved.end(), (*vf)[y].begin(), (*vf)[y].end());
+    std::sort(moved.begin(), moved.end());
+    moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+    // The reference copy stays embedded (the section argument needs a closed embedded
+    // surface; snapping can fold faces next to the chain over their neighbours).
+    for (int g : moved)
+      if (reference->face_degenerate(g) || reference->face_self_intersects(g)) {
+        note(section);
+        return false;
+      }
+    if (max_distance > 0 && !rehome_owned(r)) {
+      note(distance);
+      return false;
+    }
+    std::vector<Id> cells = r.new_cells;
+    std::vector<int> old_union, new_union, touching;
+    for (Id f : r.old_cells) old_union.insert(old_union.end(), track[f].begin(), track[f].end());
+    for (Id f : vertex_cells(pending.u))
+      if (std::find(cells.begin(), cells.end(), f) == cells.end()) {
+        cells.push_back(f);
+        old_union.insert(old_union.end(), track[f].begin(), track[f].end());
+      }
+    for (Id f : cells) {
+      if (note(prism_check(f, touching)) != none) return false;
+      track.set(f, touching);
+      new_union.insert(new_union.end(), touching.begin(), touching.end());
+    }
+    std::sort(old_union.begin(), old_union.end());
+    old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
+    std::sort(new_union.begin(), new_union.end());
+    new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
+    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end())) {
+      note(coverage);
+      return false;
+    }
+    return true;
   }
 
   // Flips: no singular vertex in the two faces (a face may hold one at most), no edge between two
@@ -219,7 +379,8 @@ class ShellMesh : public TriMesh {
   // Accepted only if the worst MIPS of the new middle triangles is strictly below that of the
   // old ones (a split is a shape repair here) and the invariants hold.
   bool split_edge_before(const Tuple& t) override {
-    return occupied && !singular[t.vid] && !singular[other_vertex(t)];
+    return occupied && !singular[t.vid] && !singular[other_vertex(t)] &&
+           !get_edge(chain, t).feature;
   }
   bool split_edge_after(const OperationRecord& r) override {
     const Id a = r.v0, b = r.v1, v = r.new_vertex;
@@ -392,7 +553,7 @@ class ShellMesh : public TriMesh {
     return Check::ok;
   }
   bool invariants(const OperationRecord& r) override {
-    const Check c = check(r);
+    const Check c = chain_mode ? (chain_invariants(r) ? Check::ok : Check::shell) : check(r);
     if (c != Check::ok && r.new_vertex != editing::k_no_id && occupied) {
       const int x = input_vertex[r.new_vertex];
       if (x >= 0) occupied[std::size_t(x)].store(0, std::memory_order_relaxed);
@@ -420,9 +581,10 @@ class ShellMesh : public TriMesh {
 Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const SimplifyOptions& options,
                      SimplifyStats& stats) {
   const auto t0 = std::chrono::steady_clock::now();
-  const InputSurfaceIndex index(input.V, input.F);
+  InputSurfaceIndex index(input.V, input.F, shell.reference);
   ShellMesh m;
   m.input = &index;
+  m.reference = &index;
   m.section_cos = options.section_cos;
   m.max_distance = options.max_distance;
   m.max_mips = options.max_mips;
@@ -442,6 +604,32 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   for (int f = 0; f < nf; ++f) {
     m.prism_check(Id(f), touching);
     m.track.set(Id(f), touching);
+  }
+  if (options.collapse_chains) {
+    if (!(options.max_distance > 0))
+      throw MeshingError("simplify: chain collapses need the distance bound (max_distance)");
+    if (!options.extra_points.empty())
+      throw MeshingError("simplify: chain collapses with extra distance points are not supported");
+    if (!shell.reference.empty())
+      throw MeshingError("simplify: chain collapses on a shell with a reference copy");
+    const int ni = input.num_vertices();
+    std::vector<int> degree(std::size_t(ni), 0);
+    std::vector<int> middle_of(std::size_t(ni), -1);
+    for (int v = 0; v < nv; ++v)
+      if (shell.input_vertex[v] >= 0) middle_of[std::size_t(shell.input_vertex[v])] = v;
+    for (const auto& e : options.feature_edges) {
+      if (e[0] < 0 || e[0] >= ni || e[1] < 0 || e[1] >= ni || e[0] == e[1])
+        throw MeshingError("simplify: feature edge (" + std::to_string(e[0]) + ", " +
+                           std::to_string(e[1]) + ") is not an edge of the input");
+      ++degree[std::size_t(e[0])];
+      ++degree[std::size_t(e[1])];
+      const int a = middle_of[std::size_t(e[0])], b = middle_of[std::size_t(e[1])];
+      if (a < 0 || b < 0) continue;
+      if (const auto t = m.edge_tuple(Id(a), Id(b))) m.set_edge(m.chain, *t, {true, {}});
+    }
+    m.chain_vertex.assign(std::size_t(ni), 0);
+    for (int x = 0; x < ni; ++x) m.chain_vertex[std::size_t(x)] = degree[std::size_t(x)] == 2;
+    m.on_chain.assign(std::size_t(ni), 0);
   }
   stats.faces_before = nf;
   if (m.max_distance > 0) {  // every input vertex starts in a prism of its middle vertex
@@ -605,6 +793,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.taken.assign(std::size_t(input.num_vertices()), 0);
     for (const auto& v : m.get_vertices())
       if (m.input_vertex[v.vid] >= 0) m.taken[std::size_t(m.input_vertex[v.vid])] = 1;
+    for (std::size_t x = 0; x < m.on_chain.size(); ++x)
+      if (m.on_chain[x]) m.taken[x] = 1;
     pass.num_threads = 1;
     pass.position = [&m](Id v) { return m.mid[v]; };
     const editing::PassStats st = pass.run(m, work);
@@ -613,10 +803,47 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     return int(st.succeeded);
   };
 
+  // Chain collapses on one thread, shortest coarse feature edge first; a success renews the edges
+  // around the kept vertex.
+  auto chain_pass = [&] {
+    std::vector<TriMesh::Tuple> feature;
+    for (const auto& e : m.get_edges())
+      if (m.get_edge(m.chain, e).feature) feature.push_back(e);
+    Pass pass;
+    pass.operations["chain"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
+      return m.collapse_edge(t);
+    };
+    pass.priority = [length2](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
+      return -length2(t);
+    };
+    pass.should_process = [length2](const TriMesh&, const Pass::Work& w, double p) {
+      return -length2(w.second) == p;
+    };
+    pass.renew_neighbor_tuples = [&](const TriMesh&, const std::string&,
+                                     const TriMesh::Tuple& kept) {
+      return edge_work("chain", m.edges_of_faces(m.vertex_cells(kept.vid)), true);
+    };
+    pass.num_threads = 1;
+    pass.position = [&m](Id v) { return m.mid[v]; };
+    m.chain_mode = true;
+    struct Off {
+      ShellMesh& m;
+      ~Off() { m.chain_mode = false; }
+    } off{m};
+    const editing::PassStats st = pass.run(m, edge_work("chain", feature, true));
+    stats.passes.emplace_back("chain", st);
+    return int(st.succeeded);
+  };
+
   for (int round = 0; round < options.rounds; ++round) {
     int changed = 0;
-    const int collapsed = collapse_pass();
+    int collapsed = collapse_pass();
     stats.collapses += collapsed;
+    if (options.collapse_chains) {
+      const int c = chain_pass();
+      stats.chain_collapses += c;
+      collapsed += c;
+    }
     changed += collapsed;
     if (options.split_mips > 0 && m.max_distance > 0) {
       const int sp = split_pass();
@@ -668,6 +895,13 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     out.top.row(v) = m.top[Id(v)].transpose();
     out.singular[v] = m.singular[Id(v)];
     out.input_vertex[v] = m.input_vertex[Id(v)];
+  }
+  out.reference = index.snaps();
+  stats.snapped_vertices = int(out.reference.size());
+  for (const SnappedVertex& q : out.reference) {
+    const Eigen::Vector3d a = input.V.row(q.a).transpose(), b = input.V.row(q.b).transpose();
+    stats.chain_max_distance = std::max(
+        stats.chain_max_distance, (input.V.row(q.vertex).transpose() - (a + q.s * (b - a))).norm());
   }
   const auto faces = m.cells_array();
   out.F.resize(int(faces.size()), 3);

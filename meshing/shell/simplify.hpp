@@ -22,6 +22,8 @@
 // and the input faces covered by the removed prisms stay covered by the new ones. Singular
 // vertices never move or disappear. Runs through the parallel scheduler.
 
+#include <array>
+
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/editing/scheduler.hpp"
 #include "meshing/shell/shell.hpp"
@@ -59,6 +61,16 @@ struct SimplifyOptions {
   // new middle vertex on the input vertex of its two prisms nearest to its midpoint, kept when
   // the worst MIPS of the new triangles is strictly lower and the invariants hold.
   double split_mips = 0;
+  // Coarsening along feature chains (thesis §5.3; needs max_distance, no extra_points): input
+  // feature edges as vertex pairs. A middle vertex on an input vertex with exactly two of them
+  // (a chain vertex; it must be frozen for the other operations) may collapse into a neighbour
+  // along a coarse feature edge. The input vertices inside each coarse feature edge are snapped,
+  // in a reference copy of the input, onto that straight edge by arc length
+  // (Shell::reference); the invariants are checked on that copy with exact predicates, and the
+  // distance bound holds between each such vertex and its snapped point. Chain collapses run
+  // on one thread after each collapse pass.
+  std::vector<std::array<int, 2>> feature_edges;
+  bool collapse_chains = false;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
 };
@@ -67,6 +79,9 @@ struct SimplifyStats {
   int faces_before = 0, faces_after = 0;
   std::vector<std::pair<std::string, editing::PassStats>> passes;  // "collapse", "flip", ...
   int collapses = 0, flips = 0, rotations = 0, zooms = 0, pans = 0, splits = 0;
+  int chain_collapses = 0;
+  int snapped_vertices = 0;       // input vertices inside coarse feature edges at the end
+  double chain_max_distance = 0;  // max |x - snapped x| over them
   // Collapses refused, by the first check that failed: the triangle shape bound, the distance
   // bound, then per new prism I1 positivity, I3 intersection, I2 section, and coverage (a prism
   // touching no input face, or an input face the old prisms touched left uncovered). Collapses

@@ -21,7 +21,7 @@ std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input
   // every non-singular half-pillar. Contact with the prism's boundary alone is not checked here:
   // the fibers there belong to the neighbour as well, whose tets see that face. Faces passing
   // the pillar test are skipped before the contact test.
-  const InputSurfaceIndex index(input.V, input.F);
+  const InputSurfaceIndex index(input.V, input.F, shell.reference);
   const int nf = int(shell.F.rows());
   auto row = [](const Eigen::MatrixXd& M, int v) { return Eigen::Vector3d(M.row(v)); };
   std::vector<char> fails(std::size_t(nf), 0);
@@ -53,10 +53,9 @@ std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input
     }
     bool ok = true;
     for (int t : index.faces_in_box(box.min(), box.max())) {
-      const auto tri = index.face_triangle(t);
       bool transversal = true;
       for (const auto& [from, to] : half_pillars)
-        if (normal_dot_sign(tri, from, to) <= 0) {
+        if (index.face_normal_dot_sign(t, from, to) <= 0) {
           transversal = false;
           break;
         }
@@ -120,7 +119,31 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     for (int v = 0; v < nv; ++v)
       if (shell.singular[v] && shell.input_vertex[v] >= 0)
         singular_input[shell.input_vertex[v]] = 1;
+    // Faces of the reference copy with a snapped corner, exactly against the cage triangles
+    // near them; a pinch at one of their corners counts as a crossing (conservative).
+    const InputSurfaceIndex reference(input.V, input.F, shell.reference);
+    std::vector<char> moved(std::size_t(input.num_faces()), 0);
+    for (int f : reference.moved_faces()) {
+      moved[std::size_t(f)] = 1;
+      const auto tri = reference.exact_face(f);
+      Eigen::AlignedBox3d box;
+      for (const auto& q : tri) box.extend(q.p);
+      // The rounded corners are within an ulp of the exact ones.
+      const double scale =
+          std::max(box.min().cwiseAbs().maxCoeff(), box.max().cwiseAbs().maxCoeff());
+      const Eigen::Vector3d pad = Eigen::Vector3d::Constant(1e-14 * scale + 1e-300);
+      bool hit = false;
+      for (int c : cage_index.faces_in_box(box.min() - pad, box.max() + pad)) {
+        for (int k = 0; k < 3 && !hit; ++k)
+          for (int j = 0; j < 3 && !hit; ++j) hit = cf(c, k) == input.F(f, j);
+        if (!hit) hit = exact_triangles_meet(tri, cage_index.face_triangle(c));
+        if (hit) break;
+      }
+      r.intersecting_input_faces += hit;
+      r.reference_self_intersections += reference.face_self_intersects(f);
+    }
     for (int f = 0; f < input.num_faces(); ++f) {
+      if (moved[std::size_t(f)]) continue;
       std::array<Eigen::Vector3d, 3> tri;
       std::array<bool, 3> s;
       const Eigen::Vector3i ids = input.F.row(f);
@@ -139,6 +162,7 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
   // a singular shell vertex, base = mid = top) is a zero-length fiber: P⁻¹ must give its corner
   // and P the vertex itself (thesis §4.2.5), as for any other vertex.
   {
+    // With a reference copy, P⁻¹ takes the vertex's point of the copy and P returns the input's.
     const ShellProjection projection(shell, input);
     const double unit = bbox_longest_edge(input.V);
     std::vector<char> referenced(input.num_vertices(), 0);
@@ -147,7 +171,7 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     for (int v = 0; v < input.num_vertices(); ++v) {
       if (!referenced[v]) continue;
       const Eigen::Vector3d x = input.V.row(v);
-      const auto q = projection.unproject(x);
+      const auto q = projection.unproject(projection.reference_vertices().row(v).transpose());
       if (!q) {
         ++r.roundtrip_failures;
         continue;

@@ -9,6 +9,9 @@
 //                 interior; shell_intersection.hpp) has a
 //                 normal making a positive dot product with every non-singular pillar, so every
 //                 fiber crosses the input transversally and at most once (thesis §4.4, I2)
+//   reference     with feature chains (Shell::reference): the faces of the reference copy with a
+//                 snapped corner meet no other face of it beyond common corners and edges; the
+//                 checks above use the copy, exactly
 //   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (pinch
 //                 points, zero-length fibers, included)
 
@@ -24,13 +27,20 @@ struct ShellVerification {
   int non_positive_faces = 0;
   int intersecting_input_faces = 0;
   int non_section_faces = 0;
+  // Faces of the reference copy (Shell::reference) meeting another face beyond their common
+  // corners and edge (the section argument needs the copy embedded, as the input is).
+  int reference_self_intersections = 0;
   int roundtrip_failures = 0;  // input vertices P⁻¹ or P could not map
   double roundtrip_max_error_rel = 0;
   double seconds = 0;
   bool positive() const { return non_positive_faces == 0; }
   bool separated() const { return intersecting_input_faces == 0; }
   bool section() const { return non_section_faces == 0; }
-  bool valid() const { return positive() && separated() && section() && roundtrip_failures == 0; }
+  bool embedded_reference() const { return reference_self_intersections == 0; }
+  bool valid() const {
+    return positive() && separated() && section() && embedded_reference() &&
+           roundtrip_failures == 0;
+  }
 };
 
 ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input);

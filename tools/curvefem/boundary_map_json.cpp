@@ -78,6 +78,10 @@ void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& ma
     s["singular"] = std::vector<int>(shell->singular.begin(), shell->singular.end());
     s["input_vertex"] = shell->input_vertex;
     s["face_parent"] = shell->face_parent;
+    if (!shell->reference.empty()) {  // [vertex, a, b, s]: vertex snapped to a + s (b - a)
+      auto& r = s["reference"] = nlohmann::ordered_json::array();
+      for (const auto& q : shell->reference) r.push_back({q.vertex, q.a, q.b, q.s});
+    }
   }
   write_text_file_atomic(path, j.dump() + "\n");
 }
@@ -164,6 +168,10 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
       for (int x : s.at("singular").get<std::vector<int>>()) sh.singular.push_back(char(x));
       sh.input_vertex = s.at("input_vertex").get<std::vector<int>>();
       sh.face_parent = s.at("face_parent").get<std::vector<int>>();
+      if (s.contains("reference"))
+        for (const auto& q : s.at("reference"))
+          sh.reference.push_back(
+              {q.at(0).get<int>(), q.at(1).get<int>(), q.at(2).get<int>(), q.at(3).get<double>()});
       const Eigen::Index nv = sh.mid.rows();
       if (sh.base.rows() != nv || sh.top.rows() != nv || Eigen::Index(sh.singular.size()) != nv ||
           Eigen::Index(sh.input_vertex.size()) != nv ||
