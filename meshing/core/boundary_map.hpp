@@ -9,6 +9,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
+#include <vector>
 
 #include "meshing/core/lagrange_mesh.hpp"
 
@@ -26,6 +28,10 @@ struct BoundaryMap {
   Eigen::MatrixXd point_bary;  // #points × 3
   Eigen::VectorXi point_face;
   Eigen::MatrixXd point_uv;  // #points × 2
+
+  // Input feature edges (input vertex pairs) the mesh keeps as curved feature edges: both ends
+  // of each map onto one boundary edge (the validator checks it). Empty: no features.
+  std::vector<std::array<int, 2>> feature_edges;
 
   int num_points() const { return static_cast<int>(point_face.size()); }
   /// The image of distance point i.

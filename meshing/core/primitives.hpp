@@ -17,6 +17,11 @@ SurfaceMesh make_torus(double R, double r, int nu, int nv);
 /// Axis-aligned box [lo, hi] with n × n quads per side, 12·n² faces; tags 1..6 = -x,+x,-y,+y,-z,+z.
 SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n = 1);
 
+/// Closed cylinder of radius 1 around z from z = 0 to z = h: `around` segments, `rows` rows on
+/// the side, `rings` concentric rings on each flat cap (its centre a vertex); its two rims are
+/// sharp (90°) curved feature chains.
+SurfaceMesh make_cylinder(int around, int rows, int rings, double h);
+
 /// Unit cube [0,1]³ cut into n³ cubes of 6 positively oriented tetrahedra each (Kuhn split along
 /// the main diagonal; conforming). Order 1, cell_tags 1.
 LagrangeMesh make_cube_tets(int n);

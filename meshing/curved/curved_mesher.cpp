@@ -870,6 +870,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     map.boundary.nodes.row(Eigen::Index(i)) = nodes[volume_of[i]].transpose();
     map.boundary_node_to_volume[Eigen::Index(i)] = volume_of[i];
   }
+  map.feature_edges = options.feature_edges;
   map.vertex_face = Eigen::VectorXi::Constant(input.num_vertices(), -1);
   map.vertex_uv = Eigen::MatrixXd::Zero(input.num_vertices(), 2);
   const int np = int(points.size());

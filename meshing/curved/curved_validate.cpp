@@ -231,6 +231,57 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         if (!(e1.x() * e2.y() - e1.y() * e2.x() > 0)) ++r.flipped_input_faces;
       }
   }
+  // Feature edges: where each end's image sits on the boundary triangles (a corner node, or the
+  // interior of the edge between two corner nodes), then one boundary edge holding both.
+  r.feature_edges = int(map.feature_edges.size());
+  if (!map.feature_edges.empty()) {
+    std::set<std::pair<int, int>> edges;
+    const auto& cells = map.boundary.cells;
+    for (int f = 0; f < cells.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int a = cells(f, c), b = cells(f, (c + 1) % 3);
+        edges.insert({std::min(a, b), std::max(a, b)});
+      }
+    // {node, -1}: at corner node; {a, b} (a < b): inside that edge; {-1, -1}: off the edges.
+    auto where = [&](int v) -> std::pair<int, int> {
+      if (v < 0 || v >= map.num_input_vertices()) return {-1, -1};
+      const int f = map.vertex_face[v];
+      if (f < 0 || f >= cells.rows()) return {-1, -1};
+      const double u = map.vertex_uv(v, 0), w = map.vertex_uv(v, 1);
+      const double l[3] = {1 - u - w, u, w};
+      constexpr double tol = 1e-9;
+      int zeros = 0, nonzero = -1;
+      for (int c = 0; c < 3; ++c)
+        if (std::abs(l[c]) <= tol)
+          ++zeros;
+        else
+          nonzero = c;
+      if (zeros == 2) return {int(cells(f, nonzero)), -1};
+      if (zeros != 1) return {-1, -1};
+      int a = -1, b = -1;
+      for (int c = 0; c < 3; ++c)
+        if (std::abs(l[c]) > tol) (a < 0 ? a : b) = int(cells(f, c));
+      return {std::min(a, b), std::max(a, b)};
+    };
+    for (std::size_t i = 0; i < map.feature_edges.size(); ++i) {
+      const auto p = where(map.feature_edges[i][0]), q = where(map.feature_edges[i][1]);
+      bool ok = false;
+      if (p.first >= 0 && q.first >= 0) {
+        if (p.second >= 0 && q.second >= 0)
+          ok = p == q;
+        else if (p.second >= 0)
+          ok = q.first == p.first || q.first == p.second;
+        else if (q.second >= 0)
+          ok = p.first == q.first || p.first == q.second;
+        else
+          ok = edges.count({std::min(p.first, q.first), std::max(p.first, q.first)}) > 0;
+      }
+      if (!ok) {
+        ++r.features_off_edges;
+        if (r.first_feature_off < 0) r.first_feature_off = int(i);
+      }
+    }
+  }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

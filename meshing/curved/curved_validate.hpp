@@ -8,6 +8,9 @@
 //   embedding    the boundary, subdivided into flat triangles at `subdivision` per edge, has no
 //                self-intersecting pair (exact predicates);
 //   distance     max over input vertices of |x - φ(x)|, relative to the bbox edge;
+//   features     both ends of every feature edge of the map (BoundaryMap::feature_edges) map
+//                onto one edge of the boundary (a corner of it, or its interior: a barycentric
+//                coordinate within 1e-9 of 0), so each input chain lies along boundary edges;
 //   orientation  diagnostic: input triangles whose three vertices map into the same boundary
 //                triangle and whose straight (u, v) triangle is not positively oriented. The
 //                shell projection is only piecewise linear (3 tets per half-prism), so a sliver
@@ -53,6 +56,7 @@ struct CurvedValidation {
   double points_max_distance_rel = 0;
   int points_max_distance_point = -1;
   int input_faces_checked = 0, flipped_input_faces = 0;
+  int feature_edges = 0, features_off_edges = 0, first_feature_off = -1;  // index in the map's list
   double seconds = 0;
   bool certified() const { return non_positive_tets == 0 && undecided_tets == 0; }
   bool boundary_ok() const {
@@ -62,7 +66,8 @@ struct CurvedValidation {
   }
   bool valid(double eps_rel) const {
     return certified() && boundary_ok() && unmapped_vertices == 0 && max_distance_rel <= eps_rel &&
-           bad_distance_points == 0 && points_max_distance_rel <= eps_rel;
+           bad_distance_points == 0 && points_max_distance_rel <= eps_rel &&
+           features_off_edges == 0;
   }
 };
 

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <unordered_map>
 
 namespace curvefem::meshing::shell {
 
@@ -469,6 +470,76 @@ struct InputSurfaceIndex::Impl {
   std::array<ExactPoint, 3> exact_face(int f) const {
     return {corner(f, 0), corner(f, 1), corner(f, 2)};
   }
+  // Moved faces filed in a hash grid by their current boxes (queries near a chain must not scan
+  // every moved face).
+  double cell = 1;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  std::unordered_map<std::int64_t, std::vector<int>> grid;
+  std::vector<CGAL::Bbox_3> filed_box;  // per face: the box it is filed under
+  std::array<std::int64_t, 6> cells_of(const CGAL::Bbox_3& b) const {
+    return {std::int64_t(std::floor((b.xmin() - origin.x()) / cell)),
+            std::int64_t(std::floor((b.ymin() - origin.y()) / cell)),
+            std::int64_t(std::floor((b.zmin() - origin.z()) / cell)),
+            std::int64_t(std::floor((b.xmax() - origin.x()) / cell)),
+            std::int64_t(std::floor((b.ymax() - origin.y()) / cell)),
+            std::int64_t(std::floor((b.zmax() - origin.z()) / cell))};
+  }
+  static std::int64_t key(std::int64_t i, std::int64_t j, std::int64_t k) {
+    return (i & 0x1fffff) | ((j & 0x1fffff) << 21) | ((k & 0x1fffff) << 42);
+  }
+  template <class Fn>
+  void for_cells(const CGAL::Bbox_3& b, Fn&& fn) const {
+    const auto c = cells_of(b);
+    for (std::int64_t i = c[0]; i <= c[3]; ++i)
+      for (std::int64_t j = c[1]; j <= c[4]; ++j)
+        for (std::int64_t k = c[2]; k <= c[5]; ++k) fn(key(i, j, k));
+  }
+  double cell_count(const CGAL::Bbox_3& b) const {
+    const auto c = cells_of(b);
+    return double(c[3] - c[0] + 1) * double(c[4] - c[1] + 1) * double(c[5] - c[2] + 1);
+  }
+  void file(int f) {
+    filed_box[std::size_t(f)] = face_box(f);
+    if (cell_count(filed_box[std::size_t(f)]) > 4096) {
+      grid[key(-1, -1, -1) ^ (std::int64_t(1) << 63)].push_back(f);  // too large: kept apart
+      return;
+    }
+    for_cells(filed_box[std::size_t(f)], [&](std::int64_t k) { grid[k].push_back(f); });
+  }
+  void unfile(int f) {
+    auto drop = [&](std::int64_t k) {
+      auto it = grid.find(k);
+      if (it == grid.end()) return;
+      auto& v = it->second;
+      v.erase(std::remove(v.begin(), v.end(), f), v.end());
+      if (v.empty()) grid.erase(it);
+    };
+    if (cell_count(filed_box[std::size_t(f)]) > 4096)
+      drop(key(-1, -1, -1) ^ (std::int64_t(1) << 63));
+    else
+      for_cells(filed_box[std::size_t(f)], drop);
+  }
+  // Moved faces whose current box overlaps b, in increasing order.
+  std::vector<int> moved_near(const CGAL::Bbox_3& b) const {
+    std::vector<int> out;
+    if (moved.empty()) return out;
+    if (cell_count(b) > 4096 || cell_count(b) > 4.0 * double(moved.size())) {
+      for (int f : moved)
+        if (CGAL::do_overlap(b, face_box(f))) out.push_back(f);
+    } else {
+      auto take = [&](std::int64_t k) {
+        if (auto it = grid.find(k); it != grid.end())
+          for (int f : it->second)
+            if (CGAL::do_overlap(b, face_box(f))) out.push_back(f);
+      };
+      for_cells(b, take);
+      take(key(-1, -1, -1) ^ (std::int64_t(1) << 63));
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+
   CGAL::Bbox_3 face_box(int f) const {
     if (!is_moved(f)) return boxes[std::size_t(f)];
     CGAL::Bbox_3 out;
@@ -519,6 +590,14 @@ void InputSurfaceIndex::snap_vertex(const SnappedVertex& q) {
     m.vf.assign(std::size_t(nv), {});
     for (int f = 0; f < m.F.rows(); ++f)
       for (int k = 0; k < 3; ++k) m.vf[std::size_t(m.F(f, k))].push_back(f);
+    m.filed_box.assign(std::size_t(m.F.rows()), CGAL::Bbox_3());
+    // Grid cells of twice the mean extent of an input triangle's box.
+    double extent = 0;
+    for (const CGAL::Bbox_3& b : m.boxes)
+      extent += std::max({b.xmax() - b.xmin(), b.ymax() - b.ymin(), b.zmax() - b.zmin()});
+    m.cell = m.boxes.empty() ? 1.0 : 2 * extent / double(m.boxes.size());
+    if (!(m.cell > 0)) m.cell = 1;
+    m.origin = m.V.colwise().minCoeff().transpose();
   }
   const bool was = m.snap[std::size_t(q.vertex)].vertex >= 0;
   m.snap[std::size_t(q.vertex)] = q;
@@ -535,12 +614,14 @@ void InputSurfaceIndex::snap_vertex(const SnappedVertex& q) {
     }
     m.snap_box[std::size_t(q.vertex)] = CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
   }
-  if (was) return;
-  for (int f : m.vf[std::size_t(q.vertex)])
-    if (m.moved_corners[std::size_t(f)]++ == 0) {
+  for (int f : m.vf[std::size_t(q.vertex)]) {
+    if (m.moved_corners[std::size_t(f)] > 0) m.unfile(f);  // filed under its old box
+    if (!was && m.moved_corners[std::size_t(f)]++ == 0) {
       m.moved_at[std::size_t(f)] = int(m.moved.size());
       m.moved.push_back(f);
     }
+    m.file(f);
+  }
 }
 
 void InputSurfaceIndex::unsnap_vertex(int x) {
@@ -548,14 +629,18 @@ void InputSurfaceIndex::unsnap_vertex(int x) {
   if (m.snap.empty() || x < 0 || x >= int(m.V.rows()) || m.snap[std::size_t(x)].vertex < 0) return;
   m.snap[std::size_t(x)] = SnappedVertex{};
   m.Vref.row(x) = m.V.row(x);
-  for (int f : m.vf[std::size_t(x)])
+  for (int f : m.vf[std::size_t(x)]) {
+    m.unfile(f);
     if (--m.moved_corners[std::size_t(f)] == 0) {
       const int at = m.moved_at[std::size_t(f)];
       m.moved[std::size_t(at)] = m.moved.back();
       m.moved_at[std::size_t(m.moved.back())] = at;
       m.moved.pop_back();
       m.moved_at[std::size_t(f)] = -1;
+    } else {
+      m.file(f);  // still moved, under its new box
     }
+  }
 }
 
 const SnappedVertex* InputSurfaceIndex::snap_of(int x) const {
@@ -792,8 +877,7 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   // Moved faces of the reference copy, exactly; a pinch at one of their corners is refused
   // (conservative: no exact pinch test for snapped corners).
   const CGAL::Bbox_3 box = tri.bbox();
-  for (int f : m_impl->moved) {
-    if (!CGAL::do_overlap(box, m_impl->face_box(f))) continue;
+  for (int f : m_impl->moved_near(box)) {
     for (int k = 0; k < 3; ++k)
       if (singular[k])
         for (int j = 0; j < 3; ++j)
@@ -863,9 +947,8 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
   std::vector<int> candidates;
   BoxOverlapTraits traits{&m_impl->triangles, &m_impl->boxes, &candidates};
   m_impl->tree.traversal(all, traits);
-  for (int f : m_impl->moved) {
+  for (int f : m_impl->moved_near(all)) {
     const CGAL::Bbox_3 fb = m_impl->face_box(f);
-    if (!CGAL::do_overlap(fb, all)) continue;
     const auto tri = m_impl->exact_face(f);
     for (std::size_t i = 0; i < T.size(); ++i)
       if (CGAL::do_overlap(fb, tb[i]) && exact_triangle_meets_tet(tri, tets[i])) {
@@ -909,8 +992,7 @@ std::vector<int> InputSurfaceIndex::faces_in_box(const Eigen::Vector3d& lo,
   out.reserve(hits.size());
   for (const auto& it : hits) out.push_back(m_impl->id(it));
   if (!m_impl->moved.empty()) {
-    for (int f : m_impl->moved)
-      if (CGAL::do_overlap(box, m_impl->face_box(f))) out.push_back(f);
+    for (int f : m_impl->moved_near(box)) out.push_back(f);
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
@@ -969,7 +1051,7 @@ int InputSurfaceIndex::segment_hit(const Eigen::Vector3d& a, const Eigen::Vector
     if (!m_impl->is_moved(m_impl->id(it))) candidates.push_back(m_impl->id(it));
   // Moved faces of the reference copy as their rounded triangles (shared corners keep the
   // rounded copy watertight, so a segment crossing near a chain hits one side or the other).
-  for (int f : m_impl->moved) {
+  for (int f : m_impl->moved_near(seg.bbox())) {
     const auto t = face_triangle(f);
     if (CGAL::do_intersect(seg, Triangle(pt(t[0]), pt(t[1]), pt(t[2])))) candidates.push_back(f);
   }

@@ -265,6 +265,40 @@ TEST(Cli, ShellReportsBeveling) {
   EXPECT_EQ(s["beveled_faces"], 0);
 }
 
+// --feature-chains: the box's edge vertices go inside coarse feature edges; boundary_map.json
+// carries the feature edges and the shell's reference copy, and `validate` re-checks both (the
+// map roundtrip through the snapped copy, and every feature edge along a boundary edge).
+TEST(Cli, MeshAlongFeatureChainsWritesAndValidatesThem) {
+  const auto dir = test::scratch_dir("cli_mesh_chains");
+  const SurfaceMesh box = make_box({0, 0, 0}, {1, 2, 1}, 4);  // 192 faces
+  io::write_surface(dir / "box.obj", box, io::SurfaceFormat::obj);
+  const std::string in = (dir / "box.obj").string(), out_dir = (dir / "m").string();
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
+                                  " --order 2 --threads 2 --feature-chains",
+                              &out),
+            0)
+      << out;
+  const auto j = read_json(dir / "m" / "report.json");
+  EXPECT_TRUE(j["valid"].get<bool>());
+  EXPECT_EQ(j["output_boundary_faces"], 12);
+  EXPECT_EQ(j["coarsening"]["snapped_vertices"], 12 * 3);  // 12 edges of 4 steps
+  EXPECT_EQ(j["validation"]["feature_edges"], 12 * 4);
+  EXPECT_EQ(j["validation"]["features_off_boundary_edges"], 0);
+  EXPECT_LT(j["map_roundtrip_max_error_rel"].get<double>(), 1e-12);
+  ASSERT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 0) << out;
+  EXPECT_NE(out.find("feature edges        48, 0 not along a boundary edge"), std::string::npos)
+      << out;
+  // An edge vertex moved into its boundary triangle fails the check.
+  auto map = read_json(dir / "m" / "boundary_map.json");
+  ASSERT_EQ(map["shell"]["reference"].size(), 36u);
+  const int x = map["shell"]["reference"][0][0].get<int>();
+  map["vertex_uv"][x] = {0.2, 0.3};
+  { std::ofstream(dir / "m" / "boundary_map.json") << map.dump(); }
+  EXPECT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 3) << out;
+  EXPECT_NE(out.find("2 not along a boundary edge"), std::string::npos) << out;
+}
+
 TEST(Cli, MeshWithDistancePointsWritesAndValidatesThem) {
   const auto dir = test::scratch_dir("cli_mesh_points");
   const SurfaceMesh sphere = make_icosphere(2);  // 320 faces, 480 edges

@@ -52,6 +52,7 @@ void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& ma
   }
   j["vertex_face"] = std::move(vf);
   j["vertex_uv"] = std::move(uv);
+  if (!map.feature_edges.empty()) j["feature_edges"] = map.feature_edges;
   if (map.num_points() > 0) {
     auto in_face = nlohmann::ordered_json::array(), bary = nlohmann::ordered_json::array(),
          face = nlohmann::ordered_json::array(), puv = nlohmann::ordered_json::array();
@@ -134,6 +135,8 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
       map.vertex_uv(Eigen::Index(v), 0) = uv[v].at(0);
       map.vertex_uv(Eigen::Index(v), 1) = uv[v].at(1);
     }
+    if (j.contains("feature_edges"))
+      map.feature_edges = j.at("feature_edges").get<std::vector<std::array<int, 2>>>();
     if (j.contains("distance_points")) {
       const auto& pts = j.at("distance_points");
       const auto& in_face = pts.at("input_face");

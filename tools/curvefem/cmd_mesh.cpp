@@ -87,6 +87,9 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"distance_points_max_distance_rel", v.points_max_distance_rel},
           {"distance_points_max_distance_point", v.points_max_distance_point},
           {"eps_rel", eps_rel},
+          {"feature_edges", v.feature_edges},
+          {"features_off_boundary_edges", v.features_off_edges},
+          {"first_feature_off", v.first_feature_off},
           {"input_faces_orientation_checked", v.input_faces_checked},
           {"flipped_input_faces", v.flipped_input_faces},
           {"seconds", v.seconds}};

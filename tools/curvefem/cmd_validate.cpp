@@ -116,6 +116,13 @@ void register_validate(CLI::App& app) {
                     : v.points_max_distance_rel <= eps ? ""
                                                        : "  EXCEEDS eps");
       std::printf("  unmapped vertices    %d\n", v.unmapped_vertices);
+      if (v.feature_edges > 0)
+        std::printf(
+            "  feature edges        %d, %d not along a boundary edge%s\n", v.feature_edges,
+            v.features_off_edges,
+            v.first_feature_off >= 0
+                ? (" (first: map feature edge " + std::to_string(v.first_feature_off) + ")").c_str()
+                : "");
       std::printf(
           "  phi chart (diag.)    %d of %d input faces inside one boundary face have a "
           "non-positive straight (u, v) image\n",

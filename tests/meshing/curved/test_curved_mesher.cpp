@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 
 #include "mapping/boundary_inverse.hpp"
 #include "meshing/core/error.hpp"
@@ -30,12 +32,14 @@ struct MeshRun {
   cv::CurvedValidation check;
 };
 
-MeshRun mesh(const SurfaceMesh& s, int order, double eps, bool features = false) {
+MeshRun mesh(const SurfaceMesh& s, int order, double eps, bool features = false,
+             bool chains = false) {
   cv::CurvedMeshOptions o;
   o.order = order;
   o.eps_rel = eps;
   o.threads = 2;
   if (features) o.feature_edges = cv::detect_feature_edges(s, 60);
+  o.feature_chains = chains;
   MeshRun r;
   r.mesh = cv::build_curved_mesh(s, o, r.stats);
   r.check = cv::validate_curved_mesh(r.mesh.mesh, r.mesh.map, s);
@@ -121,6 +125,75 @@ TEST(CurvedMesher, CubeFeatureVerticesMapExactly) {
   for (int v = 0; v < box.num_vertices(); ++v)
     if (frozen[v]) EXPECT_LT((r.mesh.map.image(v) - box.V.row(v).transpose()).norm(), 1e-14) << v;
   EXPECT_LT(r.stats.coarse_faces, 432);
+}
+
+// Coarsening along the feature chains: the cube's 60 edge vertices go inside the 12 coarse
+// feature edges, and the validator finds both ends of all 72 input feature edges on one boundary
+// edge, at every order.
+TEST(CurvedMesher, CubeCoarsensAlongItsFeatureChainsAtEveryOrder) {
+  const SurfaceMesh box = curvefem::make_box({0, 0, 0}, {1, 1, 1}, 6);  // 432 faces
+  const MeshRun frozen = mesh(box, 3, 1e-2, true, false);
+  for (int k = 1; k <= 4; ++k) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    const MeshRun r = mesh(box, k, 1e-2, true, true);
+    EXPECT_TRUE(r.check.valid(1e-2))
+        << r.check.non_positive_tets << " non-positive tets, "
+        << r.check.boundary_self_intersections << " intersections, " << r.check.max_distance_rel
+        << " distance, " << r.check.features_off_edges << " feature edges off";
+    EXPECT_EQ(r.check.feature_edges, 72);
+    EXPECT_EQ(r.check.features_off_edges, 0);
+    EXPECT_EQ(r.stats.snapped_vertices, 12 * 5);
+    EXPECT_EQ(r.stats.coarse_faces, 12);  // the corners only
+    EXPECT_LT(r.stats.chain_max_distance_rel, 1e-12);
+    EXPECT_LT(r.stats.slab_tets + r.stats.interior_tets,
+              (frozen.stats.slab_tets + frozen.stats.interior_tets) / 4);
+  }
+  EXPECT_EQ(frozen.stats.snapped_vertices, 0);
+  EXPECT_EQ(frozen.check.features_off_edges, 0);
+  // The check can fail: an edge vertex moved off its boundary edge in the map.
+  MeshRun r = mesh(box, 2, 1e-2, true, true);
+  const auto frozen_flags = cv::feature_vertices(box.num_vertices(), r.mesh.map.feature_edges);
+  int x = 0;
+  while (!frozen_flags[x] || std::abs(r.mesh.map.vertex_uv(x, 0)) < 1e-3 ||
+         std::abs(r.mesh.map.vertex_uv(x, 1)) < 1e-3)
+    ++x;  // a chain vertex with both coordinates nonzero: inside the edge u + v = 1
+  r.mesh.map.vertex_uv.row(x) *= 0.5;
+  const cv::CurvedValidation bad = cv::validate_curved_mesh(r.mesh.mesh, r.mesh.map, box);
+  EXPECT_EQ(bad.features_off_edges, 2);  // its two feature edges
+  EXPECT_FALSE(bad.valid(1e-2));
+}
+
+// Curved feature chains: the cylinder's rims snap onto chords of the coarse feature edges, and
+// the curving (through P, onto the input) bends those edges back toward the circles.
+TEST(CurvedMesher, CylinderRimsBecomeCurvedFeatureEdges) {
+  const SurfaceMesh cyl = curvefem::make_cylinder(48, 8, 4, 2.0);
+  const double unit = curvefem::bbox_longest_edge(cyl.V);
+  const MeshRun r = mesh(cyl, 3, 1e-2, true, true);
+  EXPECT_TRUE(r.check.valid(1e-2))
+      << r.check.features_off_edges << " feature edges off, distance " << r.check.max_distance_rel;
+  EXPECT_EQ(r.check.feature_edges, 96);
+  EXPECT_GT(r.stats.snapped_vertices, 40);
+  // Linear: the snapped rim points (on the chords) are up to the bound from the circle; curved,
+  // mostly far closer (the largest stay next to faces the certificate kept blended).
+  EXPECT_GT(r.stats.chain_max_distance_rel, 0.3e-2);
+  std::vector<double> linear, curved;
+  for (const auto& q : r.mesh.shell.reference) {
+    const Eigen::Vector3d x = cyl.V.row(q.vertex), a = cyl.V.row(q.a), b = cyl.V.row(q.b);
+    linear.push_back((a + q.s * (b - a) - x).norm() / unit);
+    curved.push_back((r.mesh.map.image(q.vertex) - x).norm() / unit);
+  }
+  std::sort(linear.begin(), linear.end());
+  std::sort(curved.begin(), curved.end());
+  const std::size_t mid = linear.size() / 2;
+  std::cout << "rim points: median distance linear " << linear[mid] << ", curved " << curved[mid]
+            << " (max " << curved.back() << ") of the bbox; " << r.stats.faces_blended
+            << " faces blended, fiber misses " << r.stats.fiber_misses << "\n";
+  // Rim points at the edge nodes' parameters (1/3, 2/3 of a three-segment chord) map onto
+  // themselves: the nodes are traced through P onto the input.
+  const auto exact =
+      std::count_if(curved.begin(), curved.end(), [](double d) { return d < 1e-12; });
+  EXPECT_GT(3 * exact, long(curved.size()));
+  EXPECT_LT(curved[mid], 0.2 * linear[mid]);
 }
 
 TEST(CurvedMesher, TorusIsValidAtOrders2To4) {

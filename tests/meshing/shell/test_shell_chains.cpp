@@ -41,61 +41,6 @@ std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& m, double angle_d
   return out;
 }
 
-// A closed cylinder of radius 1 around z from z = 0 to z = h: `around` segments, `rows` rows on
-// the side, `rings` rings on each cap (centre vertex, then concentric rings), outward oriented.
-SurfaceMesh make_cylinder(int around, int rows, int rings, double h) {
-  std::vector<Vector3d> v;
-  std::vector<Eigen::Vector3i> f;
-  auto ring = [&](double r, double z) {
-    const int first = int(v.size());
-    for (int i = 0; i < around; ++i) {
-      const double t = 2 * M_PI * i / around;
-      v.emplace_back(r * std::cos(t), r * std::sin(t), z);
-    }
-    return first;
-  };
-  auto band = [&](int lo, int hi, bool flip) {  // quads between two rings
-    for (int i = 0; i < around; ++i) {
-      const int j = (i + 1) % around;
-      const int a = lo + i, b = lo + j, c = hi + j, d = hi + i;
-      if (!flip) {
-        f.emplace_back(a, b, c);
-        f.emplace_back(a, c, d);
-      } else {
-        f.emplace_back(a, c, b);
-        f.emplace_back(a, d, c);
-      }
-    }
-  };
-  std::vector<int> side;
-  for (int r = 0; r <= rows; ++r) side.push_back(ring(1.0, h * r / rows));
-  for (int r = 0; r < rows; ++r) band(side[r], side[r + 1], false);
-  for (int cap = 0; cap < 2; ++cap) {
-    const double z = cap == 0 ? 0.0 : h;
-    int outer = cap == 0 ? side.front() : side.back();
-    for (int q = rings - 1; q >= 1; --q) {
-      const int inner = ring(double(q) / rings, z);
-      band(inner, outer, cap == 1);
-      outer = inner;
-    }
-    const int centre = int(v.size());
-    v.emplace_back(0, 0, z);
-    for (int i = 0; i < around; ++i) {
-      const int a = outer + i, b = outer + (i + 1) % around;
-      if (cap == 0)
-        f.emplace_back(centre, b, a);
-      else
-        f.emplace_back(centre, a, b);
-    }
-  }
-  SurfaceMesh m;
-  m.V.resize(int(v.size()), 3);
-  for (int i = 0; i < int(v.size()); ++i) m.V.row(i) = v[i].transpose();
-  m.F.resize(int(f.size()), 3);
-  for (int i = 0; i < int(f.size()); ++i) m.F.row(i) = f[i].transpose();
-  return m;
-}
-
 void expect_valid(const sh::Shell& shell, const SurfaceMesh& input, const std::string& what) {
   const sh::ShellVerification v = sh::verify_shell(shell, input);
   EXPECT_TRUE(v.positive()) << what;
@@ -183,7 +128,7 @@ TEST(ShellChains, ABoxCoarsensAlongItsEdges) {
 }
 
 TEST(ShellChains, CircularRimsSnapOntoChordsWithinTheBound) {
-  const SurfaceMesh cyl = make_cylinder(48, 8, 4, 2.0);
+  const SurfaceMesh cyl = curvefem::make_cylinder(48, 8, 4, 2.0);
   const auto features = sharp_edges(cyl, 60);
   ASSERT_EQ(features.size(), 96u);  // the two rims
   const double eps = 0.01, unit = curvefem::bbox_longest_edge(cyl.V);
