@@ -316,3 +316,28 @@ TEST(Run, GivenExactGradientGivesTheSameH1Error) {
   EXPECT_EQ(nlohmann::json::parse(resolved)["exact_gradient"],
             nlohmann::json::array({"2*x", "2*y", "2*z"}));
 }
+
+// The Dirichlet part of the input is closed: a node on an input edge between a selected face and
+// an unselected one is constrained, whichever of the two faces the map returns for it. On a box
+// of 4 × 4 quads per side with Dirichlet on the x = 0 side (by normal), every one of its 25 input
+// vertices is constrained (16 of them lie on its edges).
+TEST(Run, DirichletByNormalConstrainsTheSelectedSidesEdges) {
+  const auto dir = test::scratch_dir("run_closed_dirichlet");
+  const auto file = write_case(dir, R"({
+    "geometry": {"builtin_surface": {"shape": "box", "lo": [0, 0, 0], "hi": [1, 1, 1],
+                                     "divisions": 4}, "features": "none"},
+    "meshing": {"method": "dense"},
+    "physics": {"type": "poisson"},
+    "discretization": {"degree": 1},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"normal": {"direction": [-1, 0, 0], "angle": 30}},
+       "value": "x"},
+      {"type": "neumann", "select": {"normal": {"direction": [1, 0, 0], "angle": 30}},
+       "value": "1"}],
+    "exact": "x"})");
+  std::string log;
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  const auto j = report(dir / "out");
+  EXPECT_EQ(j["dofs"].get<int>() - j["physics_details"]["free_dofs"].get<int>(), 25);
+  EXPECT_LT(j["l2_error"].get<double>(), 1e-10);
+}

@@ -268,10 +268,40 @@ Selected select_on_input(const BoundaryConditionSpec& bc, const SurfaceMesh& inp
   Selected out;
   out.faces.assign(space.boundary_faces.size(), 1);
   const Selection s = bc.select;
-  if (s.kind != Selection::Kind::all)
+  if (s.kind != Selection::Kind::all && bc.type == "dirichlet" && mapping::uses_face_data(s)) {
+    // The Dirichlet part is closed: a point on an input edge or vertex (where a feature chain
+    // runs) is selected if any input face through it is, not by whichever face P returned.
+    auto vf = std::make_shared<std::vector<std::vector<int>>>(input.num_vertices());
+    for (int f = 0; f < input.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) (*vf)[std::size_t(input.F(f, k))].push_back(f);
+    out.where = [s, &input, &inverse, vf](const Eigen::Vector3d& x) {
+      const mapping::InputPoint p = inverse.at(x);
+      if (mapping::selects(s, mapping::site_of(input, p))) return true;
+      constexpr double tol = 1e-9;
+      std::vector<int> others;
+      for (int k = 0; k < 3; ++k) {
+        const int a = input.F(p.face, k);
+        if (p.bary[k] >= 1 - tol) others = (*vf)[std::size_t(a)];  // at that vertex
+        if (std::abs(p.bary[k]) <= tol) {                          // on the edge opposite corner k
+          const int b = input.F(p.face, (k + 1) % 3), c = input.F(p.face, (k + 2) % 3);
+          for (int g : (*vf)[std::size_t(b)])
+            for (int j = 0; j < 3; ++j)
+              if (input.F(g, j) == c) others.push_back(g);
+        }
+      }
+      for (int g : others) {
+        if (g == p.face) continue;
+        mapping::InputPoint q = p;
+        q.face = g;
+        if (mapping::selects(s, mapping::site_of(input, q))) return true;
+      }
+      return false;
+    };
+  } else if (s.kind != Selection::Kind::all) {
     out.where = [s, &input, &inverse](const Eigen::Vector3d& x) {
       return mapping::selects(s, mapping::site_of(input, inverse.at(x)));
     };
+  }
   long long count = 0;
   fem::for_each_boundary_dof(space, out.faces, out.where, [&](int) { ++count; });
   if (count == 0 && bc.type == "neumann")
@@ -318,6 +348,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     options.thickness_rel = spec.thickness;
     options.thickness_per_edge = spec.thickness_per_edge;
     options.eps_samples = spec.eps_samples;
+    options.feature_chains = spec.feature_chains;
     options.threads = threads;
     options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);
