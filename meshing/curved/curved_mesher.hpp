@@ -82,8 +82,8 @@ struct CurvedMeshOptions {
   // along their coarse feature edge, whose input vertices are snapped onto it in the shell's
   // reference copy; the curved feature edge then follows the input chain through P. Not with
   // distance points (constraints, eps_samples) or a beveled shell (the coarsening then keeps
-  // the feature vertices, with a warning).
-  bool feature_chains = false;
+  // the feature vertices, with a warning). false: every feature vertex stays a coarse vertex.
+  bool feature_chains = true;
   int threads = 0;  // 0: oneTBB default
   // The coarsening is the only stage whose result depends on thread timing (the editing
   // scheduler's try-locks). Deterministic runs coarsen on one thread, so the same input and

@@ -330,11 +330,35 @@ class ShellMesh : public TriMesh {
     std::vector<Id> cells = r.new_cells;
     std::vector<int> old_union, new_union, touching;
     for (Id f : r.old_cells) old_union.insert(old_union.end(), track[f].begin(), track[f].end());
-    for (Id f : vertex_cells(pending.u))
-      if (std::find(cells.begin(), cells.end(), f) == cells.end()) {
-        cells.push_back(f);
-        old_union.insert(old_union.end(), track[f].begin(), track[f].end());
+    // Every other live prism whose box meets a moved reference face is checked again too (the
+    // faces move by up to the bound, possibly into prisms away from w and u). One thread runs
+    // chain collapses, so reading any prism is safe.
+    std::vector<Eigen::AlignedBox3d> boxes;
+    Eigen::AlignedBox3d all;
+    for (int g : moved) {
+      Eigen::AlignedBox3d b;
+      for (const auto& p : input->face_triangle(g)) b.extend(p);
+      const double pad = 1e-12 * (b.max().cwiseAbs().maxCoeff() + b.min().cwiseAbs().maxCoeff());
+      b.min().array() -= pad;  // the rounded corners are within an ulp of the exact ones
+      b.max().array() += pad;
+      boxes.push_back(b);
+      all.extend(b);
+    }
+    for (Id f = 0; f < Id(cell_capacity()); ++f) {
+      if (is_cell_removed(f) || std::find(cells.begin(), cells.end(), f) != cells.end()) continue;
+      Eigen::AlignedBox3d prism;
+      for (Id v : cell(f)) {
+        prism.extend(base[v]);
+        prism.extend(mid[v]);
+        prism.extend(top[v]);
       }
+      if (!prism.intersects(all)) continue;
+      bool near = false;
+      for (const auto& b : boxes) near = near || prism.intersects(b);
+      if (!near) continue;
+      cells.push_back(f);
+      old_union.insert(old_union.end(), track[f].begin(), track[f].end());
+    }
     for (Id f : cells) {
       if (note(prism_check(f, touching)) != none) return false;
       track.set(f, touching);

@@ -265,18 +265,18 @@ TEST(Cli, ShellReportsBeveling) {
   EXPECT_EQ(s["beveled_faces"], 0);
 }
 
-// --feature-chains: the box's edge vertices go inside coarse feature edges; boundary_map.json
-// carries the feature edges and the shell's reference copy, and `validate` re-checks both (the
-// map roundtrip through the snapped copy, and every feature edge along a boundary edge).
+// Feature chains (the default): the box's edge vertices go inside coarse feature edges;
+// boundary_map.json carries the feature edges and the shell's reference copy, and `validate`
+// re-checks both (the map roundtrip through the snapped copy, and every feature edge along a
+// boundary edge).
 TEST(Cli, MeshAlongFeatureChainsWritesAndValidatesThem) {
   const auto dir = test::scratch_dir("cli_mesh_chains");
   const SurfaceMesh box = make_box({0, 0, 0}, {1, 2, 1}, 4);  // 192 faces
   io::write_surface(dir / "box.obj", box, io::SurfaceFormat::obj);
   const std::string in = (dir / "box.obj").string(), out_dir = (dir / "m").string();
   std::string out;
-  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
-                                  " --order 2 --threads 2 --feature-chains",
-                              &out),
+  ASSERT_EQ(test::run_command(
+                cli() + " mesh -q " + in + " -o " + out_dir + " --order 2 --threads 2", &out),
             0)
       << out;
   const auto j = read_json(dir / "m" / "report.json");

@@ -126,7 +126,7 @@ struct MeshArgs {
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
-       no_pan = false, feature_chains = false;
+       no_pan = false, no_feature_chains = false;
   double split_mips = 0;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
@@ -215,9 +215,10 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--no-pan", args->no_pan,
                 "coarsening does not move middle vertices to neighbouring input vertices where "
                 "their star is better shaped");
-  sub->add_flag("--feature-chains", args->feature_chains,
-                "coarsen along feature chains (their vertices snapped onto the coarse feature "
-                "edge in a reference copy of the input) instead of keeping every feature vertex");
+  sub->add_flag("--no-feature-chains", args->no_feature_chains,
+                "keep every feature vertex as a coarse vertex (by default the coarsening runs "
+                "along feature chains, their vertices snapped onto the coarse feature edge in a "
+                "reference copy of the input)");
   sub->add_option("--split-mips", args->split_mips,
                   "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
                   "exceeds this (2 = equilateral; 0: off)")
@@ -252,7 +253,7 @@ void register_mesh(CLI::App& app) {
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.shell_pan = !args->no_pan;
-    options.feature_chains = args->feature_chains;
+    options.feature_chains = !args->no_feature_chains;
     options.eps_samples = args->eps_samples;
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);
