@@ -241,15 +241,21 @@ namespace {
 // the facet normals of T, the normal of t, and the cross products of an edge of T with an edge
 // of t, so testing these candidates is complete. A candidate counts only if some corner of T is
 // strictly off it (a zero normal, from parallel edges or a degenerate t, puts every corner on it).
-template <class P>
-bool meets_open_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
+// Closed (`closed`): the closed sets are disjoint iff 0 lies strictly outside a facet of T − t,
+// so the same candidates, each through the tet's supporting facet or edge (or the triangle's
+// plane), separate only with the other set strictly beyond them.
+template <bool closed, class P>
+bool meets_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
+  // "beyond" a plane on the side opposite to `side`: strictly for the closed test, weakly for
+  // the open one.
+  auto beyond = [](int s, int side) { return closed ? s * side < 0 : s * side <= 0; };
   for (const auto& f : k_tet_facets) {
     const V3 &a = T[f[0]], &b = T[f[1]], &c = T[f[2]];
     const int side = sign_det(b, a, c, a, T[f[3]], a);
-    if (side == 0) return false;  // degenerate tet: no interior
+    if (side == 0) return closed;  // degenerate tet (never passed; conservative when closed)
     bool separated = true;
     for (const P& q : t)
-      if (sdet(b, a, c, a, q, a) * side > 0) {
+      if (!beyond(sdet(b, a, c, a, q, a), side)) {
         separated = false;
         break;
       }
@@ -262,7 +268,7 @@ bool meets_open_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
       pos += s > 0;
       neg += s < 0;
     }
-    if ((pos == 0) != (neg == 0)) return false;
+    if (closed ? (pos == 4 || neg == 4) : ((pos == 0) != (neg == 0))) return false;
   }
   for (const auto& e : k_tet_edges) {
     const V3 &a = T[e[0]], &b = T[e[1]];
@@ -272,48 +278,7 @@ bool meets_open_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
       if ((s1 == 0 && s2 == 0) || s1 * s2 < 0) continue;
       const int side = s1 != 0 ? s1 : s2;
       // q0 and q1 lie on a line parallel to the plane: one sign for both.
-      if (sdet(b, a, q1, q0, q0, a) * side <= 0 && sdet(b, a, q1, q0, q2, a) * side <= 0)
-        return false;
-    }
-  }
-  return true;
-}
-
-// The closed version: the same candidate planes, each through the tet's supporting facet or
-// edge (or the triangle's plane), separating only if the other set lies strictly beyond it. The
-// closed sets are disjoint iff 0 lies strictly outside a facet of T − t, whose supporting
-// features on T and t generate its normal, so the list is complete for a non-degenerate tet.
-template <class P>
-bool meets_closed_tet(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
-  for (const auto& f : k_tet_facets) {
-    const V3 &a = T[f[0]], &b = T[f[1]], &c = T[f[2]];
-    const int side = sign_det(b, a, c, a, T[f[3]], a);
-    if (side == 0) return true;  // degenerate tet: callers never pass one (conservative)
-    bool separated = true;
-    for (const P& q : t)
-      if (sdet(b, a, c, a, q, a) * side >= 0) {
-        separated = false;
-        break;
-      }
-    if (separated) return false;
-  }
-  {
-    int pos = 0, neg = 0;
-    for (const V3& p : T) {
-      const int s = sdet(t[1], t[0], t[2], t[0], p, t[0]);
-      pos += s > 0;
-      neg += s < 0;
-    }
-    if ((pos == 4) || (neg == 4)) return false;
-  }
-  for (const auto& e : k_tet_edges) {
-    const V3 &a = T[e[0]], &b = T[e[1]];
-    for (int k = 0; k < 3; ++k) {
-      const P &q0 = t[k], &q1 = t[(k + 1) % 3], &q2 = t[(k + 2) % 3];
-      const int s1 = sdet(b, a, q1, q0, T[e[2]], a), s2 = sdet(b, a, q1, q0, T[e[3]], a);
-      if ((s1 == 0 && s2 == 0) || s1 * s2 < 0) continue;
-      const int side = s1 != 0 ? s1 : s2;
-      if (sdet(b, a, q1, q0, q0, a) * side < 0 && sdet(b, a, q1, q0, q2, a) * side < 0)
+      if (beyond(sdet(b, a, q1, q0, q0, a), side) && beyond(sdet(b, a, q1, q0, q2, a), side))
         return false;
     }
   }
@@ -367,7 +332,7 @@ bool section_contact(const std::array<P, 3>& t, const std::array<V3, 4>& T) {
       if (thi < lo || tlo > hi) return false;  // no contact (a face in a facet plane touches)
     }
   }
-  if (meets_open_tet(t, T)) return true;
+  if (meets_tet<false>(t, T)) return true;
   for (const auto& f : k_tet_facets)
     if (meets_open_facet(t, {T[f[0]], T[f[1]], T[f[2]]})) return true;
   return false;
@@ -412,7 +377,7 @@ bool triangles_meet_closed(const std::array<P, 3>& a, const std::array<V3, 3>& b
 }  // namespace
 
 bool triangle_meets_open_tet(const std::array<V3, 3>& t, const std::array<V3, 4>& T) {
-  return meets_open_tet(t, T);
+  return meets_tet<false>(t, T);
 }
 bool triangle_meets_open_facet(const std::array<V3, 3>& t, const std::array<V3, 3>& F) {
   return meets_open_facet(t, F);
@@ -421,7 +386,7 @@ bool triangle_section_contact(const std::array<V3, 3>& t, const std::array<V3, 4
   return section_contact(t, T);
 }
 bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& tet) {
-  return meets_closed_tet(tri, tet);
+  return meets_tet<true>(tri, tet);
 }
 bool exact_triangles_meet(const std::array<ExactPoint, 3>& a, const std::array<V3, 3>& b) {
   return triangles_meet_closed(a, b);

@@ -722,26 +722,30 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     stats.passes.emplace_back(name, s);
     return int(s.succeeded);
   };
-  auto collapse_pass = [&] {
-    m.count_rejections = true;
-    struct Off {
-      ShellMesh& m;
-      ~Off() { m.count_rejections = false; }
-    } off{m};
+  // Collapses (ordinary or chain), shortest edge first; a success renews the edges around the
+  // kept vertex.
+  auto shortest_first_collapses = [&](const std::string& name) {
     Pass pass;
-    pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
-      return m.collapse_edge(t);
-    };
+    pass.operations[name] = [&m](TriMesh&, const TriMesh::Tuple& t) { return m.collapse_edge(t); };
     pass.priority = [length2](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
       return -length2(t);
     };
     pass.should_process = [length2](const TriMesh&, const Pass::Work& w, double p) {
       return -length2(w.second) == p;
     };
-    pass.renew_neighbor_tuples = [&](const TriMesh&, const std::string&,
-                                     const TriMesh::Tuple& kept) {
-      return edge_work("collapse", m.edges_of_faces(m.vertex_cells(kept.vid)), true);
+    pass.renew_neighbor_tuples = [&, name](const TriMesh&, const std::string&,
+                                           const TriMesh::Tuple& kept) {
+      return edge_work(name, m.edges_of_faces(m.vertex_cells(kept.vid)), true);
     };
+    return pass;
+  };
+  auto collapse_pass = [&] {
+    m.count_rejections = true;
+    struct Off {
+      ShellMesh& m;
+      ~Off() { m.count_rejections = false; }
+    } off{m};
+    Pass pass = shortest_first_collapses("collapse");
     return run("collapse", pass, edge_work("collapse", m.get_edges(), true));
   };
   // Flips, worst pair of faces first; a success renews the edges of the two new faces.
@@ -827,26 +831,12 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     return int(st.succeeded);
   };
 
-  // Chain collapses on one thread, shortest coarse feature edge first; a success renews the edges
-  // around the kept vertex.
+  // Chain collapses on one thread, shortest coarse feature edge first.
   auto chain_pass = [&] {
     std::vector<TriMesh::Tuple> feature;
     for (const auto& e : m.get_edges())
       if (m.get_edge(m.chain, e).feature) feature.push_back(e);
-    Pass pass;
-    pass.operations["chain"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
-      return m.collapse_edge(t);
-    };
-    pass.priority = [length2](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
-      return -length2(t);
-    };
-    pass.should_process = [length2](const TriMesh&, const Pass::Work& w, double p) {
-      return -length2(w.second) == p;
-    };
-    pass.renew_neighbor_tuples = [&](const TriMesh&, const std::string&,
-                                     const TriMesh::Tuple& kept) {
-      return edge_work("chain", m.edges_of_faces(m.vertex_cells(kept.vid)), true);
-    };
+    Pass pass = shortest_first_collapses("chain");
     pass.num_threads = 1;
     pass.position = [&m](Id v) { return m.mid[v]; };
     m.chain_mode = true;
