@@ -256,6 +256,26 @@ class ShellMesh : public TriMesh {
     return true;
   }
 
+  // I1–I3 for each of `cells` (their tracks updated), and every input face in `old_union` (the
+  // tracks of the prisms they replace) still touched by one of them; the first failure noted.
+  bool prisms_keep_coverage(const std::vector<Id>& cells, std::vector<int> old_union) {
+    std::vector<int> new_union, touching;
+    for (Id f : cells) {
+      if (note(prism_check(f, touching)) != none) return false;
+      track.set(f, touching);
+      new_union.insert(new_union.end(), touching.begin(), touching.end());
+    }
+    std::sort(old_union.begin(), old_union.end());
+    old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
+    std::sort(new_union.begin(), new_union.end());
+    new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
+    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end())) {
+      note(coverage);
+      return false;
+    }
+    return true;
+  }
+
   // The chain collapse's invariants: the triangle shape; the chain's input vertices snapped by
   // arc length onto the straight edge w–u, each within the distance bound of its snapped point;
   // no reference face made degenerate; the owned points re-homed; every prism of w and u (the
@@ -328,7 +348,7 @@ class ShellMesh : public TriMesh {
       return false;
     }
     std::vector<Id> cells = r.new_cells;
-    std::vector<int> old_union, new_union, touching;
+    std::vector<int> old_union;
     for (Id f : r.old_cells) old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     // Every other live prism whose box meets a moved reference face is checked again too (the
     // faces move by up to the bound, possibly into prisms away from w and u). One thread runs
@@ -359,19 +379,7 @@ class ShellMesh : public TriMesh {
       cells.push_back(f);
       old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     }
-    for (Id f : cells) {
-      if (note(prism_check(f, touching)) != none) return false;
-      track.set(f, touching);
-      new_union.insert(new_union.end(), touching.begin(), touching.end());
-    }
-    std::sort(old_union.begin(), old_union.end());
-    old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
-    std::sort(new_union.begin(), new_union.end());
-    new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
-    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end())) {
-      note(coverage);
-      return false;
-    }
+    if (!prisms_keep_coverage(cells, std::move(old_union))) return false;
     return true;
   }
 
@@ -557,23 +565,10 @@ class ShellMesh : public TriMesh {
       note(distance);
       return Check::shell;
     }
-    std::vector<int> old_union, new_union, touching;
+    std::vector<int> old_union;
     for (Id f : r.old_cells.empty() ? r.new_cells : r.old_cells)
       old_union.insert(old_union.end(), track[f].begin(), track[f].end());
-    for (Id f : r.new_cells) {
-      if (note(prism_check(f, touching)) != none) return Check::shell;
-      track.set(f, touching);
-      new_union.insert(new_union.end(), touching.begin(), touching.end());
-    }
-    std::sort(old_union.begin(), old_union.end());
-    old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
-    std::sort(new_union.begin(), new_union.end());
-    new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
-    // Every input face the removed prisms touched is still inside one of the new ones.
-    if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end())) {
-      note(coverage);
-      return Check::shell;
-    }
+    if (!prisms_keep_coverage(r.new_cells, std::move(old_union))) return Check::shell;
     return Check::ok;
   }
   bool invariants(const OperationRecord& r) override {
