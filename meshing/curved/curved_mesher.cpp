@@ -73,6 +73,58 @@ struct TetNodes {
   Eigen::MatrixXd nodes;  // #lattice × 3, canonical order
 };
 
+Eigen::Vector3d evaluate_patch(const std::vector<Eigen::Vector3d>& d, int order, double u,
+                               double v) {
+  const Eigen::VectorXd phi =
+      lagrange_shape_values(CellKind::triangle, order, Eigen::Vector3d(u, v, 0));
+  Eigen::Vector3d out = Eigen::Vector3d::Zero();
+  for (int i = 0; i < phi.size(); ++i) out += phi[i] * d[std::size_t(i)];
+  return out;
+}
+
+// The nodes of an order-k slab tet with corners P, corner j at local triangle vertex lv[j] and
+// on the middle surface when on_mid[j]: each node is its linear point plus its share h of the
+// middle corners times the patch displacement d (per triangle lattice node) at its (u, v).
+Eigen::MatrixXd slab_tet_nodes(int k, const Eigen::Vector3d (&P)[4], const int (&lv)[4],
+                               const int (&on_mid)[4], const std::vector<Eigen::Vector3d>& d) {
+  const auto& tet_lattice = lagrange_lattice(CellKind::tetrahedron, k);
+  Eigen::MatrixXd nodes(Eigen::Index(tet_lattice.size()), 3);
+  for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
+    const auto& b = tet_lattice[n];
+    Eigen::Vector3d L = Eigen::Vector3d::Zero();
+    double u = 0, v = 0, h = 0;
+    for (int j = 0; j < 4; ++j) {
+      const double l = double(b[j]) / k;
+      L += l * P[j];
+      u += l * k_xy[lv[j]][0];
+      v += l * k_xy[lv[j]][1];
+      h += l * on_mid[j];
+    }
+    nodes.row(Eigen::Index(n)) = (h > 0 ? L + h * evaluate_patch(d, k, u, v) : L).transpose();
+  }
+  return nodes;
+}
+
+// Are the 3 bottom slab tets of a prism (rotated corners, no pinch) with its middle triangle
+// displaced by d certified positive?
+bool bottom_slab_certified(int k, const std::array<Eigen::Vector3d, 3>& base,
+                           const std::array<Eigen::Vector3d, 3>& mid, bool type_a,
+                           const std::vector<Eigen::Vector3d>& d) {
+  for (const auto& tet : sh::split_tets(type_a)) {
+    Eigen::Vector3d P[4];
+    int lv[4], on_mid[4];
+    for (int j = 0; j < 4; ++j) {
+      lv[j] = tet[j] % 3;
+      on_mid[j] = tet[j] >= 3;
+      P[j] = on_mid[j] ? mid[std::size_t(lv[j])] : base[std::size_t(lv[j])];
+    }
+    if (certify_tet_jacobian(k, slab_tet_nodes(k, P, lv, on_mid, d)).verdict !=
+        JacobianVerdict::positive)
+      return false;
+  }
+  return true;
+}
+
 class Builder {
  public:
   Builder(const sh::Shell& shell, const SurfaceMesh& input, int order)
@@ -155,6 +207,15 @@ class Builder {
     }
   }
 
+  // Faces owning a point farther than ε from their linear triangle (curved-aware coarsening).
+  std::vector<char> needs_full;
+  void find_needs_full(double eps) {
+    needs_full.assign(nf, 0);
+    for (int f = 0; f < nf; ++f)
+      for (const Owned& o : owned[f])
+        if (!((linear_mid(f, o.u, o.v) - point(o.vertex)).norm() <= eps)) needs_full[f] = 1;
+  }
+
   // Distance points besides the vertices of `in`: index #V + i in `owned`.
   std::vector<Eigen::Vector3d> extra;
   Eigen::Vector3d point(int x) const {
@@ -194,10 +255,42 @@ class Builder {
 
   // The blend schedule of a face: 1, 1/2, ..., 1/64, then 0 (linear).
   void lower_alpha(int f) { alpha[f] = alpha[f] > 1.0 / 64 ? alpha[f] / 2 : 0.0; }
+  // Lowers f's α; at α = 0, the α of the faces across its edges that need full curving (their
+  // edges are not lowered by f, edge_alpha). false when nothing could be lowered.
+  std::vector<int> lower_for(int f) {
+    if (alpha[f] > 0) {
+      lower_alpha(f);
+      return {f};
+    }
+    std::vector<int> lowered;
+    for (int g : across(f))
+      if (!needs_full.empty() && needs_full[g] && alpha[g] > 0) {
+        lower_alpha(g);
+        lowered.push_back(g);
+      }
+    return lowered;
+  }
+  // The faces sharing an edge with f, and f.
+  std::vector<int> across(int f) const {
+    std::vector<int> out;
+    for (int e = 0; e < 3; ++e) {
+      const int p = s.F(f, e), q = s.F(f, (e + 1) % 3);
+      for (int g : edge_faces.at({std::min(p, q), std::max(p, q)})) out.push_back(g);
+    }
+    return out;
+  }
 
+  // An edge's nodes use the smallest α of its faces, leaving out, on an edge of a face that needs
+  // full curving (needs_full), the faces that do not: lowering their α must not pass a distance
+  // miss on to that face.
   double edge_alpha(int a, int b) const {
+    const auto& faces = edge_faces.at({std::min(a, b), std::max(a, b)});
+    bool full = false;
+    if (!needs_full.empty())
+      for (int g : faces) full = full || needs_full[g];
     double out = 1;
-    for (int g : edge_faces.at({std::min(a, b), std::max(a, b)})) out = std::min(out, alpha[g]);
+    for (int g : faces)
+      if (!full || needs_full[g]) out = std::min(out, alpha[g]);
     return out;
   }
   // Blended displacement of every node of face f.
@@ -218,11 +311,7 @@ class Builder {
   }
   static Eigen::Vector3d evaluate(const std::vector<Eigen::Vector3d>& d, int order, double u,
                                   double v) {
-    const Eigen::VectorXd phi =
-        lagrange_shape_values(CellKind::triangle, order, Eigen::Vector3d(u, v, 0));
-    Eigen::Vector3d out = Eigen::Vector3d::Zero();
-    for (int i = 0; i < phi.size(); ++i) out += phi[i] * d[i];
-    return out;
+    return evaluate_patch(d, order, u, v);
   }
 
   // The bottom (or, with `upper`, the top) half-prism of face f as order-k tets (pinched tets
@@ -254,20 +343,7 @@ class Builder {
       for (int i = 0; i < 4; ++i)
         for (int j = i + 1; j < 4; ++j) repeated |= t.gid[i] == t.gid[j];
       if (repeated) continue;
-      t.nodes.resize(Eigen::Index(tet_lattice.size()), 3);
-      for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
-        const auto& b = tet_lattice[n];
-        Eigen::Vector3d L = Eigen::Vector3d::Zero();
-        double u = 0, v = 0, h = 0;
-        for (int j = 0; j < 4; ++j) {
-          const double l = double(b[j]) / k;
-          L += l * P[j];
-          u += l * k_xy[lv[j]][0];
-          v += l * k_xy[lv[j]][1];
-          h += l * on_mid[j];
-        }
-        t.nodes.row(Eigen::Index(n)) = (h > 0 ? L + h * evaluate(d, k, u, v) : L).transpose();
-      }
+      t.nodes = slab_tet_nodes(k, P, lv, on_mid, d);
       out.push_back(std::move(t));
     }
     return out;
@@ -346,13 +422,20 @@ class Builder {
         inner.row(v) = (mid(v) - depth[v] * pillar[v]).transpose();
     };
     for (int v = 0; v < nv; ++v) place(v);
+    std::vector<char> protect(nv, 0);
+    if (!needs_full.empty())
+      for (int f = 0; f < nf; ++f)
+        if (needs_full[f])
+          for (int c = 0; c < 3; ++c) protect[s.F(f, c)] = 1;
+    int round = 0;  // protection ends after 20 rounds: a clean inner surface comes first
+    auto is_protected = [&](int v) { return round < 20 && protect[v] != 0; };
     // Repair rounds. A face failing (slabs not certified, or ε violated after an α change)
     // shrinks its deepened vertices back toward the base, or, if none is deeper than the base,
     // halves its curving α. Vertices of self-intersecting or degenerate inner triangles move
     // halfway back to the base, then below it along the pillar (the shell's base itself can
     // self-intersect in thin parts: it is only guaranteed to be separated from the input).
     bool clean = false;
-    for (int round = 0; round < 40 && !clean; ++round) {
+    for (round = 0; round < 40 && !clean; ++round) {
       std::vector<char> ok(nf, 1);
       tbb::parallel_for(0, nf, [&](int f) { ok[f] = face_check(f, eps) == 0; });
       std::vector<char> shrink(nv, 0);
@@ -366,13 +449,21 @@ class Builder {
         bool any = false;
         for (int c = 0; c < 3; ++c)
           if (depth[F(f, c)] > base_depth[F(f, c)]) any = shrink[F(f, c)] = 1;
-        if (!any) lower_alpha(f);
+        if (!any) lower_for(f);
       }
       const auto si = check::find_self_intersections(inner, F, degenerate, true,
                                                      check::SelfIntersectionEngine::soup);
-      for (const auto& [f, g] : si.pairs)
+      // A pair moves the corners that no face needing full curving uses, if it has any (for 20
+      // rounds): such a face's slab was certified on the shell's base, and above it full
+      // curving may fail.
+      for (const auto& [f, g] : si.pairs) {
+        bool free_corner = false;
         for (int c = 0; c < 3; ++c)
-          shrink[F(f, c)] = shrink[F(g, c)] = deepen[F(f, c)] = deepen[F(g, c)] = 1;
+          free_corner = free_corner || !is_protected(F(f, c)) || !is_protected(F(g, c));
+        for (int c = 0; c < 3; ++c)
+          for (int v : {F(f, c), F(g, c)})
+            if (!free_corner || !is_protected(v)) shrink[v] = deepen[v] = 1;
+      }
       clean = std::count(ok.begin(), ok.end(), 0) == 0 && si.pairs.empty() &&
               std::count(degenerate.begin(), degenerate.end(), 1) == 0;
       for (int v = 0; v < nv; ++v) {
@@ -430,6 +521,10 @@ class Builder {
     if (!slabs_certified(f)) return 1;
     const auto d = node_displacements(f);
     if (alpha[f] == 0) return 0;  // the linear shell's bound was enforced by simplification
+    // A face the curved-aware coarsening let beyond ε of its linear triangle meets ε only near
+    // full curving: lowering its α cannot help (and would lower its edges' α, passing the miss on
+    // to its neighbours). Its distance is checked once, at the end (build_attempt).
+    if (!needs_full.empty() && needs_full[f]) return 0;
     for (const Owned& o : owned[f]) {
       const Eigen::Vector3d p = linear_mid(f, o.u, o.v) + evaluate(d, k, o.u, o.v);
       if ((p - point(o.vertex)).norm() > eps) return 2;
@@ -440,8 +535,19 @@ class Builder {
 
 }  // namespace
 
-CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
-                             CurvedMeshStats& stats, const ProgressFn& progress) {
+namespace {
+
+// Thrown by one attempt of the curved-aware coarsening when the final curved surface misses ε
+// at input vertices the coarsening placed beyond ε of the linear surface: the surface vertices
+// to keep under the linear bound next time.
+struct CurvedBoundMissed {
+  std::vector<int> vertices;
+  int faces = 0;
+};
+
+CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& options,
+                         const std::vector<char>& strict, bool relaxed, CurvedMeshStats& stats,
+                         const ProgressFn& progress) {
   if (options.order < 1 || options.order > k_max_order)
     throw InputError("mesh: order " + std::to_string(options.order) + " is not in 1..4");
   if (!(options.eps_rel > 0)) throw InputError("mesh: eps must be positive");
@@ -559,6 +665,17 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
+  if (relaxed) {
+    simplify_options.curved_order = options.order;
+    simplify_options.relaxed_distance = options.curved_linear_factor * eps;
+    simplify_options.curved_distance = options.curved_margin * eps;
+    simplify_options.strict_input_vertices = strict;
+    simplify_options.strict_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
+    simplify_options.curved_slab_ok = [k = options.order](const auto& base, const auto& mid,
+                                                          bool type_a, const auto& d) {
+      return bottom_slab_certified(k, base, mid, type_a, d);
+    };
+  }
   if (options.feature_chains && !options.feature_edges.empty()) {
     if (!points.empty())
       log::warn(
@@ -598,7 +715,8 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     const auto& why = simplify_stats.collapse_rejections;
     stats.coarsen_rejections = {{"shape", why.shape},           {"distance", why.distance},
                                 {"positivity", why.positivity}, {"intersection", why.intersection},
-                                {"section", why.section},       {"coverage", why.coverage}};
+                                {"section", why.section},       {"coverage", why.coverage},
+                                {"curved", why.curved}};
   }
   stats.coarse_min_thickness_rel = simplify_stats.min_half_thickness / unit;
   stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
@@ -628,6 +746,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   b.extra = points;
   b.compute_targets(progress);
   b.locate_input(progress);
+  if (relaxed) b.find_needs_full(eps);
   stats.fiber_misses = b.fiber_misses;
   const int nf = b.nf, nv = b.nv;
   b.alpha.assign(nf, 1.0);
@@ -648,6 +767,12 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
     if (failing.empty()) break;
     std::vector<int> next;
     for (int f : failing) {
+      if (b.alpha[f] == 0) {  // lower the faces across its edges that need full curving
+        const std::vector<int> lowered = b.lower_for(f);
+        for (int g : lowered)
+          for (int h : b.across(g)) next.push_back(h);
+        if (!lowered.empty()) continue;
+      }
       if (b.alpha[f] == 0) {
         std::string detail;
         for (int layer = 0; layer < (b.exterior ? 2 : 1); ++layer)
@@ -701,6 +826,41 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       log::warn("mesh: filling the inner surface at slab depth ", depth, " failed (", e.what(),
                 ")");
       depth = depth > 0.1 ? depth / 2 : 0.0;
+    }
+  }
+
+  // The curved-aware coarsening placed input vertices up to curved_linear_factor × ε from the
+  // linear surface, counting on full curving. Where the final patch (a lower α: slabs not
+  // certified) misses ε at one of its points, the attempt is given up, naming the points of
+  // those faces and of the faces within two edge steps of them. (Measured on spot and bunny: the
+  // misses are faces whose slab was certified on the shell's base in the coarsening, but whose
+  // inner surface the thickening had to pull above that base, where the base self-intersects
+  // in thin parts, so their α dropped.)
+  if (relaxed) {
+    std::vector<char> bad(nf, 0);
+    tbb::parallel_for(0, nf, [&](int f) {
+      const auto d = b.node_displacements(f);
+      for (const Owned& o : b.owned[f])
+        if (!((b.linear_mid(f, o.u, o.v) + b.evaluate(d, k, o.u, o.v) - b.point(o.vertex)).norm() <=
+              eps)) {
+          bad[f] = 1;
+          break;
+        }
+    });
+    CurvedBoundMissed missed;
+    std::vector<char> near(nf, 0);
+    for (int f = 0; f < nf; ++f) {
+      if (!bad[f]) continue;
+      ++missed.faces;
+      for (int g : b.across(f))
+        for (int h : b.across(g)) near[h] = 1;
+    }
+    if (missed.faces > 0) {
+      for (int f = 0; f < nf; ++f)
+        if (near[f])
+          for (const Owned& o : b.owned[f])
+            if (o.vertex < surface.num_vertices()) missed.vertices.push_back(o.vertex);
+      throw missed;
     }
   }
 
@@ -921,6 +1081,43 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
             "; faces curved/blended/linear ", stats.faces_fully_curved, "/", stats.faces_blended,
             "/", stats.faces_linear);
   return out;
+}
+
+}  // namespace
+
+CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
+                             CurvedMeshStats& stats, const ProgressFn& progress) {
+  const bool curved = options.curved_coarsening && options.order >= 2 &&
+                      options.curved_linear_factor > 1 && options.curved_attempts > 0;
+  if (!curved) return build_attempt(input, options, {}, false, stats, progress);
+  // Curved-aware attempts, each keeping more input vertices under the linear bound; the last
+  // resort is the linear bound everywhere (whose α = 0 fallback always meets ε).
+  std::vector<char> strict;
+  std::vector<std::pair<std::string, double>> discarded;
+  for (int attempt = 1;; ++attempt) {
+    const bool relaxed = attempt <= options.curved_attempts;
+    CurvedMeshStats s;
+    Stopwatch watch;
+    try {
+      CurvedMesh out = build_attempt(input, options, strict, relaxed, s, progress);
+      s.curved_coarsening = relaxed;
+      s.curved_attempts = attempt;
+      s.strict_vertices = int(std::count(strict.begin(), strict.end(), 1));
+      s.stage_seconds.insert(s.stage_seconds.begin(), discarded.begin(), discarded.end());
+      stats = std::move(s);
+      return out;
+    } catch (const CurvedBoundMissed& missed) {
+      discarded.emplace_back("discarded attempt " + std::to_string(attempt), watch.seconds());
+      if (strict.empty()) strict.assign(std::size_t(input.num_vertices()), 0);
+      for (int x : missed.vertices) {
+        if (std::size_t(x) >= strict.size()) strict.resize(std::size_t(x) + 1, 0);
+        strict[std::size_t(x)] = 1;
+      }
+      log::info("mesh: curved-aware coarsening, attempt ", attempt, ": ", missed.faces,
+                " coarse faces miss eps once curved; ", missed.vertices.size(),
+                " input vertices near them keep the linear bound next");
+    }
+  }
 }
 
 }  // namespace curvefem::meshing::curved

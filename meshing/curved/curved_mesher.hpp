@@ -6,7 +6,8 @@
 //   1. shell      the bijective prismatic shell around the input (meshing/shell);
 //   2. coarsen    shell simplification under the distance bound: every input vertex x stays in a
 //                 prism, at prism coordinates (u, v, h), with |x - mid(u, v)| <= ε for the
-//                 *linear* middle triangle; feature vertices are frozen (never collapsed);
+//                 *linear* middle triangle, or (curved-aware) within a few ε of it and ε of the
+//                 face's fully curved patch; feature corners are frozen;
 //   3. curve      the middle surface of every coarse face becomes an order-k Lagrange triangle
 //                 whose nodes interpolate the input along the shell's fibers (P_T at the node's
 //                 (u, v)); the displacement from the linear triangle is blended per face by
@@ -84,6 +85,19 @@ struct CurvedMeshOptions {
   // distance points (constraints, eps_samples) or a beveled shell (the coarsening then keeps
   // the feature vertices, with a warning). false: every feature vertex stays a coarse vertex.
   bool feature_chains = true;
+  // Curved-aware coarsening (SimplifyOptions::curved_order, order >= 2): an input vertex may lie
+  // up to curved_linear_factor × ε from the *linear* middle surface when the face's fully curved
+  // patch (the step-3 interpolant) is within curved_margin × ε of every point the face owns.
+  // The coarsening also asks such faces' slabs (on the shell's base) to certify fully curved,
+  // and their neighbours' with the shared edges curved. Full curving can still be refused later
+  // (thickening in thin parts); if the final surface then misses ε somewhere, the attempt is
+  // discarded and the input vertices of those faces and of the faces within two edge steps of
+  // them keep the linear bound in the next one. After curved_attempts such attempts the linear
+  // bound holds everywhere (the behaviour with curved_coarsening = false).
+  bool curved_coarsening = true;
+  double curved_linear_factor = 3.0;
+  double curved_margin = 0.95;
+  int curved_attempts = 4;
   int threads = 0;  // 0: oneTBB default
   // The coarsening is the only stage whose result depends on thread timing (the editing
   // scheduler's try-locks). Deterministic runs coarsen on one thread, so the same input and
@@ -132,6 +146,10 @@ struct CurvedMeshStats {
   int outer_slab_tets = 0, exterior_tets = 0;  // --exterior
   int thickened_vertices = 0;
   double linear_max_distance_rel = 0;
+  // Curved-aware coarsening: in effect for the kept attempt, its number (1 = first), and the
+  // input vertices kept under the linear bound after the discarded ones.
+  bool curved_coarsening = false;
+  int curved_attempts = 0, strict_vertices = 0;
   OptimizeStats optimize;
   std::vector<std::pair<std::string, double>> stage_seconds;
 };

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/editing/tri_mesh.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
 #include "meshing/shell/prism_location.hpp"
@@ -65,6 +66,19 @@ class ShellMesh : public TriMesh {
   } pending;
   double section_cos = 0;
   double max_distance = 0;
+  // Curved-aware bound (SimplifyOptions::curved_order): an input vertex not in `strict` may lie
+  // up to relaxed_distance from the linear middle triangle when the order-curved_order
+  // interpolant of P at its face's lattice nodes passes within curved_distance of it.
+  int curved_order = 0;
+  double relaxed_distance = 0, curved_distance = 0;
+  const std::vector<char>* strict = nullptr;
+  const decltype(SimplifyOptions::curved_slab_ok)* curved_slab_ok = nullptr;
+  double bound_of(int x) const {
+    if (curved_order < 2 || !is_input_vertex(x) ||
+        (strict && std::size_t(x) < strict->size() && (*strict)[std::size_t(x)]))
+      return max_distance;
+    return relaxed_distance;
+  }
   double max_mips = 0;
   const std::vector<char>* frozen = nullptr;
   enum class Smoothing { rotate, zoom, pan };
@@ -79,7 +93,17 @@ class ShellMesh : public TriMesh {
   // by one of its two locked faces), and gives it back if the invariants refuse the split.
   std::unique_ptr<std::atomic<char>[]> occupied;
   // Why operations were refused, counted while `count_rejections` is set (the collapse passes).
-  enum Reject { none, shape, distance, positivity, intersection, section, coverage, n_reasons };
+  enum Reject {
+    none,
+    shape,
+    distance,
+    positivity,
+    intersection,
+    section,
+    coverage,
+    curved,
+    n_reasons
+  };
   std::array<std::atomic<long>, n_reasons> rejections{};
   bool count_rejections = false;
   Reject note(Reject why) {
@@ -106,6 +130,13 @@ class ShellMesh : public TriMesh {
 
   // Prism coordinates of x in face f and the distance to the linear middle triangle there.
   std::optional<double> owned_distance(Id f, const Eigen::Vector3d& x) const {
+    const auto q = owned_place(f, x);
+    if (!q) return std::nullopt;
+    return (*q)[2];
+  }
+  // (u, v) of x in face f (rotated to its smallest id) and the distance to the linear middle
+  // triangle there.
+  std::optional<Eigen::Vector3d> owned_place(Id f, const Eigen::Vector3d& x) const {
     const Cell& c = cell(f);
     const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
     std::array<Eigen::Vector3d, 3> b, m, t;
@@ -119,7 +150,202 @@ class ShellMesh : public TriMesh {
     const int r = min_rotation(F);
     const Eigen::Vector3d p =
         (1 - q->u - q->v) * m[r] + q->u * m[(r + 1) % 3] + q->v * m[(r + 2) % 3];
-    return (p - x).norm();
+    return Eigen::Vector3d(q->u, q->v, (p - x).norm());
+  }
+
+  // The curved-aware bound. A face is *needed* when it owns a point farther than max_distance
+  // from its linear middle triangle; its fully curved patch is the order-curved_order Lagrange
+  // triangle through the middle corners and, at every other lattice node, the input point P
+  // gives on the node's fiber (what the curved mesher builds at full curving; an edge's nodes
+  // depend on its two pillars only). On `cells`, and on the faces across their edges:
+  //   - a needed face's patch passes within curved_distance of every point it owns, and its
+  //     bottom slab with that patch is valid (curved_slab_ok);
+  //   - any other face's bottom slab is valid with the edges it shares with needed faces curved
+  //     and the rest of its nodes linear (the mesher's fallback for it, edge_alpha there).
+  // A face outside `cells` has the same vertices, pillars and nodes as before, so only the first
+  // kind of change (a neighbour becoming needed) can touch it. A fiber missing the input
+  // (rounding near a pinch) or a singular corner refuses.
+  std::optional<bool> needed(Id f, std::vector<Eigen::Vector3d>* places = nullptr) const {
+    bool out = false;
+    for (int x : owned[f]) {
+      const auto q = owned_place(f, distance_point(x));
+      if (!q) return std::nullopt;
+      if (places) places->push_back(*q);
+      out = out || (*q)[2] > max_distance;
+    }
+    return out;
+  }
+  // The rotated corners of f.
+  std::array<Id, 3> rotated_corners(Id f) const {
+    const Cell& c = cell(f);
+    const int r = min_rotation(Eigen::Vector3i{int(c[0]), int(c[1]), int(c[2])});
+    return {c[r], c[(r + 1) % 3], c[(r + 2) % 3]};
+  }
+  // The other face on edge (a, b) of f, or k_no_id.
+  Id across(Id f, Id a, Id b) const {
+    for (Id g : vertex_cells(a))
+      if (g != f) {
+        const Cell& c = cell(g);
+        if (std::find(c.begin(), c.end(), b) != c.end()) return g;
+      }
+    return editing::k_no_id;
+  }
+  // The fully curved patch of f: node positions in canonical lattice order of its rotated
+  // corners; false when a corner is singular or a fiber misses the input.
+  bool patch_nodes(Id f, std::vector<Eigen::Vector3d>& node) const {
+    const auto& lattice = lagrange_lattice(CellKind::triangle, curved_order);
+    const Cell& c = cell(f);
+    const bool type_a = is_type_a(Eigen::Vector3i{int(c[0]), int(c[1]), int(c[2])});
+    const std::array<Id, 3> v = rotated_corners(f);
+    for (Id u : v)
+      if (singular[u]) return false;
+    node.assign(lattice.size(), Eigen::Vector3d::Zero());
+    for (std::size_t n = 0; n < lattice.size(); ++n) {
+      const auto& a = lattice[n];
+      const int nonzero = (a[0] > 0) + (a[1] > 0) + (a[2] > 0);
+      if (nonzero == 1) {
+        node[n] = mid[v[a[0] > 0 ? 0 : a[1] > 0 ? 1 : 2]];
+        continue;
+      }
+      const double w[3] = {double(a[0]) / curved_order, double(a[1]) / curved_order,
+                           double(a[2]) / curved_order};
+      // The fiber's corners on the rising facets of both halves (projection.cpp).
+      std::array<Eigen::Vector3d, 7> fiber;
+      int m7 = 0;
+      for (int half = 0; half < 2; ++half)
+        for (int i = half; i < 4; ++i) {
+          std::array<int, 3> sorted = rising_facets(type_a)[i];
+          std::sort(sorted.begin(), sorted.end(), [](int p, int q) { return p % 3 < q % 3; });
+          Eigen::Vector3d p = Eigen::Vector3d::Zero();
+          for (int k = 0; k < 3; ++k) {
+            const Id u = v[sorted[k] % 3];
+            const bool upper = sorted[k] >= 3;
+            p += w[k] * (half == 0 ? (upper ? mid[u] : base[u]) : (upper ? top[u] : mid[u]));
+          }
+          fiber[m7++] = p;
+        }
+      static constexpr int walk[6][2] = {{3, 2}, {3, 4}, {2, 1}, {4, 5}, {1, 0}, {5, 6}};
+      int g = -1;
+      Eigen::Vector3d bary;
+      for (const auto& seg : walk)
+        if ((g = input->segment_hit(fiber[seg[0]], fiber[seg[1]], bary)) >= 0) break;
+      if (g < 0) return false;
+      for (int k = 0; k < 3; ++k) node[n] += bary[k] * input->V().row(input->F()(g, k)).transpose();
+    }
+    return true;
+  }
+  // Is f's bottom slab valid with its nodes `node` where `keep` says so (corners always) and
+  // linear elsewhere?
+  bool slab_ok(Id f, const std::vector<Eigen::Vector3d>& node,
+               const std::function<bool(const std::array<int, 4>&)>& keep) const {
+    if (!curved_slab_ok || !*curved_slab_ok) return true;
+    const auto& lattice = lagrange_lattice(CellKind::triangle, curved_order);
+    const Cell& c = cell(f);
+    const bool type_a = is_type_a(Eigen::Vector3i{int(c[0]), int(c[1]), int(c[2])});
+    const std::array<Id, 3> v = rotated_corners(f);
+    std::array<Eigen::Vector3d, 3> b, mc;
+    for (int k = 0; k < 3; ++k) {
+      b[k] = base[v[k]];
+      mc[k] = mid[v[k]];
+    }
+    std::vector<Eigen::Vector3d> d(node.size(), Eigen::Vector3d::Zero());
+    for (std::size_t n = 0; n < node.size(); ++n)
+      if (keep(lattice[n]))
+        d[n] = node[n] - (double(lattice[n][0]) * mc[0] + double(lattice[n][1]) * mc[1] +
+                          double(lattice[n][2]) * mc[2]) /
+                             double(curved_order);
+    return (*curved_slab_ok)(b, mc, type_a, d);
+  }
+  // f's slab with the edges it shares with needed faces curved (need_of: neededness by face).
+  bool fallback_slab_ok(Id f, const std::function<std::optional<bool>(Id)>& need_of) const {
+    const std::array<Id, 3> v = rotated_corners(f);
+    std::array<bool, 3> curved_edge{};  // edge opposite local vertex i (a[i] == 0)
+    bool any = false;
+    for (int i = 0; i < 3; ++i) {
+      const Id g = across(f, v[(i + 1) % 3], v[(i + 2) % 3]);
+      if (g == editing::k_no_id) continue;
+      const auto ng = need_of(g);
+      if (!ng) return false;
+      curved_edge[std::size_t(i)] = *ng;
+      any = any || *ng;
+    }
+    if (!any) return true;
+    std::vector<Eigen::Vector3d> node;
+    if (!patch_nodes(f, node)) return false;
+    const auto& lattice = lagrange_lattice(CellKind::triangle, curved_order);
+    auto keep = [&](const std::array<int, 4>& a) {
+      const int nonzero = (a[0] > 0) + (a[1] > 0) + (a[2] > 0);
+      if (nonzero != 2) return false;
+      const int zero = a[0] == 0 ? 0 : a[1] == 0 ? 1 : 2;
+      return curved_edge[std::size_t(zero)];
+    };
+    // Within the bound with those edges curved and the rest linear, too.
+    std::vector<Eigen::Vector3d> patch = node;
+    for (std::size_t n = 0; n < node.size(); ++n)
+      if (!keep(lattice[n]) && (lattice[n][0] > 0) + (lattice[n][1] > 0) + (lattice[n][2] > 0) > 1)
+        patch[n] = (double(lattice[n][0]) * node[0] + double(lattice[n][1]) * node[1] +
+                    double(lattice[n][2]) * node[2]) /
+                   double(curved_order);
+    for (int x : owned[f]) {
+      const auto q = owned_place(f, distance_point(x));
+      if (!q) return false;
+      const Eigen::VectorXd phi = lagrange_shape_values(CellKind::triangle, curved_order,
+                                                        Eigen::Vector3d((*q)[0], (*q)[1], 0));
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      for (std::size_t n = 0; n < patch.size(); ++n) p += phi[Eigen::Index(n)] * patch[n];
+      if (!((p - distance_point(x)).norm() <= max_distance)) return false;
+    }
+    return slab_ok(f, node, keep);
+  }
+  bool curved_ok(const std::vector<Id>& cells) const {
+    if (curved_order < 2) return true;
+    std::vector<char> need(cells.size(), 0);
+    bool any = false;
+    std::vector<std::vector<Eigen::Vector3d>> places(cells.size());
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const auto n = needed(cells[i], &places[i]);
+      if (!n) return false;
+      need[i] = *n;
+      any = any || *n;
+    }
+    if (!any) return true;
+    auto need_of = [&](Id g) -> std::optional<bool> {
+      const auto it = std::find(cells.begin(), cells.end(), g);
+      if (it != cells.end()) return need[std::size_t(it - cells.begin())] != 0;
+      return needed(g);
+    };
+    std::vector<Id> outside;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const Id f = cells[i];
+      if (!need[i]) {
+        if (!fallback_slab_ok(f, need_of)) return false;
+        continue;
+      }
+      std::vector<Eigen::Vector3d> node;
+      if (!patch_nodes(f, node)) return false;
+      for (std::size_t j = 0; j < places[i].size(); ++j) {
+        const Eigen::VectorXd phi = lagrange_shape_values(
+            CellKind::triangle, curved_order, Eigen::Vector3d(places[i][j][0], places[i][j][1], 0));
+        Eigen::Vector3d p = Eigen::Vector3d::Zero();
+        for (std::size_t n = 0; n < node.size(); ++n) p += phi[Eigen::Index(n)] * node[n];
+        if (!((p - distance_point(owned[f][j])).norm() <= curved_distance)) return false;
+      }
+      if (!slab_ok(f, node, [](const std::array<int, 4>&) { return true; })) return false;
+      const std::array<Id, 3> v = rotated_corners(f);
+      for (int e = 0; e < 3; ++e) {
+        const Id g = across(f, v[e], v[(e + 1) % 3]);
+        if (g != editing::k_no_id && std::find(cells.begin(), cells.end(), g) == cells.end())
+          outside.push_back(g);
+      }
+    }
+    std::sort(outside.begin(), outside.end());
+    outside.erase(std::unique(outside.begin(), outside.end()), outside.end());
+    for (Id g : outside) {
+      const auto n = needed(g);
+      if (!n) return false;
+      if (!*n && !fallback_slab_ok(g, need_of)) return false;
+    }
+    return true;
   }
 
   // Re-homes the input vertices owned by the old cells (the changed cells of a smoothing) into
@@ -136,7 +362,7 @@ class ShellMesh : public TriMesh {
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
         const auto d = owned_distance(r.new_cells[i], p);
         if (!d) continue;
-        if (*d > max_distance) return false;
+        if (*d > bound_of(x)) return false;
         next[i].push_back(x);
         placed = true;
       }
@@ -380,6 +606,10 @@ class ShellMesh : public TriMesh {
       old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     }
     if (!prisms_keep_coverage(cells, std::move(old_union))) return false;
+    if (!curved_ok(cells)) {
+      note(curved);
+      return false;
+    }
     return true;
   }
 
@@ -569,6 +799,10 @@ class ShellMesh : public TriMesh {
     for (Id f : r.old_cells.empty() ? r.new_cells : r.old_cells)
       old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     if (!prisms_keep_coverage(r.new_cells, std::move(old_union))) return Check::shell;
+    if (!curved_ok(r.new_cells)) {
+      note(curved);
+      return Check::shell;
+    }
     return Check::ok;
   }
   bool invariants(const OperationRecord& r) override {
@@ -607,6 +841,20 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   m.section_cos = options.section_cos;
   m.max_distance = options.max_distance;
   m.max_mips = options.max_mips;
+  if (options.curved_order >= 2) {
+    if (!(options.max_distance > 0))
+      throw MeshingError(
+          "simplify: the curved-aware bound needs the distance bound (max_distance)");
+    if (options.curved_order > k_max_order)
+      throw MeshingError("simplify: curved_order " + std::to_string(options.curved_order) +
+                         " is not in 2.." + std::to_string(k_max_order));
+    m.curved_order = options.curved_order;
+    m.relaxed_distance = std::max(options.relaxed_distance, options.max_distance);
+    m.curved_distance =
+        options.curved_distance > 0 ? options.curved_distance : options.max_distance;
+    if (!options.strict_input_vertices.empty()) m.strict = &options.strict_input_vertices;
+    if (options.curved_slab_ok) m.curved_slab_ok = &options.curved_slab_ok;
+  }
   if (!options.frozen_input_vertices.empty()) m.frozen = &options.frozen_input_vertices;
   const int nv = int(shell.mid.rows()), nf = int(shell.F.rows());
   std::vector<TriMesh::Cell> cells(nf);
@@ -889,6 +1137,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   why.intersection = m.rejections[ShellMesh::intersection];
   why.section = m.rejections[ShellMesh::section];
   why.coverage = m.rejections[ShellMesh::coverage];
+  why.curved = m.rejections[ShellMesh::curved];
 
   m.consolidate();
   Shell out;

@@ -23,6 +23,7 @@
 // vertices never move or disappear. Runs through the parallel scheduler.
 
 #include <array>
+#include <functional>
 
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/editing/scheduler.hpp"
@@ -71,6 +72,24 @@ struct SimplifyOptions {
   // on one thread after each collapse pass.
   std::vector<std::array<int, 2>> feature_edges;
   bool collapse_chains = false;
+  // >= 2 (needs max_distance): the curved-aware bound. An input vertex not marked in
+  // strict_input_vertices may lie up to relaxed_distance (>= max_distance) from the linear middle
+  // triangle, provided every new prism owning such a vertex passes within curved_distance
+  // (0: max_distance) of every point it owns with its curved middle triangle of this order: the
+  // Lagrange triangle through the middle corners and, at the other lattice nodes, the input
+  // points on the nodes' fibers (the curved mesher's patch at full curving). Extra points and
+  // the chains' snapped vertices keep max_distance.
+  int curved_order = 0;
+  double relaxed_distance = 0, curved_distance = 0;
+  std::vector<char> strict_input_vertices;  // #input vertices or empty (none strict)
+  // Optional, with curved_order: is the bottom half-prism of such a face, with corners base and
+  // mid (rotated to the smallest id; canonical split of type_a) and its middle triangle displaced
+  // by d (node − linear point per triangle lattice node, canonical order), a valid curved slab?
+  // The curved mesher certifies its slab tets (the coarsening cannot see curved elements).
+  std::function<bool(const std::array<Eigen::Vector3d, 3>& base,
+                     const std::array<Eigen::Vector3d, 3>& mid, bool type_a,
+                     const std::vector<Eigen::Vector3d>& d)>
+      curved_slab_ok;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
 };
@@ -88,6 +107,7 @@ struct SimplifyStats {
   // refused earlier (link condition, frozen or singular vertex) are not counted here.
   struct Rejections {
     long shape = 0, distance = 0, positivity = 0, intersection = 0, section = 0, coverage = 0;
+    long curved = 0;  // the curved-aware bound (curved_order)
   } collapse_rejections;
   // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
   double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;

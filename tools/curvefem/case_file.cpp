@@ -302,7 +302,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (const json* m = r.get(j, "meshing")) {
     r.only_keys(*m, "/meshing",
                 {"method", "order", "eps", "thickness", "thickness_per_edge", "eps_samples",
-                 "feature_chains", "validate", "deterministic"});
+                 "feature_chains", "curved_coarsening", "validate", "deterministic"});
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
     if (c.method != "given" && c.method != "curved" && c.method != "dense")
       fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
@@ -315,7 +315,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
     for (const char* key : {"order", "eps", "thickness", "thickness_per_edge", "eps_samples",
-                            "feature_chains", "validate", "deterministic"})
+                            "feature_chains", "curved_coarsening", "validate", "deterministic"})
       if (r.get(*m, key) && c.method != "curved")
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
@@ -341,6 +341,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*m, "feature_chains")) {
       if (!v->is_boolean()) fail("/meshing/feature_chains", "expected true/false", r.file);
       c.feature_chains = v->get<bool>();
+    }
+    if (const json* v = r.get(*m, "curved_coarsening")) {
+      if (!v->is_boolean()) fail("/meshing/curved_coarsening", "expected true/false", r.file);
+      c.curved_coarsening = v->get<bool>();
     }
     if (const json* v = r.get(*m, "validate")) {
       if (!v->is_boolean()) fail("/meshing/validate", "expected true/false", r.file);
@@ -536,6 +540,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     res["meshing"]["thickness_per_edge"] = c.thickness_per_edge;
     res["meshing"]["eps_samples"] = c.eps_samples;
     res["meshing"]["feature_chains"] = c.feature_chains;
+    res["meshing"]["curved_coarsening"] = c.curved_coarsening;
     res["meshing"]["validate"] = c.validate;
     res["meshing"]["deterministic"] = c.deterministic;
   }

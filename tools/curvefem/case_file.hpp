@@ -50,7 +50,8 @@ struct CaseSpec {
   double eps = 1e-2;                ///< curved: distance bound, relative to the bbox edge
   double thickness = 0.02;          ///< curved: shell half-thickness cap (relative)
   double thickness_per_edge = 1.0;  ///< curved: initial cap × each vertex's mean edge (0: off)
-  bool feature_chains = true;  ///< curved: coarsen along feature chains (snapped reference copy)
+  bool feature_chains = true;     ///< curved: coarsen along feature chains (snapped reference copy)
+  bool curved_coarsening = true;  ///< curved: distance bound on the curved patch (order >= 2)
   int eps_samples = 0;   ///< curved: ε also at the degree-L lattice points of every input face
   bool validate = true;  ///< curved: independent validation of the mesh (report.json)
   bool deterministic = true;  ///< curved: single-threaded coarsening, bit-identical output

@@ -126,7 +126,7 @@ struct MeshArgs {
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
-       no_pan = false, no_feature_chains = false;
+       no_pan = false, no_feature_chains = false, linear_coarsening = false;
   double split_mips = 0;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
@@ -219,6 +219,10 @@ void register_mesh(CLI::App& app) {
                 "keep every feature vertex as a coarse vertex (by default the coarsening runs "
                 "along feature chains, their vertices snapped onto the coarse feature edge in a "
                 "reference copy of the input)");
+  sub->add_flag("--linear-coarsening", args->linear_coarsening,
+                "bound the distance on the linear middle surface during coarsening (by default, "
+                "at order >= 2, an input vertex may lie up to 3 eps from it when the face's fully "
+                "curved patch is within eps of it)");
   sub->add_option("--split-mips", args->split_mips,
                   "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
                   "exceeds this (2 = equilateral; 0: off)")
@@ -254,6 +258,7 @@ void register_mesh(CLI::App& app) {
     options.recurve = !args->no_recurve;
     options.shell_pan = !args->no_pan;
     options.feature_chains = !args->no_feature_chains;
+    options.curved_coarsening = !args->linear_coarsening;
     options.eps_samples = args->eps_samples;
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);
@@ -322,6 +327,9 @@ void register_mesh(CLI::App& app) {
           {"pans", stats.coarsen_pans},
           {"splits", stats.coarsen_splits},
           {"chain_collapses", stats.coarsen_chain_collapses},
+          {"curved_aware", stats.curved_coarsening},
+          {"curved_attempts", stats.curved_attempts},
+          {"strict_vertices", stats.strict_vertices},
           {"snapped_vertices", stats.snapped_vertices},
           {"chain_max_distance_rel", stats.chain_max_distance_rel},
           {"median_half_thickness_rel", stats.coarse_median_thickness_rel},

@@ -349,6 +349,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     options.thickness_per_edge = spec.thickness_per_edge;
     options.eps_samples = spec.eps_samples;
     options.feature_chains = spec.feature_chains;
+    options.curved_coarsening = spec.curved_coarsening;
     options.threads = threads;
     options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);
@@ -370,6 +371,9 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     p.report["faces_recurved"] = stats.faces_recurved;
     p.report["fiber_misses"] = stats.fiber_misses;
     p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
+    p.report["curved_coarsening"] = {{"curved_aware", stats.curved_coarsening},
+                                     {"attempts", stats.curved_attempts},
+                                     {"strict_vertices", stats.strict_vertices}};
     p.report["optimize"] = json::parse(optimize_json(stats.optimize).dump());
     p.report["stage_s"] = stages;
     if (spec.validate) {

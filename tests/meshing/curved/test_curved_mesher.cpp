@@ -10,6 +10,7 @@
 
 #include "mapping/boundary_inverse.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -315,6 +316,9 @@ TEST(CurvedMesher, DeeperSlabsLetRefusedFacesCurveAgain) {
   o.order = 3;
   o.eps_rel = 1e-2;
   o.threads = 2;
+  // The linear bound: its faces may go down to α = 0, which is what recurving lifts again (faces
+  // the curved-aware bound needs fully curved never take that path).
+  o.curved_coarsening = false;
   std::array<cv::CurvedMeshStats, 2> stats;
   for (int recurve = 0; recurve < 2; ++recurve) {
     o.recurve = recurve == 1;
@@ -433,4 +437,90 @@ TEST(CurvedMesher, ConstraintPointsAreEnforcedAndCheckedByTheValidator) {
   } catch (const curvefem::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("constraint point 0"), std::string::npos) << e.what();
   }
+}
+
+// The curved-aware bound in the coarsening itself: every input vertex is re-checked against the
+// order-3 patch of its coarse face built here through ShellProjection (P_T at the lattice nodes),
+// not through the coarsening's own fiber walk.
+TEST(CurvedMesher, CurvedAwareSimplificationHoldsOnTheProjectionsPatch) {
+  const SurfaceMesh sphere = curvefem::make_icosphere(4);  // 5120 faces
+  sh::ShellStats ss;
+  const sh::Shell shell = sh::build_shell(sphere, {}, ss);
+  const double eps = 0.01 * curvefem::bbox_longest_edge(sphere.V);
+  sh::SimplifyOptions o;
+  o.threads = 1;
+  o.max_distance = eps;
+  sh::SimplifyStats linear_stats;
+  const sh::Shell linear = sh::simplify_shell(shell, sphere, o, linear_stats);
+  o.curved_order = 3;
+  o.relaxed_distance = 3 * eps;
+  o.curved_distance = 0.95 * eps;
+  sh::SimplifyStats st;
+  const sh::Shell coarse = sh::simplify_shell(shell, sphere, o, st);
+  std::cout << "[ measured ] sphere 5120 faces, eps 1%: linear bound " << linear.F.rows()
+            << " faces, curved-aware (K = 3) " << coarse.F.rows() << " faces, linear distance "
+            << st.max_distance / eps << " eps\n";
+  EXPECT_LE(double(coarse.F.rows()), 0.6 * double(linear.F.rows()))
+      << "a cubic patch needs far fewer faces";
+  EXPECT_GT(st.max_distance, eps) << "the relaxed linear bound must be in use";
+  EXPECT_LE(st.max_distance, 3 * eps * (1 + 1e-12));
+  const sh::ShellProjection p(coarse, sphere);
+  const auto& lattice = curvefem::lagrange_lattice(curvefem::CellKind::triangle, 3);
+  double worst = 0;
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    const Eigen::Vector3d x = sphere.V.row(v);
+    const auto q = p.locate(x);
+    ASSERT_TRUE(q.has_value()) << "vertex " << v << " left the shell";
+    const Eigen::VectorXd phi = curvefem::lagrange_shape_values(curvefem::CellKind::triangle, 3,
+                                                                Eigen::Vector3d(q->u, q->v, 0));
+    Eigen::Vector3d patch = Eigen::Vector3d::Zero();
+    for (std::size_t n = 0; n < lattice.size(); ++n) {
+      const auto hit =
+          p.project(sh::PrismPoint{q->face, lattice[n][1] / 3.0, lattice[n][2] / 3.0, 0.0});
+      ASSERT_TRUE(hit.has_value()) << "face " << q->face << " node " << n;
+      patch += phi[Eigen::Index(n)] * hit->position;
+    }
+    worst = std::max(worst, (patch - x).norm());
+  }
+  EXPECT_LE(worst, 0.95 * eps * (1 + 1e-9));
+}
+
+// The mesher with it (the default at order >= 2): far fewer faces than with the linear bound,
+// and the independent validator finds every input vertex within ε of the curved boundary.
+TEST(CurvedMesher, CurvedAwareCoarseningMeetsEpsWithFewerFaces) {
+  const SurfaceMesh sphere = curvefem::make_icosphere(4);  // 5120 faces
+  for (int k : {2, 3}) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    cv::CurvedMeshOptions o;
+    o.order = k;
+    o.eps_rel = 1e-2;
+    o.threads = 2;
+    o.curved_coarsening = false;
+    cv::CurvedMeshStats linear_stats;
+    const cv::CurvedMesh linear = cv::build_curved_mesh(sphere, o, linear_stats);
+    o.curved_coarsening = true;
+    cv::CurvedMeshStats st;
+    const cv::CurvedMesh curved = cv::build_curved_mesh(sphere, o, st);
+    const cv::CurvedValidation check = cv::validate_curved_mesh(curved.mesh, curved.map, sphere);
+    std::cout << "[ measured ] sphere 5120 faces, K = " << k << ": linear bound "
+              << linear_stats.coarse_faces << " faces / " << linear.mesh.num_cells()
+              << " tets; curved-aware " << st.coarse_faces << " faces / " << curved.mesh.num_cells()
+              << " tets (attempt " << st.curved_attempts << "), max distance "
+              << check.max_distance_rel << "\n";
+    EXPECT_TRUE(check.valid(1e-2));
+    EXPECT_LE(check.max_distance_rel, 1e-2);
+    EXPECT_TRUE(st.curved_coarsening);
+    EXPECT_GT(st.linear_max_distance_rel, 1e-2);
+    EXPECT_LT(st.coarse_faces, 0.7 * linear_stats.coarse_faces);
+    EXPECT_LE(linear_stats.linear_max_distance_rel, 1e-2);
+    EXPECT_FALSE(linear_stats.curved_coarsening);
+  }
+  // Order 1 has no curved patch: the linear bound, whatever the option says.
+  cv::CurvedMeshOptions o;
+  o.order = 1;
+  o.threads = 2;
+  cv::CurvedMeshStats st;
+  cv::build_curved_mesh(sphere, o, st);
+  EXPECT_FALSE(st.curved_coarsening);
+  EXPECT_LE(st.linear_max_distance_rel, 1e-2);
 }
