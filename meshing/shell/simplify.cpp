@@ -38,6 +38,9 @@ class ShellMesh : public TriMesh {
   Attribute<std::vector<int>> track{*this, 2, {}};  // input faces touching the prism
   // Distance points located in the prism: input vertex x, or extra point x - #input V.
   Attribute<std::vector<int>> owned{*this, 2, {}};
+  // Per owned point, in the same order: (u, v) in the face and the distance to its linear middle
+  // triangle there (owned_place), kept with `owned` by rehome_owned.
+  Attribute<std::vector<Eigen::Vector3d>> place{*this, 2, {}};
   const std::vector<Eigen::Vector3d>* extra_points = nullptr;
   Eigen::Vector3d distance_point(int x) const {
     const int nv = int(input->V().rows());
@@ -167,12 +170,8 @@ class ShellMesh : public TriMesh {
   // (rounding near a pinch) or a singular corner refuses.
   std::optional<bool> needed(Id f, std::vector<Eigen::Vector3d>* places = nullptr) const {
     bool out = false;
-    for (int x : owned[f]) {
-      const auto q = owned_place(f, distance_point(x));
-      if (!q) return std::nullopt;
-      if (places) places->push_back(*q);
-      out = out || (*q)[2] > max_distance;
-    }
+    for (const Eigen::Vector3d& q : place[f]) out = out || q[2] > max_distance;
+    if (places) *places = place[f];
     return out;
   }
   // The rotated corners of f.
@@ -286,14 +285,13 @@ class ShellMesh : public TriMesh {
         patch[n] = (double(lattice[n][0]) * node[0] + double(lattice[n][1]) * node[1] +
                     double(lattice[n][2]) * node[2]) /
                    double(curved_order);
-    for (int x : owned[f]) {
-      const auto q = owned_place(f, distance_point(x));
-      if (!q) return false;
-      const Eigen::VectorXd phi = lagrange_shape_values(CellKind::triangle, curved_order,
-                                                        Eigen::Vector3d((*q)[0], (*q)[1], 0));
+    for (std::size_t j = 0; j < owned[f].size(); ++j) {
+      const Eigen::Vector3d& q = place[f][j];
+      const Eigen::VectorXd phi =
+          lagrange_shape_values(CellKind::triangle, curved_order, Eigen::Vector3d(q[0], q[1], 0));
       Eigen::Vector3d p = Eigen::Vector3d::Zero();
       for (std::size_t n = 0; n < patch.size(); ++n) p += phi[Eigen::Index(n)] * patch[n];
-      if (!((p - distance_point(x)).norm() <= max_distance)) return false;
+      if (!((p - distance_point(owned[f][j])).norm() <= max_distance)) return false;
     }
     return slab_ok(f, node, keep);
   }
@@ -355,20 +353,25 @@ class ShellMesh : public TriMesh {
     std::vector<int> points;
     for (Id f : from) points.insert(points.end(), owned[f].begin(), owned[f].end());
     std::vector<std::vector<int>> next(r.new_cells.size());
+    std::vector<std::vector<Eigen::Vector3d>> where(r.new_cells.size());
     for (int x : points) {
       if (!on_chain.empty() && is_input_vertex(x) && on_chain[std::size_t(x)]) continue;
       const Eigen::Vector3d p = distance_point(x);
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
-        const auto d = owned_distance(r.new_cells[i], p);
-        if (!d) continue;
-        if (*d > bound_of(x)) return false;
+        const auto q = owned_place(r.new_cells[i], p);
+        if (!q) continue;
+        if ((*q)[2] > bound_of(x)) return false;
         next[i].push_back(x);
+        where[i].push_back(*q);
         placed = true;
       }
       if (!placed) return false;
     }
-    for (std::size_t i = 0; i < r.new_cells.size(); ++i) owned.set(r.new_cells[i], next[i]);
+    for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
+      owned.set(r.new_cells[i], next[i]);
+      place.set(r.new_cells[i], where[i]);
+    }
     return true;
   }
 
@@ -935,7 +938,15 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
                            std::to_string(f) + " or of a face next to it");
       own[home].push_back(input.num_vertices() + int(i));
     }
-    for (int f = 0; f < nf; ++f) m.owned.set(Id(f), own[f]);
+    for (int f = 0; f < nf; ++f) {
+      m.owned.set(Id(f), own[f]);
+      std::vector<Eigen::Vector3d> where;
+      for (int x : own[f]) {
+        const auto q = m.owned_place(Id(f), m.distance_point(x));
+        where.push_back(q ? *q : Eigen::Vector3d(0, 0, HUGE_VAL));
+      }
+      m.place.set(Id(f), where);
+    }
   }
 
   std::vector<std::vector<int>> vf(input.num_vertices());
