@@ -1094,8 +1094,10 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   // resort is the linear bound everywhere (whose α = 0 fallback always meets ε).
   std::vector<char> strict;
   std::vector<std::pair<std::string, double>> discarded;
+  int last_misses = INT_MAX;
+  bool give_up = false;
   for (int attempt = 1;; ++attempt) {
-    const bool relaxed = attempt <= options.curved_attempts;
+    const bool relaxed = !give_up && attempt <= options.curved_attempts;
     CurvedMeshStats s;
     Stopwatch watch;
     try {
@@ -1113,9 +1115,15 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
         if (std::size_t(x) >= strict.size()) strict.resize(std::size_t(x) + 1, 0);
         strict[std::size_t(x)] = 1;
       }
+      // Misses that do not drop mean thin parts keep refusing full curving wherever the
+      // coarsening puts its faces: the linear bound next.
+      give_up = missed.faces >= last_misses;
+      last_misses = missed.faces;
       log::info("mesh: curved-aware coarsening, attempt ", attempt, ": ", missed.faces,
-                " coarse faces miss eps once curved; ", missed.vertices.size(),
-                " input vertices near them keep the linear bound next");
+                " coarse faces miss eps once curved; ",
+                give_up ? "no fewer than before: the linear bound next"
+                        : std::to_string(missed.vertices.size()) +
+                              " input vertices near them keep the linear bound next");
     }
   }
 }

@@ -92,8 +92,9 @@ struct CurvedMeshOptions {
   // and their neighbours' with the shared edges curved. Full curving can still be refused later
   // (thickening in thin parts); if the final surface then misses ε somewhere, the attempt is
   // discarded and the input vertices of those faces and of the faces within two edge steps of
-  // them keep the linear bound in the next one. After curved_attempts such attempts the linear
-  // bound holds everywhere (the behaviour with curved_coarsening = false).
+  // them keep the linear bound in the next one. After curved_attempts such attempts, or one
+  // that misses on no fewer faces than the one before, the linear bound holds everywhere (the
+  // behaviour with curved_coarsening = false).
   bool curved_coarsening = true;
   double curved_linear_factor = 3.0;
   double curved_margin = 0.95;
