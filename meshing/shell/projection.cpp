@@ -148,18 +148,8 @@ Eigen::Vector3d ShellProjection::point(const PrismPoint& q) const {
 
 std::array<Eigen::Vector3d, 7> ShellProjection::Impl::fiber(int f,
                                                             const std::array<double, 3>& w) const {
-  const bool type_a = is_type_a(Eigen::Vector3i(shell.F.row(f)));
-  std::array<Eigen::Vector3d, 7> out;
-  int n = 0;
-  for (int half = 0; half < 2; ++half)
-    for (int i = half; i < 4; ++i) {  // the mid facet of half 1 is the top facet of half 0
-      std::array<int, 3> sorted = rising_facets(type_a)[i];
-      std::sort(sorted.begin(), sorted.end(), [](int a, int b) { return a % 3 < b % 3; });
-      Eigen::Vector3d x = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) x += w[k] * corner(f, half, sorted[k]);
-      out[n++] = x;
-    }
-  return out;
+  return fiber_points(is_type_a(Eigen::Vector3i(shell.F.row(f))), w,
+                      [&](int half, int c) { return corner(f, half, c); });
 }
 
 std::array<Eigen::Vector3d, 7> ShellProjection::fiber(int face, double u, double v) const {
@@ -167,9 +157,6 @@ std::array<Eigen::Vector3d, 7> ShellProjection::fiber(int face, double u, double
 }
 
 namespace {
-// Fiber segments (a, b) in search order: from the middle (index 3) outwards, where the input
-// crosses the fiber near h = 0.
-constexpr int k_walk[6][2] = {{3, 2}, {3, 4}, {2, 1}, {4, 5}, {1, 0}, {5, 6}};
 
 // Barycentric coordinates of x, a point of the plane of tri (floating-point solve).
 Eigen::Vector3d barycentric(const std::array<Eigen::Vector3d, 3>& tri, const Eigen::Vector3d& x) {
@@ -250,7 +237,7 @@ std::optional<SurfacePoint> ShellProjection::Impl::near_pinch(
     for (int k = 0; k < 3; ++k)
       if (tri[k] != x && tri[(k + 1) % 3] != x) wedges.push_back({g, k, tri, pi});
   }
-  for (const auto& seg : k_walk) {
+  for (const auto& seg : k_fiber_walk) {
     const Eigen::Vector3d &p = z[seg[0]], &q = z[seg[1]];
     std::optional<SurfacePoint> best;
     double best_tau = std::numeric_limits<double>::infinity();
@@ -289,7 +276,7 @@ std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const 
   if (s >= 0 && w[(s + 1) % 3] <= 0 && w[(s + 2) % 3] <= 0)
     return m.at_pinch(m.corner(q.face, 1, s));
   const auto fiber = m.fiber(q.face, w);
-  for (const auto& seg : k_walk) {
+  for (const auto& seg : k_fiber_walk) {
     Eigen::Vector3d bary;
     const int f = m.input.segment_hit(fiber[seg[0]], fiber[seg[1]], bary);
     if (f >= 0) return m.surface_point(f, bary);

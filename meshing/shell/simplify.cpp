@@ -208,25 +208,14 @@ class ShellMesh : public TriMesh {
       }
       const double w[3] = {double(a[0]) / curved_order, double(a[1]) / curved_order,
                            double(a[2]) / curved_order};
-      // The fiber's corners on the rising facets of both halves (projection.cpp).
-      std::array<Eigen::Vector3d, 7> fiber;
-      int m7 = 0;
-      for (int half = 0; half < 2; ++half)
-        for (int i = half; i < 4; ++i) {
-          std::array<int, 3> sorted = rising_facets(type_a)[i];
-          std::sort(sorted.begin(), sorted.end(), [](int p, int q) { return p % 3 < q % 3; });
-          Eigen::Vector3d p = Eigen::Vector3d::Zero();
-          for (int k = 0; k < 3; ++k) {
-            const Id u = v[sorted[k] % 3];
-            const bool upper = sorted[k] >= 3;
-            p += w[k] * (half == 0 ? (upper ? mid[u] : base[u]) : (upper ? top[u] : mid[u]));
-          }
-          fiber[m7++] = p;
-        }
-      static constexpr int walk[6][2] = {{3, 2}, {3, 4}, {2, 1}, {4, 5}, {1, 0}, {5, 6}};
+      const auto fiber = fiber_points(type_a, {w[0], w[1], w[2]}, [&](int half, int j) {
+        const Id u = v[j % 3];
+        return Eigen::Vector3d(half == 0 ? (j >= 3 ? mid[u] : base[u])
+                                         : (j >= 3 ? top[u] : mid[u]));
+      });
       int g = -1;
       Eigen::Vector3d bary;
-      for (const auto& seg : walk)
+      for (const auto& seg : k_fiber_walk)
         if ((g = input->segment_hit(fiber[seg[0]], fiber[seg[1]], bary)) >= 0) break;
       if (g < 0) return false;
       for (int k = 0; k < 3; ++k) node[n] += bary[k] * input->V().row(input->F()(g, k)).transpose();
