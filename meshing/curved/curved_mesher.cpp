@@ -256,7 +256,7 @@ class Builder {
   // The blend schedule of a face: 1, 1/2, ..., 1/64, then 0 (linear).
   void lower_alpha(int f) { alpha[f] = alpha[f] > 1.0 / 64 ? alpha[f] / 2 : 0.0; }
   // Lowers f's α; at α = 0, the α of the faces across its edges that need full curving (their
-  // edges are not lowered by f, edge_alpha). false when nothing could be lowered.
+  // edges are not lowered by f, edge_alpha). Returns the faces lowered (none: nothing could be).
   std::vector<int> lower_for(int f) {
     if (alpha[f] > 0) {
       lower_alpha(f);
@@ -309,9 +309,14 @@ class Builder {
     }
     return d;
   }
-  static Eigen::Vector3d evaluate(const std::vector<Eigen::Vector3d>& d, int order, double u,
-                                  double v) {
-    return evaluate_patch(d, order, u, v);
+  // Is every point face f owns within eps of its patch at the current α?
+  bool meets_eps(int f, double eps) const {
+    const auto d = node_displacements(f);
+    for (const Owned& o : owned[f])
+      if (!((linear_mid(f, o.u, o.v) + evaluate_patch(d, k, o.u, o.v) - point(o.vertex)).norm() <=
+            eps))
+        return false;
+    return true;
   }
 
   // The bottom (or, with `upper`, the top) half-prism of face f as order-k tets (pinched tets
@@ -519,17 +524,12 @@ class Builder {
   // 1 when the slabs are not certified, 2 when an input vertex is farther than eps.
   int face_check(int f, double eps) const {
     if (!slabs_certified(f)) return 1;
-    const auto d = node_displacements(f);
     if (alpha[f] == 0) return 0;  // the linear shell's bound was enforced by simplification
     // A face the curved-aware coarsening let beyond ε of its linear triangle meets ε only near
     // full curving: lowering its α cannot help (and would lower its edges' α, passing the miss on
     // to its neighbours). Its distance is checked once, at the end (build_attempt).
     if (!needs_full.empty() && needs_full[f]) return 0;
-    for (const Owned& o : owned[f]) {
-      const Eigen::Vector3d p = linear_mid(f, o.u, o.v) + evaluate(d, k, o.u, o.v);
-      if ((p - point(o.vertex)).norm() > eps) return 2;
-    }
-    return 0;
+    return meets_eps(f, eps) ? 0 : 2;
   }
 };
 
@@ -838,15 +838,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   // in thin parts, so their α dropped.)
   if (relaxed) {
     std::vector<char> bad(nf, 0);
-    tbb::parallel_for(0, nf, [&](int f) {
-      const auto d = b.node_displacements(f);
-      for (const Owned& o : b.owned[f])
-        if (!((b.linear_mid(f, o.u, o.v) + b.evaluate(d, k, o.u, o.v) - b.point(o.vertex)).norm() <=
-              eps)) {
-          bad[f] = 1;
-          break;
-        }
-    });
+    tbb::parallel_for(0, nf, [&](int f) { bad[f] = !b.meets_eps(f, eps); });
     CurvedBoundMissed missed;
     std::vector<char> near(nf, 0);
     for (int f = 0; f < nf; ++f) {

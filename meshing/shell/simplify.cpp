@@ -168,11 +168,10 @@ class ShellMesh : public TriMesh {
   // A face outside `cells` has the same vertices, pillars and nodes as before, so only the first
   // kind of change (a neighbour becoming needed) can touch it. A fiber missing the input
   // (rounding near a pinch) or a singular corner refuses.
-  std::optional<bool> needed(Id f, std::vector<Eigen::Vector3d>* places = nullptr) const {
-    bool out = false;
-    for (const Eigen::Vector3d& q : place[f]) out = out || q[2] > max_distance;
-    if (places) *places = place[f];
-    return out;
+  bool needed(Id f) const {
+    for (const Eigen::Vector3d& q : place[f])
+      if (q[2] > max_distance) return true;
+    return false;
   }
   // The rotated corners of f.
   std::array<Id, 3> rotated_corners(Id f) const {
@@ -222,6 +221,19 @@ class ShellMesh : public TriMesh {
     }
     return true;
   }
+  // Does the patch with these nodes (canonical lattice order) pass within `bound` of every point
+  // f owns?
+  bool patch_within(Id f, const std::vector<Eigen::Vector3d>& node, double bound) const {
+    for (std::size_t j = 0; j < owned[f].size(); ++j) {
+      const Eigen::Vector3d& q = place[f][j];
+      const Eigen::VectorXd phi =
+          lagrange_shape_values(CellKind::triangle, curved_order, Eigen::Vector3d(q[0], q[1], 0));
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      for (std::size_t n = 0; n < node.size(); ++n) p += phi[Eigen::Index(n)] * node[n];
+      if (!((p - distance_point(owned[f][j])).norm() <= bound)) return false;
+    }
+    return true;
+  }
   // Is f's bottom slab valid with its nodes `node` where `keep` says so (corners always) and
   // linear elsewhere?
   bool slab_ok(Id f, const std::vector<Eigen::Vector3d>& node,
@@ -245,17 +257,15 @@ class ShellMesh : public TriMesh {
     return (*curved_slab_ok)(b, mc, type_a, d);
   }
   // f's slab with the edges it shares with needed faces curved (need_of: neededness by face).
-  bool fallback_slab_ok(Id f, const std::function<std::optional<bool>(Id)>& need_of) const {
+  bool fallback_slab_ok(Id f, const std::function<bool(Id)>& need_of) const {
     const std::array<Id, 3> v = rotated_corners(f);
     std::array<bool, 3> curved_edge{};  // edge opposite local vertex i (a[i] == 0)
     bool any = false;
     for (int i = 0; i < 3; ++i) {
       const Id g = across(f, v[(i + 1) % 3], v[(i + 2) % 3]);
       if (g == editing::k_no_id) continue;
-      const auto ng = need_of(g);
-      if (!ng) return false;
-      curved_edge[std::size_t(i)] = *ng;
-      any = any || *ng;
+      curved_edge[std::size_t(i)] = need_of(g);
+      any = any || curved_edge[std::size_t(i)];
     }
     if (!any) return true;
     std::vector<Eigen::Vector3d> node;
@@ -274,32 +284,16 @@ class ShellMesh : public TriMesh {
         patch[n] = (double(lattice[n][0]) * node[0] + double(lattice[n][1]) * node[1] +
                     double(lattice[n][2]) * node[2]) /
                    double(curved_order);
-    for (std::size_t j = 0; j < owned[f].size(); ++j) {
-      const Eigen::Vector3d& q = place[f][j];
-      const Eigen::VectorXd phi =
-          lagrange_shape_values(CellKind::triangle, curved_order, Eigen::Vector3d(q[0], q[1], 0));
-      Eigen::Vector3d p = Eigen::Vector3d::Zero();
-      for (std::size_t n = 0; n < patch.size(); ++n) p += phi[Eigen::Index(n)] * patch[n];
-      if (!((p - distance_point(owned[f][j])).norm() <= max_distance)) return false;
-    }
-    return slab_ok(f, node, keep);
+    return patch_within(f, patch, max_distance) && slab_ok(f, node, keep);
   }
   bool curved_ok(const std::vector<Id>& cells) const {
     if (curved_order < 2) return true;
     std::vector<char> need(cells.size(), 0);
-    bool any = false;
-    std::vector<std::vector<Eigen::Vector3d>> places(cells.size());
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      const auto n = needed(cells[i], &places[i]);
-      if (!n) return false;
-      need[i] = *n;
-      any = any || *n;
-    }
-    if (!any) return true;
-    auto need_of = [&](Id g) -> std::optional<bool> {
+    for (std::size_t i = 0; i < cells.size(); ++i) need[i] = needed(cells[i]);
+    if (std::find(need.begin(), need.end(), 1) == need.end()) return true;
+    auto need_of = [&](Id g) {
       const auto it = std::find(cells.begin(), cells.end(), g);
-      if (it != cells.end()) return need[std::size_t(it - cells.begin())] != 0;
-      return needed(g);
+      return it != cells.end() ? need[std::size_t(it - cells.begin())] != 0 : needed(g);
     };
     std::vector<Id> outside;
     for (std::size_t i = 0; i < cells.size(); ++i) {
@@ -309,15 +303,9 @@ class ShellMesh : public TriMesh {
         continue;
       }
       std::vector<Eigen::Vector3d> node;
-      if (!patch_nodes(f, node)) return false;
-      for (std::size_t j = 0; j < places[i].size(); ++j) {
-        const Eigen::VectorXd phi = lagrange_shape_values(
-            CellKind::triangle, curved_order, Eigen::Vector3d(places[i][j][0], places[i][j][1], 0));
-        Eigen::Vector3d p = Eigen::Vector3d::Zero();
-        for (std::size_t n = 0; n < node.size(); ++n) p += phi[Eigen::Index(n)] * node[n];
-        if (!((p - distance_point(owned[f][j])).norm() <= curved_distance)) return false;
-      }
-      if (!slab_ok(f, node, [](const std::array<int, 4>&) { return true; })) return false;
+      if (!patch_nodes(f, node) || !patch_within(f, node, curved_distance) ||
+          !slab_ok(f, node, [](const std::array<int, 4>&) { return true; }))
+        return false;
       const std::array<Id, 3> v = rotated_corners(f);
       for (int e = 0; e < 3; ++e) {
         const Id g = across(f, v[e], v[(e + 1) % 3]);
@@ -327,11 +315,8 @@ class ShellMesh : public TriMesh {
     }
     std::sort(outside.begin(), outside.end());
     outside.erase(std::unique(outside.begin(), outside.end()), outside.end());
-    for (Id g : outside) {
-      const auto n = needed(g);
-      if (!n) return false;
-      if (!*n && !fallback_slab_ok(g, need_of)) return false;
-    }
+    for (Id g : outside)
+      if (!needed(g) && !fallback_slab_ok(g, need_of)) return false;
     return true;
   }
 
