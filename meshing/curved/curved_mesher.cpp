@@ -168,6 +168,7 @@ class Builder {
   bool exterior = false;  // also the top half-prisms (outer slab layer)
   Eigen::Vector3d mid(int v) const { return s.mid.row(v).transpose(); }
   Eigen::Vector3d base(int v) const { return inner.row(v).transpose(); }
+  std::vector<char> pulled_above;  // #V: inner vertex left above the shell's base by thicken()
   Eigen::MatrixXd inner;  // the inner surface of the slab layer (starts as the shell's base)
   Eigen::Vector3d linear_mid(int f, double u, double v) const {
     return (1 - u - v) * mid(rotated(f, 0)) + u * mid(rotated(f, 1)) + v * mid(rotated(f, 2));
@@ -486,7 +487,11 @@ class Builder {
           "self-intersections with certified slabs in 40 rounds");
     if (recurve) raise_alpha(eps);
     int moved = 0;
-    for (int v = 0; v < nv; ++v) moved += depth[v] > base_depth[v];
+    pulled_above.assign(nv, 0);
+    for (int v = 0; v < nv; ++v) {
+      moved += depth[v] > base_depth[v];
+      pulled_above[v] = depth[v] < base_depth[v];
+    }
     return moved;
   }
 
@@ -542,6 +547,9 @@ namespace {
 // to keep under the linear bound next time.
 struct CurvedBoundMissed {
   std::vector<int> vertices;
+  // The input vertices of the faces across every needed face with a corner the thickening left
+  // above the shell's base (where full curving became uncertain, missed or not).
+  std::vector<int> above_base;
   int faces = 0;
 };
 
@@ -848,10 +856,17 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
         for (int h : b.across(g)) near[h] = 1;
     }
     if (missed.faces > 0) {
+      std::vector<char> above(nf, 0);
       for (int f = 0; f < nf; ++f)
-        if (near[f])
-          for (const Owned& o : b.owned[f])
-            if (o.vertex < surface.num_vertices()) missed.vertices.push_back(o.vertex);
+        if (b.needs_full[f] && (b.pulled_above[shell.F(f, 0)] || b.pulled_above[shell.F(f, 1)] ||
+                                b.pulled_above[shell.F(f, 2)]))
+          for (int g : b.across(f)) above[g] = 1;
+      for (int f = 0; f < nf; ++f)
+        for (const Owned& o : b.owned[f])
+          if (o.vertex < surface.num_vertices()) {
+            if (near[f]) missed.vertices.push_back(o.vertex);
+            if (above[f]) missed.above_base.push_back(o.vertex);
+          }
       throw missed;
     }
   }
@@ -1087,7 +1102,8 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   std::vector<char> strict;
   std::vector<std::pair<std::string, double>> discarded;
   int last_misses = INT_MAX;
-  bool give_up = false;
+  bool give_up = false, widened = false;
+  std::vector<int> above_base;  // from every discarded attempt
   for (int attempt = 1;; ++attempt) {
     const bool relaxed = !give_up && attempt <= options.curved_attempts;
     CurvedMeshStats s;
@@ -1097,23 +1113,37 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       s.curved_coarsening = relaxed;
       s.curved_attempts = attempt;
       s.strict_vertices = int(std::count(strict.begin(), strict.end(), 1));
+      s.curved_widened = widened;
       s.stage_seconds.insert(s.stage_seconds.begin(), discarded.begin(), discarded.end());
       stats = std::move(s);
       return out;
     } catch (const CurvedBoundMissed& missed) {
       discarded.emplace_back("discarded attempt " + std::to_string(attempt), watch.seconds());
       if (strict.empty()) strict.assign(std::size_t(input.num_vertices()), 0);
-      for (int x : missed.vertices) {
-        if (std::size_t(x) >= strict.size()) strict.resize(std::size_t(x) + 1, 0);
-        strict[std::size_t(x)] = 1;
+      auto keep_linear = [&](const std::vector<int>& vertices) {
+        for (int x : vertices) {
+          if (std::size_t(x) >= strict.size()) strict.resize(std::size_t(x) + 1, 0);
+          strict[std::size_t(x)] = 1;
+        }
+      };
+      keep_linear(missed.vertices);
+      above_base.insert(above_base.end(), missed.above_base.begin(), missed.above_base.end());
+      // Misses that do not drop mean the thickening keeps pulling the inner surface above the
+      // shell's base somewhere else (thin parts): once, every needed face where it did so in any
+      // attempt so far keeps the linear bound around it; after that, the linear bound everywhere.
+      const bool no_fewer = missed.faces >= last_misses;
+      const bool widen = no_fewer && !widened;
+      give_up = no_fewer && widened;
+      if (widen) {
+        keep_linear(above_base);
+        widened = true;
       }
-      // Misses that do not drop mean thin parts keep refusing full curving wherever the
-      // coarsening puts its faces: the linear bound next.
-      give_up = missed.faces >= last_misses;
       last_misses = missed.faces;
       log::info("mesh: curved-aware coarsening, attempt ", attempt, ": ", missed.faces,
                 " coarse faces miss eps once curved; ",
                 give_up ? "no fewer than before: the linear bound next"
+                : widen ? "no fewer than before: the input vertices around every face whose "
+                          "slab was pulled above the shell's base keep the linear bound next"
                         : std::to_string(missed.vertices.size()) +
                               " input vertices near them keep the linear bound next");
     }

@@ -92,9 +92,11 @@ struct CurvedMeshOptions {
   // and their neighbours' with the shared edges curved. Full curving can still be refused later
   // (thickening in thin parts); if the final surface then misses ε somewhere, the attempt is
   // discarded and the input vertices of those faces and of the faces within two edge steps of
-  // them keep the linear bound in the next one. After curved_attempts such attempts, or one
-  // that misses on no fewer faces than the one before, the linear bound holds everywhere (the
-  // behaviour with curved_coarsening = false).
+  // them keep the linear bound in the next one. The first attempt that misses on no fewer faces
+  // than the one before widens that set, once, to the faces around every needed face whose slab
+  // the thickening pulled above the shell's base in any attempt so far (thin parts, where the
+  // misses move). After curved_attempts attempts, or a second such attempt, the linear bound
+  // holds everywhere (the behaviour with curved_coarsening = false).
   bool curved_coarsening = true;
   double curved_linear_factor = 3.0;
   double curved_margin = 0.95;
@@ -148,8 +150,9 @@ struct CurvedMeshStats {
   int thickened_vertices = 0;
   double linear_max_distance_rel = 0;
   // Curved-aware coarsening: in effect for the kept attempt, its number (1 = first), and the
-  // input vertices kept under the linear bound after the discarded ones.
-  bool curved_coarsening = false;
+  // input vertices kept under the linear bound after the discarded ones; curved_widened: that
+  // set was widened to the slabs pulled above the shell's base.
+  bool curved_coarsening = false, curved_widened = false;
   int curved_attempts = 0, strict_vertices = 0;
   OptimizeStats optimize;
   std::vector<std::pair<std::string, double>> stage_seconds;

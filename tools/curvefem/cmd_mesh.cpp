@@ -330,6 +330,7 @@ void register_mesh(CLI::App& app) {
           {"curved_aware", stats.curved_coarsening},
           {"curved_attempts", stats.curved_attempts},
           {"strict_vertices", stats.strict_vertices},
+          {"curved_widened", stats.curved_widened},
           {"snapped_vertices", stats.snapped_vertices},
           {"chain_max_distance_rel", stats.chain_max_distance_rel},
           {"median_half_thickness_rel", stats.coarse_median_thickness_rel},

@@ -373,7 +373,8 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
     p.report["curved_coarsening"] = {{"curved_aware", stats.curved_coarsening},
                                      {"attempts", stats.curved_attempts},
-                                     {"strict_vertices", stats.strict_vertices}};
+                                     {"strict_vertices", stats.strict_vertices},
+                                     {"widened", stats.curved_widened}};
     p.report["optimize"] = json::parse(optimize_json(stats.optimize).dump());
     p.report["stage_s"] = stages;
     if (spec.validate) {
