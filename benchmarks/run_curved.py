@@ -18,6 +18,7 @@ Standard library only.
 import argparse
 import datetime
 import json
+import math
 import os
 import resource
 import shlex
@@ -36,6 +37,9 @@ ap.add_argument("--threads", type=int, default=2)
 ap.add_argument("--timeout", type=float, default=900)
 ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvefem"))
 ap.add_argument("--tetfill-tool", default=None)
+ap.add_argument("--exterior", action="store_true",
+                help="mesh with --exterior too (outer slab layer and the region out to the padded "
+                     "box); tets then count all four parts")
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/curved.md"))
 ap.add_argument("--work", default="/tmp/curved_bench")
 ap.add_argument("--render-from", metavar="JSONL",
@@ -103,7 +107,7 @@ def main():
         meshes = [m for m in meshes if m in args.meshes]
     os.makedirs(args.work, exist_ok=True)
     records = []
-    raw = open("/tmp/curved_runs.jsonl", "a")
+    raw = open("/tmp/curved_runs%s.jsonl" % ("_exterior" if args.exterior else ""), "a")
     for mesh in meshes:
         name = os.path.splitext(mesh)[0]
         path = os.path.join(args.data, mesh)
@@ -114,7 +118,8 @@ def main():
             load = os.getloadavg()[0]
             code, secs, out, err, rss = run([args.exe, "mesh", path, "-o", out_dir, "--order",
                                             str(k), "--eps", str(args.eps), "-q", "--threads",
-                                            str(args.threads)], args.timeout)
+                                            str(args.threads)] +
+                                           (["--exterior"] if args.exterior else []), args.timeout)
             rep = None
             try:
                 with open(os.path.join(out_dir, "report.json")) as f:
@@ -137,7 +142,8 @@ def fmt(x, f="%.3g"):
 
 def render(records):
     w = []
-    w.append("# Curved meshing benchmark (issue 6)\n")
+    w.append("# Curved meshing benchmark (issue 6)%s\n" % (", with `--exterior`" if args.exterior
+                                                            else ""))
     w.append("Generated %s by `%s` at commit %s, on %d cores; eps = %g of the longest bbox edge, "
              "%d threads.\n" % (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), command,
                                 subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"],
@@ -148,8 +154,10 @@ def render(records):
              "of the subdivided curved boundary, distance at every input vertex). `valid` = all "
              "hold. Dense = the input itself tetrahedralized with its boundary unchanged "
              "(tetfill_tool); ratio = dense tets / curved tets.\n")
-    w.append("| mesh | K | exit | valid | input F | boundary F | tets (slab+interior) | dense tets | "
-             "ratio | max dist | min sJ slab / interior | mean MIPS | time s (coarsen) | "
+    w.append("| mesh | K | exit | valid | input F | boundary F | tets (slab+interior%s) | dense tets | "
+             % ("+outer slab+exterior" if args.exterior else "") +
+             "ratio | max dist | min sJ slab / interior%s | mean MIPS | time s (coarsen) | "
+             % (" / outer slab / exterior" if args.exterior else "") +
              "RSS MB | load |")
     w.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     ok = 0
@@ -167,11 +175,18 @@ def render(records):
         w.append("| %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s / %s | %s | %s (%s) | %s | %.1f |" % (
             r["mesh"], r["order"], r["exit"], "yes" if valid else "NO",
             rep.get("input_faces", "–"), rep.get("output_boundary_faces", "–"),
-            "%s (%s+%s)" % (tets, rep.get("slab_tets"), rep.get("interior_tets")) if tets else "–",
-            dense or "–", fmt(dense / tets, "%.1f") if dense and tets else "–",
+            ("%s (%s+%s+%s+%s)" % (tets, rep.get("slab_tets"), rep.get("interior_tets"),
+                                   rep.get("outer_slab_tets"), rep.get("exterior_tets"))
+             if rep.get("exterior") else
+             "%s (%s+%s)" % (tets, rep.get("slab_tets"), rep.get("interior_tets"))) if tets else "–",
+            dense or "–",
+            fmt(dense / tets, "%.1f") if dense and tets and not rep.get("exterior") else "–",
             fmt(rep.get("max_distance_rel")),
             fmt(q.get("slab", {}).get("min_scaled_jacobian")),
-            fmt(q.get("interior", {}).get("min_scaled_jacobian")),
+            fmt(q.get("interior", {}).get("min_scaled_jacobian")) + (
+                " / %s / %s" % (fmt(q.get("outer_slab", {}).get("min_scaled_jacobian")),
+                                fmt(q.get("exterior", {}).get("min_scaled_jacobian")))
+                if rep.get("exterior") else ""),
             fmt(val.get("mean_mips"), "%.0f"),
             fmt(rep.get("time_s", {}).get("total"), "%.1f"),
             fmt(rep.get("time_s", {}).get("coarsen"), "%.1f"),
@@ -180,6 +195,31 @@ def render(records):
     w.append("- Valid runs: %d of %d." % (ok, len(records)))
     if times:
         w.append("- Median total time: %.1f s (goal: under 60 s)." % statistics.median(times))
+    # The 10x goal, per order; and how time grows with input size: the least-squares slope of
+    # log(time) over log(input faces) (1 = linear).
+    for k in args.orders:
+        ratios = [(r["mesh"], r["dense"]["tets"] / r["report"]["output_tets"]) for r in records
+                  if r["order"] == k and r["report"] and (r["dense"] or {}).get("tets")
+                  and r["report"].get("output_tets")]
+        if ratios:
+            met = [m for m, x in ratios if x >= 10]
+            w.append("- K = %d: tets >= 10x below the dense-linear baseline on %d of %d meshes (%s)."
+                     % (k, len(met), len(ratios), ", ".join(met) or "none"))
+        pts = [(math.log(r["report"]["input_faces"]), math.log(r["report"]["time_s"][key]))
+               for r in records if r["order"] == k and r["report"]
+               for key in ["total"] if r["report"]["time_s"].get(key, 0) > 0]
+        cpts = [(math.log(r["report"]["input_faces"]), math.log(r["report"]["time_s"]["coarsen"]))
+                for r in records if r["order"] == k and r["report"]
+                and r["report"]["time_s"].get("coarsen", 0) > 0]
+        def slope(p):
+            n = len(p)
+            mx, my = sum(a for a, _ in p) / n, sum(b for _, b in p) / n
+            sxx = sum((a - mx) ** 2 for a, _ in p)
+            return sum((a - mx) * (b - my) for a, b in p) / sxx if sxx > 0 else float("nan")
+        if len(pts) >= 3:
+            w.append("- K = %d: time ~ (input faces)^%.2f over the %d runs (least squares on "
+                     "log-log; 1 = linear); the coarsening alone (kept attempt) ^%.2f."
+                     % (k, slope(pts), len(pts), slope(cpts) if len(cpts) >= 3 else float("nan")))
     # Why coarsening stopped: the collapses the shell refused, by the first failed check.
     why_rows = []
     for r in records:
@@ -211,21 +251,31 @@ def render(records):
             continue
         refused = rep.get("curve_refused") or {}
         co = rep.get("coarsening") or {}
-        curve_rows.append("| %s | %d | %s / %s / %s | %s / %s | %s | %s | %s |" % (
+        attempts = co.get("curved_attempts")
+        if attempts is None:
+            attempts = "–"
+        elif not co.get("curved_aware"):
+            attempts = "%d (linear)" % attempts
+        elif co.get("curved_widened"):
+            attempts = "%d (widened)" % attempts
+        curve_rows.append("| %s | %d | %s / %s / %s | %s / %s | %s | %s | %s | %s |" % (
             r["mesh"], r["order"], rep.get("faces_fully_curved"), rep.get("faces_blended"),
             rep.get("faces_linear"), refused.get("certificate", "–"),
             refused.get("distance", "–"), rep.get("faces_recurved", "–"), co.get("pans", "–"),
-            co.get("splits", "–")))
+            co.get("splits", "–"), attempts))
     if curve_rows:
         w.append("\n## Curving\n")
         w.append("Boundary faces at full curving (α = 1) / blended toward the linear triangle / "
                  "linear, counted after the thicken step; the faces whose full curving was "
                  "refused on the shell's own slabs, because a slab tet was not certified positive "
                  "or an input vertex was farther than eps (`curve_refused`); the faces the deeper "
-                 "slab layer let curve again (`faces_recurved`); coarsening pans and splits.\n")
+                 "slab layer let curve again (`faces_recurved`); coarsening pans and splits; the "
+                 "curved-aware attempt kept (`coarsening.curved_attempts`; (linear) = every "
+                 "curved-aware attempt discarded, (widened) = the linear-bound set was widened "
+                 "around slabs pulled above the shell's base).\n")
         w.append("| mesh | K | curved / blended / linear | refused: certificate / distance | "
-                 "recurved | pans | splits |")
-        w.append("|---|---|---|---|---|---|---|")
+                 "recurved | pans | splits | attempt |")
+        w.append("|---|---|---|---|---|---|---|---|")
         w += curve_rows
     w.append("\n## Beside the reference implementation (bichon, P4 tets, measured here)\n")
     w.append("| mesh | bichon s | bichon tets | bichon surface tris | curvefem K=4 s | curvefem K=4 tets | "

@@ -105,18 +105,18 @@ Eigen::MatrixXd slab_tet_nodes(int k, const Eigen::Vector3d (&P)[4], const int (
   return nodes;
 }
 
-// Are the 3 bottom slab tets of a prism (rotated corners, no pinch) with its middle triangle
-// displaced by d certified positive?
-bool bottom_slab_certified(int k, const std::array<Eigen::Vector3d, 3>& base,
-                           const std::array<Eigen::Vector3d, 3>& mid, bool type_a,
-                           const std::vector<Eigen::Vector3d>& d) {
+// Are the 3 bottom (with `upper`: top) slab tets of a prism (rotated corners, no pinch) with
+// its middle triangle displaced by d certified positive? `far`: the base (top) corners.
+bool slab_certified(int k, const std::array<Eigen::Vector3d, 3>& far,
+                    const std::array<Eigen::Vector3d, 3>& mid, bool upper, bool type_a,
+                    const std::vector<Eigen::Vector3d>& d) {
   for (const auto& tet : sh::split_tets(type_a)) {
     Eigen::Vector3d P[4];
     int lv[4], on_mid[4];
     for (int j = 0; j < 4; ++j) {
       lv[j] = tet[j] % 3;
-      on_mid[j] = tet[j] >= 3;
-      P[j] = on_mid[j] ? mid[std::size_t(lv[j])] : base[std::size_t(lv[j])];
+      on_mid[j] = (tet[j] >= 3) != upper;
+      P[j] = on_mid[j] ? mid[std::size_t(lv[j])] : far[std::size_t(lv[j])];
     }
     if (certify_tet_jacobian(k, slab_tet_nodes(k, P, lv, on_mid, d)).verdict !=
         JacobianVerdict::positive)
@@ -136,7 +136,8 @@ class Builder {
         projection(shell, input),
         tri_lattice(lagrange_lattice(CellKind::triangle, order)),
         tet_lattice(lagrange_lattice(CellKind::tetrahedron, order)),
-        inner(shell.base) {
+        inner(shell.base),
+        outer(shell.top) {
     for (int f = 0; f < nf; ++f)
       for (int e = 0; e < 3; ++e) {
         const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
@@ -164,12 +165,13 @@ class Builder {
   int gid_base(int v) const { return s.singular[v] ? nv + v : v; }
   int gid_mid(int v) const { return nv + v; }
   int gid_top(int v) const { return s.singular[v] ? nv + v : 2 * nv + v; }
-  Eigen::Vector3d top(int v) const { return s.top.row(v).transpose(); }
+  Eigen::Vector3d top(int v) const { return outer.row(v).transpose(); }
   bool exterior = false;  // also the top half-prisms (outer slab layer)
   Eigen::Vector3d mid(int v) const { return s.mid.row(v).transpose(); }
   Eigen::Vector3d base(int v) const { return inner.row(v).transpose(); }
   std::vector<char> pulled_above;  // #V: inner vertex left above the shell's base by thicken()
   Eigen::MatrixXd inner;  // the inner surface of the slab layer (starts as the shell's base)
+  Eigen::MatrixXd outer;  // the outer surface of the outer slab layer (starts as the shell's top)
   Eigen::Vector3d linear_mid(int f, double u, double v) const {
     return (1 - u - v) * mid(rotated(f, 0)) + u * mid(rotated(f, 1)) + v * mid(rotated(f, 2));
   }
@@ -363,15 +365,17 @@ class Builder {
     return true;
   }
 
-  // Deepens the inner surface along the pillars: slabs as thin as the shell make needle tets.
-  // Target depth beta × mean coarse edge length at v (never shallower than the shell's base);
-  // a vertex of a face whose slabs are not certified, or of an inner triangle in a
-  // self-intersecting pair, moves halfway back to the shell's base, for a few rounds, then all the
-  // way. The shell's base is the fallback that always passes. Returns the vertices deepened.
+  // Deepens the inner surface (and, with an exterior, raises the outer one) along the pillars:
+  // slabs as thin as the shell make needle tets. Target depth beta × mean coarse edge length at v
+  // (never shallower than the shell's base / top); a vertex of a face whose slabs are not
+  // certified, or of a triangle of that surface in a self-intersecting pair, moves halfway back
+  // to the shell's base / top, for a few rounds, then all the way, then toward the middle surface
+  // (the shell's base and top are only guaranteed to be separated from the input: they can
+  // self-intersect in thin parts and near contacts). Returns the inner vertices deepened.
   int thicken(double beta, double eps) {
-    std::vector<double> base_depth(nv, 0), depth(nv, 0), length(nv, 0);
+    const int layers = exterior ? 2 : 1;
+    std::vector<double> length(nv, 0);
     std::vector<int> count(nv, 0);
-    std::vector<Eigen::Vector3d> dir(nv, Eigen::Vector3d::Zero());
     for (int f = 0; f < nf; ++f)
       for (int e = 0; e < 3; ++e) {
         const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
@@ -389,111 +393,148 @@ class Builder {
           (mid(s.F(f, 1)) - mid(s.F(f, 0))).cross(mid(s.F(f, 2)) - mid(s.F(f, 0)));
       for (int c = 0; c < 3; ++c) normal[s.F(f, c)] += n;
     }
-    for (int v = 0; v < nv; ++v) {
-      const Eigen::Vector3d p = mid(v) - Eigen::Vector3d(s.base.row(v));
-      base_depth[v] = depth[v] = p.norm();
-      if (s.singular[v] || base_depth[v] == 0) continue;
-      dir[v] = p / base_depth[v];
-      const Eigen::Vector3d n = normal[v].normalized();
-      if (n.dot(dir[v]) > 0.5) dir[v] = n;
-      depth[v] = std::max(base_depth[v], beta * length[v] / std::max(count[v], 1));
-    }
-    // Lipschitz-smooth the target depths so the inner surface has no steps: depth(v) <=
-    // depth(u) + |uv| / 2 for every edge.
-    for (int pass = 0; pass < 20; ++pass) {
-      bool changed = false;
-      for (int f = 0; f < nf; ++f)
-        for (int e = 0; e < 3; ++e) {
-          const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
-          const double l = 0.5 * (mid(a) - mid(b)).norm();
-          for (auto [x, y] : {std::pair{a, b}, std::pair{b, a}})
-            if (depth[x] > std::max(base_depth[x], depth[y] + l)) {
-              depth[x] = std::max(base_depth[x], depth[y] + l);
-              changed = true;
-            }
-        }
-      if (!changed) break;
-    }
-    std::vector<Eigen::Vector3d> pillar(nv, Eigen::Vector3d::Zero());
-    for (int v = 0; v < nv; ++v)
-      if (base_depth[v] > 0) pillar[v] = (mid(v) - Eigen::Vector3d(s.base.row(v))) / base_depth[v];
-    // Above the shell's base the inner vertex follows `dir`; at or below it, the pillar (so the
-    // slab stays a sub-prism of the shell's positive prism).
-    auto place = [&](int v) {
-      if (depth[v] == base_depth[v])
-        inner.row(v) = s.base.row(v);
-      else if (depth[v] > base_depth[v])
-        inner.row(v) = (mid(v) - depth[v] * dir[v]).transpose();
-      else
-        inner.row(v) = (mid(v) - depth[v] * pillar[v]).transpose();
+    // Per layer: 0 = the inner surface (below the middle surface, from the shell's base), 1 = the
+    // outer one (above it, from the shell's top). Depths are distances from the middle surface.
+    struct Layer {
+      Eigen::MatrixXd* surface;
+      const Eigen::MatrixXd* shell_end;
+      double side;  // -1 below the middle surface, +1 above
+      std::vector<double> shell_depth, depth;
+      std::vector<Eigen::Vector3d> dir, pillar;
     };
-    for (int v = 0; v < nv; ++v) place(v);
+    std::vector<Layer> L;
+    L.push_back({&inner, &s.base, -1.0, {}, {}, {}, {}});
+    if (exterior) L.push_back({&outer, &s.top, 1.0, {}, {}, {}, {}});
+    for (Layer& l : L) {
+      l.shell_depth.assign(nv, 0);
+      l.depth.assign(nv, 0);
+      l.dir.assign(nv, Eigen::Vector3d::Zero());
+      l.pillar.assign(nv, Eigen::Vector3d::Zero());
+      for (int v = 0; v < nv; ++v) {
+        const Eigen::Vector3d p = l.side * (Eigen::Vector3d(l.shell_end->row(v)) - mid(v));
+        l.shell_depth[v] = l.depth[v] = p.norm();
+        if (s.singular[v] || l.shell_depth[v] == 0) continue;
+        l.pillar[v] = l.dir[v] = p / l.shell_depth[v];  // pointing outward on both layers
+        const Eigen::Vector3d n = normal[v].normalized();
+        if (n.dot(l.dir[v]) > 0.5) l.dir[v] = n;
+        l.depth[v] = std::max(l.shell_depth[v], beta * length[v] / std::max(count[v], 1));
+      }
+      // Lipschitz-smooth the target depths so the surface has no steps: depth(v) <=
+      // depth(u) + |uv| / 2 for every edge.
+      for (int pass = 0; pass < 20; ++pass) {
+        bool changed = false;
+        for (int f = 0; f < nf; ++f)
+          for (int e = 0; e < 3; ++e) {
+            const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
+            const double h = 0.5 * (mid(a) - mid(b)).norm();
+            for (auto [x, y] : {std::pair{a, b}, std::pair{b, a}})
+              if (l.depth[x] > std::max(l.shell_depth[x], l.depth[y] + h)) {
+                l.depth[x] = std::max(l.shell_depth[x], l.depth[y] + h);
+                changed = true;
+              }
+          }
+        if (!changed) break;
+      }
+    }
+    // Beyond the shell's base / top the vertex follows `dir`; within it, the pillar (so the
+    // slab stays a sub-prism of the shell's positive prism).
+    auto place = [&](Layer& l, int v) {
+      if (l.depth[v] == l.shell_depth[v])
+        l.surface->row(v) = l.shell_end->row(v);
+      else if (l.depth[v] > l.shell_depth[v])
+        l.surface->row(v) = (mid(v) + l.side * l.depth[v] * l.dir[v]).transpose();
+      else
+        l.surface->row(v) = (mid(v) + l.side * l.depth[v] * l.pillar[v]).transpose();
+    };
+    for (Layer& l : L)
+      for (int v = 0; v < nv; ++v) place(l, v);
     std::vector<char> protect(nv, 0);
     if (!needs_full.empty())
       for (int f = 0; f < nf; ++f)
         if (needs_full[f])
           for (int c = 0; c < 3; ++c) protect[s.F(f, c)] = 1;
-    int round = 0;  // protection ends after 20 rounds: a clean inner surface comes first
+    int round = 0;  // protection ends after 20 rounds: a clean surface comes first
     auto is_protected = [&](int v) { return round < 20 && protect[v] != 0; };
     // Repair rounds. A face failing (slabs not certified, or ε violated after an α change)
-    // shrinks its deepened vertices back toward the base, or, if none is deeper than the base,
-    // halves its curving α. Vertices of self-intersecting or degenerate inner triangles move
-    // halfway back to the base, then below it along the pillar (the shell's base itself can
-    // self-intersect in thin parts: it is only guaranteed to be separated from the input).
+    // shrinks its vertices beyond the shell's base / top back toward it, or, if it has none,
+    // halves its curving α. Vertices of self-intersecting or degenerate triangles of a surface
+    // move halfway back to the shell's base / top, then toward the middle surface along the
+    // pillar.
+    const Eigen::MatrixXi F = s.F;
     bool clean = false;
     for (round = 0; round < 40 && !clean; ++round) {
       std::vector<char> ok(nf, 1);
       tbb::parallel_for(0, nf, [&](int f) { ok[f] = face_check(f, eps) == 0; });
-      std::vector<char> shrink(nv, 0);
-      const Eigen::MatrixXi F = s.F;
-      const std::vector<char> degenerate = check::exactly_degenerate_faces(inner, F);
-      std::vector<char> deepen(nv, 0);  // shrink below the base (self-intersection only)
+      clean = std::count(ok.begin(), ok.end(), 0) == 0;
+      std::vector<std::vector<char>> shrink(std::size_t(layers), std::vector<char>(nv, 0));
+      std::vector<std::vector<char>> deepen = shrink;  // toward the middle (intersections only)
       for (int f = 0; f < nf; ++f) {
-        if (degenerate[f])
-          for (int c = 0; c < 3; ++c) shrink[F(f, c)] = deepen[F(f, c)] = 1;
         if (ok[f]) continue;
         bool any = false;
-        for (int c = 0; c < 3; ++c)
-          if (depth[F(f, c)] > base_depth[F(f, c)]) any = shrink[F(f, c)] = 1;
+        for (int i = 0; i < layers; ++i)
+          for (int c = 0; c < 3; ++c)
+            if (L[std::size_t(i)].depth[F(f, c)] > L[std::size_t(i)].shell_depth[F(f, c)])
+              any = shrink[std::size_t(i)][F(f, c)] = 1;
         if (!any) lower_for(f);
       }
-      const auto si = check::find_self_intersections(inner, F, degenerate, true,
-                                                     check::SelfIntersectionEngine::soup);
-      // A pair moves the corners that no face needing full curving uses, if it has any (for 20
-      // rounds): such a face's slab was certified on the shell's base, and above it full
-      // curving may fail.
-      for (const auto& [f, g] : si.pairs) {
-        bool free_corner = false;
-        for (int c = 0; c < 3; ++c)
-          free_corner = free_corner || !is_protected(F(f, c)) || !is_protected(F(g, c));
-        for (int c = 0; c < 3; ++c)
-          for (int v : {F(f, c), F(g, c)})
-            if (!free_corner || !is_protected(v)) shrink[v] = deepen[v] = 1;
+      for (int i = 0; i < layers; ++i) {
+        const Eigen::MatrixXd& X = *L[std::size_t(i)].surface;
+        auto& sh = shrink[std::size_t(i)];
+        auto& dp = deepen[std::size_t(i)];
+        const std::vector<char> degenerate = check::exactly_degenerate_faces(X, F);
+        for (int f = 0; f < nf; ++f)
+          if (degenerate[f])
+            for (int c = 0; c < 3; ++c) sh[F(f, c)] = dp[F(f, c)] = 1;
+        const auto si = check::find_self_intersections(X, F, degenerate, true,
+                                                       check::SelfIntersectionEngine::soup);
+        // A pair moves the corners that no face needing full curving uses, if it has any (for
+        // 20 rounds): such a face's slab was certified on the shell's base, and beyond it full
+        // curving may fail.
+        for (const auto& [f, g] : si.pairs) {
+          bool free_corner = false;
+          for (int c = 0; c < 3; ++c)
+            free_corner = free_corner || !is_protected(F(f, c)) || !is_protected(F(g, c));
+          for (int c = 0; c < 3; ++c)
+            for (int v : {F(f, c), F(g, c)})
+              if (!free_corner || !is_protected(v)) sh[v] = dp[v] = 1;
+        }
+        clean =
+            clean && si.pairs.empty() && std::count(degenerate.begin(), degenerate.end(), 1) == 0;
       }
-      clean = std::count(ok.begin(), ok.end(), 0) == 0 && si.pairs.empty() &&
-              std::count(degenerate.begin(), degenerate.end(), 1) == 0;
-      for (int v = 0; v < nv; ++v) {
-        if (!shrink[v] || s.singular[v]) continue;
-        if (depth[v] > base_depth[v])
-          depth[v] = round < 8 ? base_depth[v] + 0.5 * (depth[v] - base_depth[v]) : base_depth[v];
-        else if (deepen[v])
-          depth[v] *= 0.5;
-        place(v);
+      for (int i = 0; i < layers; ++i) {
+        Layer& l = L[std::size_t(i)];
+        for (int v = 0; v < nv; ++v) {
+          if (!shrink[std::size_t(i)][v] || s.singular[v]) continue;
+          if (l.depth[v] > l.shell_depth[v])
+            l.depth[v] = round < 8 ? l.shell_depth[v] + 0.5 * (l.depth[v] - l.shell_depth[v])
+                                   : l.shell_depth[v];
+          else if (deepen[std::size_t(i)][v])
+            l.depth[v] *= 0.5;
+          place(l, v);
+        }
       }
     }
     if (!clean)
-      throw MeshingError(
-          "thicken: the inner surface of the slab layer could not be made free of "
-          "self-intersections with certified slabs in 40 rounds");
+      throw MeshingError(std::string("thicken: the ") + (exterior ? "inner or outer" : "inner") +
+                         " surface of the slab layer could not be made free of "
+                         "self-intersections with certified slabs in 40 rounds");
     if (recurve) raise_alpha(eps);
     int moved = 0;
     pulled_above.assign(nv, 0);
     for (int v = 0; v < nv; ++v) {
-      moved += depth[v] > base_depth[v];
-      pulled_above[v] = depth[v] < base_depth[v];
+      moved += L[0].depth[v] > L[0].shell_depth[v];
+      pulled_above[v] = L[0].depth[v] < L[0].shell_depth[v];
     }
+    outer_raised = 0;
+    outer_lowered = 0;
+    if (exterior)
+      for (int v = 0; v < nv; ++v) {
+        outer_raised += L[1].depth[v] > L[1].shell_depth[v];
+        outer_lowered += L[1].depth[v] < L[1].shell_depth[v];
+      }
     return moved;
   }
+  int outer_raised = 0, outer_lowered = 0;
 
   // Curving was decided on slabs down to the shell's base; the deeper inner surface leaves the
   // curved patch room. Each face below α = 1 tries 1, 1/2, ... down to (not including) its α,
@@ -679,9 +720,12 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     simplify_options.curved_distance = options.curved_margin * eps;
     simplify_options.strict_input_vertices = strict;
     simplify_options.strict_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
-    simplify_options.curved_slab_ok = [k = options.order](const auto& base, const auto& mid,
-                                                          bool type_a, const auto& d) {
-      return bottom_slab_certified(k, base, mid, type_a, d);
+    // With an exterior the top half-prism becomes an outer slab with the same patch.
+    simplify_options.curved_slab_ok = [k = options.order, exterior = options.exterior](
+                                          const auto& base, const auto& mid, const auto& top,
+                                          bool type_a, const auto& d) {
+      return slab_certified(k, base, mid, false, type_a, d) &&
+             (!exterior || slab_certified(k, top, mid, true, type_a, d));
     };
   }
   if (options.feature_chains && !options.feature_edges.empty()) {
@@ -811,16 +855,38 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   }
   stats.stage_seconds.emplace_back("curve", watch.seconds());
 
-  // 4. Thicken the slab layer, then fill the inside of its inner surface. Gmsh's boundary
-  // recovery can refuse an inner surface our exact check accepts (near-contacts): retry with a
-  // shallower layer, down to the repaired shell base.
+  // 4. Thicken the slab layer(s), then fill the inside of the inner surface (and, with an
+  // exterior, the region between the outer surface and a padded box, the outer surface entering
+  // reversed as the box's cavity). Gmsh's boundary recovery can refuse a surface our exact check
+  // accepts (near-contacts): retry with shallower layers, down to the repaired shell base / top.
   tetfill::TetFillOptions fill_options;
   fill_options.threads = options.threads;
-  tetfill::TetFillResult fill;
+  tetfill::TetFillResult fill, outside;
+  int box_vertices = 0;
+  auto fill_exterior = [&] {
+    const Eigen::Vector3d lo = b.outer.colwise().minCoeff().transpose();
+    const Eigen::Vector3d hi = b.outer.colwise().maxCoeff().transpose();
+    const double pad = options.exterior_padding * unit;
+    const SurfaceMesh box =
+        make_box(lo - Eigen::Vector3d::Constant(pad), hi + Eigen::Vector3d::Constant(pad), 4);
+    box_vertices = box.num_vertices();
+    Eigen::MatrixXd V(nv + box_vertices, 3);
+    V << b.outer, box.V;
+    Eigen::MatrixXi F(nf + box.num_faces(), 3);
+    for (int f = 0; f < nf; ++f) F.row(f) << shell.F(f, 0), shell.F(f, 2), shell.F(f, 1);
+    F.bottomRows(box.num_faces()) = box.F.array() + nv;
+    try {
+      outside = tetfill::fill_interior(V, F, fill_options);
+    } catch (const MeshingError& e) {
+      throw MeshingError(std::string("exterior: ") + e.what());
+    }
+  };
   double depth = std::max(options.slab_depth, 0.0);
   for (int attempt = 0;; ++attempt) {
     watch = Stopwatch();
     stats.thickened_vertices = b.thicken(depth, eps);
+    stats.outer_raised_vertices = b.outer_raised;
+    stats.outer_lowered_vertices = b.outer_lowered;
     stats.faces_recurved = b.alpha_raised;
     stats.stage_seconds.emplace_back(attempt ? "thicken (retry)" : "thicken", watch.seconds());
     watch = Stopwatch();
@@ -828,11 +894,17 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     try {
       fill = tetfill::fill_interior(b.inner, shell.F, fill_options);
       stats.stage_seconds.emplace_back("fill interior", watch.seconds());
+      if (options.exterior) {
+        watch = Stopwatch();
+        if (progress) progress("fill exterior", 0.0);
+        fill_exterior();
+        stats.stage_seconds.emplace_back("fill exterior", watch.seconds());
+      }
       break;
     } catch (const MeshingError& e) {
       if (depth == 0) throw;
-      log::warn("mesh: filling the inner surface at slab depth ", depth, " failed (", e.what(),
-                ")");
+      log::warn("mesh: filling the inner", options.exterior ? " or outer" : "",
+                " surface at slab depth ", depth, " failed (", e.what(), ")");
       depth = depth > 0.1 ? depth / 2 : 0.0;
     }
   }
@@ -907,30 +979,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   };
   flip(fill);
 
-  // 5b. Exterior: the region between the shell's top surface and a padded box, filled the same
-  // way (the top surface enters reversed, as the cavity of the box).
-  tetfill::TetFillResult outside;
-  int box_vertices = 0;
   if (options.exterior) {
-    watch = Stopwatch();
-    if (progress) progress("fill exterior", 0.0);
-    const Eigen::Vector3d lo = shell.top.colwise().minCoeff().transpose();
-    const Eigen::Vector3d hi = shell.top.colwise().maxCoeff().transpose();
-    const double pad = options.exterior_padding * unit;
-    const SurfaceMesh box =
-        make_box(lo - Eigen::Vector3d::Constant(pad), hi + Eigen::Vector3d::Constant(pad), 4);
-    box_vertices = box.num_vertices();
-    Eigen::MatrixXd V(nv + box_vertices, 3);
-    V << shell.top, box.V;
-    Eigen::MatrixXi F(nf + box.num_faces(), 3);
-    for (int f = 0; f < nf; ++f) F.row(f) << shell.F(f, 0), shell.F(f, 2), shell.F(f, 1);
-    F.bottomRows(box.num_faces()) = box.F.array() + nv;
-    try {
-      outside = tetfill::fill_interior(V, F, fill_options);
-    } catch (const MeshingError& e) {
-      throw MeshingError(std::string("exterior: ") + e.what());
-    }
-    stats.stage_seconds.emplace_back("fill exterior", watch.seconds());
     flip(outside);
     stats.exterior_tets = int(outside.T.rows());
   }

@@ -148,6 +148,9 @@ struct CurvedMeshStats {
   int slab_tets = 0, interior_tets = 0, nodes = 0;
   int outer_slab_tets = 0, exterior_tets = 0;  // --exterior
   int thickened_vertices = 0;
+  // Exterior: outer surface vertices raised beyond the shell's top, and pulled below it (toward
+  // the middle surface) to clear self-intersections of the shell's top.
+  int outer_raised_vertices = 0, outer_lowered_vertices = 0;
   double linear_max_distance_rel = 0;
   // Curved-aware coarsening: in effect for the kept attempt, its number (1 = first), and the
   // input vertices kept under the linear bound after the discarded ones; curved_widened: that

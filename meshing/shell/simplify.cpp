@@ -243,10 +243,11 @@ class ShellMesh : public TriMesh {
     const Cell& c = cell(f);
     const bool type_a = is_type_a(Eigen::Vector3i{int(c[0]), int(c[1]), int(c[2])});
     const std::array<Id, 3> v = rotated_corners(f);
-    std::array<Eigen::Vector3d, 3> b, mc;
+    std::array<Eigen::Vector3d, 3> b, mc, t;
     for (int k = 0; k < 3; ++k) {
       b[k] = base[v[k]];
       mc[k] = mid[v[k]];
+      t[k] = top[v[k]];
     }
     std::vector<Eigen::Vector3d> d(node.size(), Eigen::Vector3d::Zero());
     for (std::size_t n = 0; n < node.size(); ++n)
@@ -254,7 +255,7 @@ class ShellMesh : public TriMesh {
         d[n] = node[n] - (double(lattice[n][0]) * mc[0] + double(lattice[n][1]) * mc[1] +
                           double(lattice[n][2]) * mc[2]) /
                              double(curved_order);
-    return (*curved_slab_ok)(b, mc, type_a, d);
+    return (*curved_slab_ok)(b, mc, t, type_a, d);
   }
   // f's slab with the edges it shares with needed faces curved (need_of: neededness by face).
   bool fallback_slab_ok(Id f, const std::function<bool(Id)>& need_of) const {

@@ -85,9 +85,11 @@ struct SimplifyOptions {
   // Optional, with curved_order: is the bottom half-prism of such a face, with corners base and
   // mid (rotated to the smallest id; canonical split of type_a) and its middle triangle displaced
   // by d (node − linear point per triangle lattice node, canonical order), a valid curved slab?
+  // `top` (the same corners' tops) is for callers that also use the top half-prism (an exterior).
   // The curved mesher certifies its slab tets (the coarsening cannot see curved elements).
   std::function<bool(const std::array<Eigen::Vector3d, 3>& base,
-                     const std::array<Eigen::Vector3d, 3>& mid, bool type_a,
+                     const std::array<Eigen::Vector3d, 3>& mid,
+                     const std::array<Eigen::Vector3d, 3>& top, bool type_a,
                      const std::vector<Eigen::Vector3d>& d)>
       curved_slab_ok;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length

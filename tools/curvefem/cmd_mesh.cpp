@@ -315,6 +315,8 @@ void register_mesh(CLI::App& app) {
         {"exterior_padding_rel",
          args->exterior ? nlohmann::ordered_json(args->padding) : nlohmann::ordered_json(nullptr)},
         {"outer_slab_tets", stats.outer_slab_tets},
+        {"outer_raised_vertices", stats.outer_raised_vertices},
+        {"outer_lowered_vertices", stats.outer_lowered_vertices},
         {"exterior_tets", stats.exterior_tets},
         {"output_nodes", result.mesh.num_nodes()},
         {"output_boundary_faces", result.map.boundary.num_cells()},

@@ -240,6 +240,30 @@ TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
   }
 }
 
+// The outer slab layer is thickened like the inner one and repaired the same way: on a torus
+// with a narrow hole (radius 0.08), K = 2, the coarse shell's tops cross near the hole and the
+// repair pulls those outer vertices toward the middle surface (measured: 6), while elsewhere the
+// outer surface is raised beyond the shell's top. The exterior fill sees the repaired outer
+// surface; the validator checks the whole mesh. (The real meshes where the shell's own tops made
+// Gmsh's boundary recovery fail are in test_curved_data.cpp.)
+TEST(CurvedMesher, ExteriorThickensAndRepairsTheOuterSurface) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.92, 48, 24);
+  cv::CurvedMeshOptions o;
+  o.order = 2;
+  o.exterior = true;
+  cv::CurvedMeshStats stats;
+  const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
+  const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+  std::printf("narrow torus: %d faces, outer surface %d raised, %d lowered, %d exterior tets\n",
+              stats.coarse_faces, stats.outer_raised_vertices, stats.outer_lowered_vertices,
+              stats.exterior_tets);
+  EXPECT_TRUE(check.valid(1e-2));
+  EXPECT_EQ(check.exterior_faces_off_box, 0);
+  EXPECT_GT(stats.outer_lowered_vertices, 0) << "the shell's tops cross near the hole";
+  EXPECT_GT(stats.outer_raised_vertices, 0) << "the outer slab layer is thickened elsewhere";
+  EXPECT_GT(check.quality_by_tag.at(3).min_scaled_jacobian, 0.0);
+}
+
 TEST(CurvedMesher, BevelsACraterAndKeepsTheMapOnTheInput) {
   // The crater of tests/meshing/shell/test_shell_bevel.cpp: its own shell is no section (a
   // pinched rim edge), so the mesher bevels 10 of its 14 faces first. The boundary map and the
