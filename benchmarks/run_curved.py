@@ -199,7 +199,8 @@ def render(records):
     # log(time) over log(input faces) (1 = linear).
     for k in args.orders:
         ratios = [(r["mesh"], r["dense"]["tets"] / r["report"]["output_tets"]) for r in records
-                  if r["order"] == k and r["report"] and (r["dense"] or {}).get("tets")
+                  if r["order"] == k and r["report"] and not r["report"].get("exterior")
+                  and (r["dense"] or {}).get("tets")
                   and r["report"].get("output_tets")]
         if ratios:
             met = [m for m, x in ratios if x >= 10]
