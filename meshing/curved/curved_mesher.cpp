@@ -802,6 +802,12 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.fiber_misses = b.fiber_misses;
   const int nf = b.nf, nv = b.nv;
   b.alpha.assign(nf, 1.0);
+  auto bottom_certified = [&](int f) {
+    for (const auto& t : b.slab_tets(f, b.node_displacements(f), false))
+      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
+    return true;
+  };
+  std::vector<int> deferred_top;  // linear faces whose outer slab only thicken() can certify
   std::vector<int> work(nf);
   for (int f = 0; f < nf; ++f) work[f] = f;
   while (!work.empty()) {
@@ -824,6 +830,13 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
         for (int g : lowered)
           for (int h : b.across(g)) next.push_back(h);
         if (!lowered.empty()) continue;
+      }
+      if (b.alpha[f] == 0 && b.exterior && bottom_certified(f)) {
+        // Only the outer slab fails on the linear patch (the shell's top can leave a half-prism
+        // too thin for the floating-point certificate): thicken() raises the outer surface and
+        // re-certifies every face, so the face is left to it.
+        deferred_top.push_back(f);
+        continue;
       }
       if (b.alpha[f] == 0) {
         std::string detail;
@@ -853,6 +866,9 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     work = std::move(next);
     if (progress) progress("curve: certify", 1.0 - double(work.size()) / nf);
   }
+  std::sort(deferred_top.begin(), deferred_top.end());
+  stats.curve_deferred_outer =
+      int(std::unique(deferred_top.begin(), deferred_top.end()) - deferred_top.begin());
   stats.stage_seconds.emplace_back("curve", watch.seconds());
 
   // 4. Thicken the slab layer(s), then fill the inside of the inner surface (and, with an

@@ -140,6 +140,9 @@ struct CurvedMeshStats {
   // Faces whose fully curved patch (first curving round) was refused: slab tets not certified
   // positive, or an input vertex farther than eps from the patch (why faces end blended).
   int curve_refused_certificate = 0, curve_refused_distance = 0;
+  // Exterior: linear faces whose outer slab (the shell's top) was not certified, left to the
+  // outer surface's thickening, which certifies every face or fails.
+  int curve_deferred_outer = 0;
   // Faces whose α rose again once the slab layer was deepened (the counts above are final).
   int faces_recurved = 0;
   int distance_points = 0;  // constraint points + samples (besides the input vertices)

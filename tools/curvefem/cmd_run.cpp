@@ -367,7 +367,8 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     p.report["faces_blended"] = stats.faces_blended;
     p.report["faces_linear"] = stats.faces_linear;
     p.report["curve_refused"] = {{"certificate", stats.curve_refused_certificate},
-                                 {"distance", stats.curve_refused_distance}};
+                                 {"distance", stats.curve_refused_distance},
+                                 {"deferred_outer", stats.curve_deferred_outer}};
     p.report["faces_recurved"] = stats.faces_recurved;
     p.report["fiber_misses"] = stats.fiber_misses;
     p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
