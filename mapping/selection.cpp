@@ -9,16 +9,20 @@
 namespace curvefem::mapping {
 
 bool selects(const Selection& s, const SelectionSite& site) {
+  const bool on_box = site.box_side >= 0;
   switch (s.kind) {
+    case Selection::Kind::outer_box:
+      return on_box && (s.box_side < 0 || s.box_side == site.box_side);
     case Selection::Kind::all:
-      return true;
+      return !on_box;
     case Selection::Kind::tag:
-      return site.tag == s.tag;
+      return !on_box && site.tag == s.tag;
     case Selection::Kind::box:
       return (site.x.array() >= s.lo.array()).all() && (site.x.array() <= s.hi.array()).all();
     case Selection::Kind::plane:
       return (site.x - s.point).dot(s.direction) >= 0;
     case Selection::Kind::normal: {
+      if (on_box) return false;
       const double c = std::cos(s.angle_deg * std::numbers::pi / 180.0);
       return site.normal.dot(s.direction) >= c * s.direction.norm() - 1e-12;
     }
@@ -36,6 +40,32 @@ bool selects(const Selection& s, const SelectionSite& site) {
       return true;
   }
   return false;
+}
+
+bool selects_point(const Selection& s, const SelectionSite& site) {
+  if (site.box_side >= 0 && !uses_outer_box(s)) return false;
+  return selects(s, site);
+}
+
+bool uses_outer_box(const Selection& s) {
+  if (s.kind == Selection::Kind::outer_box) return true;
+  for (const auto& c : s.children)
+    if (uses_outer_box(c)) return true;
+  return false;
+}
+
+const char* box_side_name(int side) {
+  static const char* names[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
+  return side >= 0 && side < 6 ? names[side] : "all";
+}
+
+int box_side_of(const Eigen::Vector3d& x, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                double tol) {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(x[axis] - lo[axis]) <= tol) return 2 * axis;
+    if (std::abs(x[axis] - hi[axis]) <= tol) return 2 * axis + 1;
+  }
+  return -1;
 }
 
 Eigen::Vector3d face_normal(const SurfaceMesh& input, int f) {

@@ -880,11 +880,16 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   tetfill::TetFillResult fill, outside;
   int box_vertices = 0;
   auto fill_exterior = [&] {
-    const Eigen::Vector3d lo = b.outer.colwise().minCoeff().transpose();
-    const Eigen::Vector3d hi = b.outer.colwise().maxCoeff().transpose();
+    // The input's bounding box padded by pad on every side (where a case expects it), pushed
+    // out where the outer surface comes closer to it than pad / 4.
     const double pad = options.exterior_padding * unit;
-    const SurfaceMesh box =
-        make_box(lo - Eigen::Vector3d::Constant(pad), hi + Eigen::Vector3d::Constant(pad), 4);
+    const Eigen::Vector3d lo = (input.V.colwise().minCoeff().array() - pad)
+                                   .min(b.outer.colwise().minCoeff().array() - pad / 4)
+                                   .transpose();
+    const Eigen::Vector3d hi = (input.V.colwise().maxCoeff().array() + pad)
+                                   .max(b.outer.colwise().maxCoeff().array() + pad / 4)
+                                   .transpose();
+    const SurfaceMesh box = make_box(lo, hi, 4);
     box_vertices = box.num_vertices();
     Eigen::MatrixXd V(nv + box_vertices, 3);
     V << b.outer, box.V;

@@ -110,9 +110,10 @@ struct CurvedMeshOptions {
   // Vertex smoothing of the slab layer's inner surface and of the interior under certified
   // positivity, boundary frozen (optimize.hpp); 0 sweeps: off.
   OptimizeOptions optimize;
-  // Also mesh the region between the curved surface and a box padded by exterior_padding × the
-  // longest bbox edge (cell tags 3: outer slab layer, 4: the rest); the curved surface becomes an
-  // interface whose nodes are shared by both sides.
+  // Also mesh the region between the curved surface and a box (cell tags 3: outer slab layer, 4:
+  // the rest); the curved surface becomes an interface whose nodes are shared by both sides. The
+  // box is the input's bounding box padded by exterior_padding × its longest edge, pushed out
+  // where the outer slab surface comes closer to it than a quarter of that.
   bool exterior = false;
   double exterior_padding = 0.25;
 };

@@ -121,6 +121,64 @@ TEST(Selection, KindsAndCombinationsArePointwise) {
   EXPECT_FALSE(uses_face_data(plane));
 }
 
+TEST(Selection, OuterBoxPointsAreSelectedOnlyThroughOuterBox) {
+  const Eigen::Vector3d lo(-2, -2, -2), hi(2, 2, 2);
+  const double tol = 1e-9;
+  EXPECT_EQ(box_side_of({-2, 0.3, 0.1}, lo, hi, tol), 0);
+  EXPECT_EQ(box_side_of({2 - 1e-12, 0.3, 0.1}, lo, hi, tol), 1);
+  EXPECT_EQ(box_side_of({0.5, 0.3, 2}, lo, hi, tol), 5);
+  EXPECT_EQ(box_side_of({0.5, 0.3, 1.9}, lo, hi, tol), -1);
+  EXPECT_EQ(box_side_of({-2, -2, 0}, lo, hi, tol), 0);  // an edge: the first side in index order
+
+  Selection any_side{.kind = Selection::Kind::outer_box};
+  Selection zmax{.kind = Selection::Kind::outer_box, .box_side = 5};
+  Selection all{.kind = Selection::Kind::all};
+  Selection tag{.kind = Selection::Kind::tag, .tag = 0};
+  Selection cone{.kind = Selection::Kind::normal};
+  cone.direction = {0, 0, 1};
+  cone.angle_deg = 180;  // every normal
+  Selection right{.kind = Selection::Kind::plane};
+  right.direction = {1, 0, 0};  // x >= 0
+  Selection right_of_box{.kind = Selection::Kind::all_of, .children = {any_side, right}};
+  Selection not_tag{.kind = Selection::Kind::none_of, .children = {tag}};
+
+  SelectionSite top;  // a point of the box's z max side, x > 0
+  top.x = {1, 0, 2};
+  top.box_side = 5;
+  SelectionSite left = top;  // of the x min side
+  left.x = {-2, 0, 0};
+  left.box_side = 0;
+  SelectionSite input;  // a point of the input surface with tag 0
+  input.x = {1, 0, 0};
+  input.tag = 0;
+  input.normal = {1, 0, 0};
+
+  EXPECT_TRUE(selects_point(any_side, top));
+  EXPECT_TRUE(selects_point(any_side, left));
+  EXPECT_FALSE(selects_point(any_side, input));
+  EXPECT_TRUE(selects_point(zmax, top));
+  EXPECT_FALSE(selects_point(zmax, left));
+  // The input-surface kinds never reach the box, on their own or under not / or.
+  for (const Selection* s : {&all, &tag, &cone, &right, &not_tag}) {
+    EXPECT_FALSE(selects_point(*s, top));
+    EXPECT_FALSE(selects_point(*s, left));
+  }
+  EXPECT_TRUE(selects_point(all, input));
+  EXPECT_TRUE(selects_point(tag, input));
+  EXPECT_TRUE(selects_point(cone, input));
+  EXPECT_FALSE(selects_point(not_tag, input));
+  // Once outer_box is in the tree, box and plane are tested at the box point.
+  EXPECT_TRUE(selects_point(right_of_box, top));
+  EXPECT_FALSE(selects_point(right_of_box, left));
+  EXPECT_FALSE(selects_point(right_of_box, input));
+  Selection box_or_not_tag{.kind = Selection::Kind::any_of, .children = {zmax, not_tag}};
+  EXPECT_TRUE(selects_point(box_or_not_tag, left));  // not tag: no tag on the box
+  EXPECT_TRUE(uses_outer_box(box_or_not_tag));
+  EXPECT_FALSE(uses_outer_box(not_tag));
+  EXPECT_STREQ(box_side_name(3), "ymax");
+  EXPECT_STREQ(box_side_name(-1), "all");
+}
+
 TEST(SurfaceTransfer, LinearFieldIsExactAtEveryInputVertexOfTheDenseBaseline) {
   // Dense pipeline on the unit cube: volume nodes first = input vertices, φ = identity.
   const LagrangeMesh mesh = make_cube_tets(2);

@@ -52,7 +52,8 @@ std::string poisson_case(const std::string& meshing) {
 })JSON";
 }
 
-void expect_surface_output(const std::filesystem::path& out, int input_vertices) {
+void expect_surface_output(const std::filesystem::path& out, int input_vertices,
+                           const std::string& bc_field = "bc1_neumann") {
   ASSERT_TRUE(std::filesystem::exists(out / "surface.vtu"));
   ASSERT_TRUE(std::filesystem::exists(out / "volume.vtu"));
   ASSERT_TRUE(std::filesystem::exists(out / "result.pvd"));
@@ -68,7 +69,7 @@ void expect_surface_output(const std::filesystem::path& out, int input_vertices)
     }
     has_error |= f.name == "error";
   }
-  for (const auto& f : surface.fields.cell_data) has_bc |= f.name == "bc1_neumann";
+  for (const auto& f : surface.fields.cell_data) has_bc |= f.name == bc_field;
   EXPECT_TRUE(has_u);
   EXPECT_TRUE(has_error);
   EXPECT_TRUE(has_bc);
@@ -190,6 +191,15 @@ TEST(RunSurface, BrokenCasesExitTwoNameTheJsonPathAndLeaveNothing) {
        "/geometry/builtin_surface/R: not a parameter of the sphere"},
       {R"("geometry": {"surface": "sphere.obj"}, "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x+"}])",
        "/boundary_conditions/0/value: bad expression"},
+      {R"("geometry": {"surface": "sphere.obj"}, "meshing": {"method": "dense"},
+         "boundary_conditions": [{"type": "dirichlet", "select": {"not": {"outer_box": "all"}}, "value": 0}])",
+       "/boundary_conditions/0/select: outer_box needs meshing.exterior: true"},
+      {R"("geometry": {"surface": "sphere.obj"}, "meshing": {"method": "dense", "exterior": true},
+         "boundary_conditions": [{"type": "dirichlet", "select": {"outer_box": "top"}, "value": 0}])",
+       "/boundary_conditions/0/select/outer_box: 'top': expected all, xmin"},
+      {R"("geometry": {"surface": "sphere.obj"}, "meshing": {"method": "dense", "padding": 0.5}, )" +
+           dirichlet,
+       "/meshing/padding: only with \"exterior\": true"},
   };
   for (const auto& c : cases) {
     const auto file = write_case(dir, "case.json", "{" + c.body + "}");
@@ -211,4 +221,100 @@ TEST(RunSurface, ShippedCurvedCaseRuns) {
   const auto r = read_json(dir / "out" / "report.json");
   EXPECT_EQ(r["method"], "curved");
   EXPECT_LT(r["surface_l2_error"].get<double>(), 5e-2);
+}
+
+namespace {
+// Exterior Poisson around the unit sphere, out to the box padded by 0.25 × 2: u = 1/r is harmonic
+// there. Dirichlet on the outer box (outer_box) and on the sphere below z = 0.2; on the cap above
+// it a Neumann flux with the *exterior* domain's outward normal, −r̂: ∂u/∂n = −∂u/∂r = 1/r².
+std::string exterior_case(const std::string& meshing, int degree) {
+  return R"JSON({
+  "geometry": {"surface": "sphere.obj"},
+  "meshing": )JSON" +
+         meshing + R"JSON(,
+  "physics": {"type": "poisson"},
+  "discretization": {"degree": )JSON" +
+         std::to_string(degree) + R"JSON(},
+  "boundary_conditions": [
+    {"type": "dirichlet", "select": {"outer_box": "all"}, "value": "1/sqrt(x*x+y*y+z*z)"},
+    {"type": "dirichlet", "select": {"not": {"plane": {"point": [0, 0, 0.2], "normal": [0, 0, 1]}}},
+     "value": "1/sqrt(x*x+y*y+z*z)"},
+    {"type": "neumann", "select": {"plane": {"point": [0, 0, 0.2], "normal": [0, 0, 1]}},
+     "value": "1/(x*x+y*y+z*z)"}
+  ],
+  "exact": "1/sqrt(x*x+y*y+z*z)"
+})JSON";
+}
+}  // namespace
+
+TEST(RunSurface, CurvedExteriorPoissonAroundSphereMatchesOneOverR) {
+  const auto dir = test::scratch_dir("run_surface_exterior");
+  const SurfaceMesh sphere = make_icosphere(3);
+  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  const auto file = write_case(
+      dir, "case.json",
+      exterior_case(R"({"method": "curved", "order": 2, "eps": 0.01, "exterior": true})", 2));
+  std::string log;
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  const auto r = read_json(dir / "out" / "report.json");
+  ASSERT_TRUE(r["meshing"].contains("exterior")) << r.dump(1);
+  // The domain is the outer slab layer and the exterior only (tags 3, 4).
+  EXPECT_EQ(r["tets"],
+            r["meshing"]["outer_slab_tets"].get<int>() + r["meshing"]["exterior_tets"].get<int>());
+  EXPECT_TRUE(r["mesh_valid"].get<bool>());
+  // The box is the sphere's bounding box padded by 0.25 × its longest edge (2): the outer slab
+  // surface stays more than 0.125 inside it.
+  const auto box = r["meshing"]["exterior"]["box"];
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_DOUBLE_EQ(box[0][a].get<double>(), -1.5);
+    EXPECT_DOUBLE_EQ(box[1][a].get<double>(), 1.5);
+  }
+  // Measured (140 coarse faces, 908 tets, 1,556 DOFs): l2 2.0e-2 (0.6% of |u|), surface l2
+  // 4.5e-2, surface max 6.7e-2 (u = 1 on the sphere; ε = 0.02 with |∇u| = 1 there, plus the
+  // point-wise Dirichlet/Neumann interface at z = 0.2). The same run with the flux's sign flipped
+  // (the interior's normal) gives l2 0.74 and surface max 0.79; k = p = 3: l2 6.4e-3.
+  EXPECT_LT(r["l2_error"].get<double>(), 4e-2);
+  EXPECT_LT(r["surface_l2_error"].get<double>(), 9e-2);
+  EXPECT_LT(r["surface_max_error"].get<double>(), 0.12);
+  EXPECT_EQ(r["surface_unmapped_vertices"], 0);
+  expect_surface_output(dir / "out", sphere.num_vertices(), "bc2_neumann");
+}
+
+TEST(RunSurface, DenseExteriorPoissonAroundSphereMatchesOneOverR) {
+  const auto dir = test::scratch_dir("run_surface_exterior_dense");
+  const SurfaceMesh sphere = make_icosphere(2);
+  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  const auto file =
+      write_case(dir, "case.json", exterior_case(R"({"method": "dense", "exterior": true})", 1));
+  std::string log;
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  const auto r = read_json(dir / "out" / "report.json");
+  const auto box = r["meshing"]["exterior"]["box"];
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_DOUBLE_EQ(box[0][a].get<double>(), -1.5);
+    EXPECT_DOUBLE_EQ(box[1][a].get<double>(), 1.5);
+  }
+  // P1 on 1,100 tets, 316 nodes. Measured: l2 6.4e-2, surface l2 8.1e-2, surface max 5.0e-2.
+  EXPECT_LT(r["l2_error"].get<double>(), 0.12);
+  EXPECT_LT(r["surface_max_error"].get<double>(), 0.1);
+  EXPECT_EQ(r["surface_unmapped_vertices"], 0);
+  expect_surface_output(dir / "out", sphere.num_vertices(), "bc2_neumann");
+}
+
+// The shipped exterior case: potential flow past the unit sphere, u = x (1 + 1/(2r³)), Dirichlet
+// on the box [-3, 3]³ and zero flux on the sphere (exact there). Measured: 126 coarse faces,
+// 1,135 tets (outer slab + exterior), 5,847 DOFs at k = p = 3: l2 6.2e-3, surface max 8.7e-3.
+TEST(RunSurface, ShippedPotentialFlowExteriorCaseRuns) {
+  const auto dir = test::scratch_dir("run_surface_potential_flow");
+  std::string log;
+  ASSERT_EQ(
+      run_case(test::source_dir() / "cases/potential_flow_sphere_exterior.json", dir / "out", &log),
+      0)
+      << log;
+  const auto r = read_json(dir / "out" / "report.json");
+  const auto box = r["meshing"]["exterior"]["box"];
+  EXPECT_DOUBLE_EQ(box[0][0].get<double>(), -3.0);
+  EXPECT_DOUBLE_EQ(box[1][2].get<double>(), 3.0);
+  EXPECT_LT(r["l2_error"].get<double>(), 1.5e-2);
+  EXPECT_LT(r["surface_max_error"].get<double>(), 2e-2);
 }

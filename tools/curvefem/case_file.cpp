@@ -91,8 +91,8 @@ Eigen::Vector3d nonzero_vector(const Reader& r, const json& j, const std::string
 }
 
 Selection read_selection(const Reader& r, const json& j, const std::string& path) {
-  const char* k_kinds = "all, tag, box, plane, normal, and, or, not";
-  r.only_keys(j, path, {"all", "tag", "box", "plane", "normal", "and", "or", "not"});
+  const char* k_kinds = "all, tag, box, plane, normal, and, or, not, outer_box";
+  r.only_keys(j, path, {"all", "tag", "box", "plane", "normal", "and", "or", "not", "outer_box"});
   if (j.size() != 1) fail(path, std::string("a selection has exactly one of: ") + k_kinds, r.file);
   Selection s;
   s.where = path;
@@ -130,6 +130,15 @@ Selection read_selection(const Reader& r, const json& j, const std::string& path
     if (const json* a = r.get(*v, "angle")) s.angle_deg = r.number(*a, p + "/angle");
     if (!(s.angle_deg >= 0 && s.angle_deg <= 180))
       fail(p + "/angle", "must be in [0, 180]", r.file);
+  } else if (const json* v = r.get(j, "outer_box")) {
+    s.kind = Selection::Kind::outer_box;
+    const std::string side = r.string(*v, path + "/outer_box");
+    s.box_side = -2;
+    for (int i = -1; i < 6; ++i)
+      if (side == mapping::box_side_name(i)) s.box_side = i;
+    if (s.box_side == -2)
+      fail(path + "/outer_box",
+           "'" + side + "': expected all, xmin, xmax, ymin, ymax, zmin or zmax", r.file);
   } else if (const json* v = r.get(j, "not")) {
     s.kind = Selection::Kind::none_of;
     s.children.push_back(read_selection(r, *v, path + "/not"));
@@ -159,6 +168,8 @@ json selection_json(const Selection& s) {
       return {{"plane", {{"point", vec(s.point)}, {"normal", vec(s.direction)}}}};
     case Selection::Kind::normal:
       return {{"normal", {{"direction", vec(s.direction)}, {"angle", s.angle_deg}}}};
+    case Selection::Kind::outer_box:
+      return {{"outer_box", mapping::box_side_name(s.box_side)}};
     case Selection::Kind::none_of:
       return {{"not", selection_json(s.children.at(0))}};
     case Selection::Kind::all_of:
@@ -302,7 +313,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (const json* m = r.get(j, "meshing")) {
     r.only_keys(*m, "/meshing",
                 {"method", "order", "eps", "thickness", "thickness_per_edge", "eps_samples",
-                 "feature_chains", "curved_coarsening", "validate", "deterministic"});
+                 "feature_chains", "curved_coarsening", "validate", "deterministic", "exterior",
+                 "padding"});
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
     if (c.method != "given" && c.method != "curved" && c.method != "dense")
       fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
@@ -353,6 +365,18 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*m, "deterministic")) {
       if (!v->is_boolean()) fail("/meshing/deterministic", "expected true/false", r.file);
       c.deterministic = v->get<bool>();
+    }
+    if (const json* v = r.get(*m, "exterior")) {
+      if (!v->is_boolean()) fail("/meshing/exterior", "expected true/false", r.file);
+      c.exterior = v->get<bool>();
+      if (c.exterior && !dense_input)
+        fail("/meshing/exterior", "takes a dense surface (method curved or dense)", r.file);
+    }
+    if (const json* v = r.get(*m, "padding")) {
+      if (!c.exterior) fail("/meshing/padding", "only with \"exterior\": true", r.file);
+      c.padding = r.number(*v, "/meshing/padding");
+      if (!(c.padding > 0 && c.padding <= 10))
+        fail("/meshing/padding", "must be in (0, 10] (relative to the longest bbox edge)", r.file);
     }
   }
 
@@ -445,6 +469,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       const json* select = r.get(b, "select");
       if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
       bc.select = read_selection(r, *select, p + "/select");
+      if (!c.exterior && mapping::uses_outer_box(bc.select))
+        fail(p + "/select", "outer_box needs meshing.exterior: true", r.file);
       if (!c.dense_surface()) {
         const auto k = bc.select.kind;
         if (k != Selection::Kind::all && k != Selection::Kind::tag && k != Selection::Kind::box &&
@@ -543,6 +569,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     res["meshing"]["curved_coarsening"] = c.curved_coarsening;
     res["meshing"]["validate"] = c.validate;
     res["meshing"]["deterministic"] = c.deterministic;
+  }
+  if (c.dense_surface()) {
+    res["meshing"]["exterior"] = c.exterior;
+    if (c.exterior) res["meshing"]["padding"] = c.padding;
   }
   res["physics"] = {{"type", c.physics}};
   if (c.physics == "poisson")

@@ -55,6 +55,10 @@ struct CaseSpec {
   int eps_samples = 0;   ///< curved: ε also at the degree-L lattice points of every input face
   bool validate = true;  ///< curved: independent validation of the mesh (report.json)
   bool deterministic = true;  ///< curved: single-threaded coarsening, bit-identical output
+  /// curved | dense: solve outside the surface, out to its bounding box padded by `padding` ×
+  /// the longest bbox edge (the inside is not part of the domain).
+  bool exterior = false;
+  double padding = 0.25;
   bool dense_surface() const { return method == "curved" || method == "dense"; }
   std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
   Expression kappa;                 ///< poisson

@@ -260,11 +260,75 @@ void check_selection_on_input(const Selection& s, const SurfaceMesh& input,
                    {.file = file});
 }
 
+/// The mesh of a dense-surface pipeline and what maps between it and the input.
+struct SurfacePipeline {
+  SurfaceMesh input;
+  std::optional<cv::CurvedMesh> curved;  // method curved
+  BoundaryMap identity_map;              // method dense
+  std::optional<mapping::BoundaryInverse> inverse;
+  json report;
+  bool valid = true;
+  const BoundaryMap& map() const { return curved ? curved->map : identity_map; }
+  // Exterior runs: the outer box (the mesh's bounding box) and the tolerance of a point on it.
+  bool exterior = false;
+  Eigen::Vector3d box_lo = Eigen::Vector3d::Zero(), box_hi = Eigen::Vector3d::Zero();
+  double box_tol = 0;
+  /// The side of the outer box x lies on, or -1 (always -1 without an exterior).
+  int box_side(const Eigen::Vector3d& x) const {
+    return exterior ? mapping::box_side_of(x, box_lo, box_hi, box_tol) : -1;
+  }
+};
+
+/// The cells of `mesh` tagged in `tags`, with the nodes they use (renumbered in order);
+/// `old_to_new` gets, for every node of `mesh`, its new id or -1.
+LagrangeMesh extract_cells(const LagrangeMesh& mesh, std::initializer_list<int> tags,
+                           std::vector<int>& old_to_new) {
+  CF_VERIFY(mesh.cell_tags.size() == mesh.num_cells(), "extract_cells: the mesh has no cell tags");
+  std::vector<int> kept;
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    if (std::find(tags.begin(), tags.end(), mesh.cell_tags[c]) != tags.end()) kept.push_back(c);
+  old_to_new.assign(std::size_t(mesh.num_nodes()), -1);
+  int n = 0;
+  for (int c : kept)
+    for (int j = 0; j < mesh.cells.cols(); ++j)
+      if (old_to_new[std::size_t(mesh.cells(c, j))] < 0)
+        old_to_new[std::size_t(mesh.cells(c, j))] = n++;
+  LagrangeMesh out;
+  out.kind = mesh.kind;
+  out.order = mesh.order;
+  out.nodes.resize(n, 3);
+  for (int v = 0; v < mesh.num_nodes(); ++v)
+    if (old_to_new[std::size_t(v)] >= 0)
+      out.nodes.row(old_to_new[std::size_t(v)]) = mesh.nodes.row(v);
+  out.cells.resize(Eigen::Index(kept.size()), mesh.cells.cols());
+  out.cell_tags.resize(Eigen::Index(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    for (int j = 0; j < mesh.cells.cols(); ++j)
+      out.cells(Eigen::Index(i), j) = old_to_new[std::size_t(mesh.cells(kept[i], j))];
+    out.cell_tags[Eigen::Index(i)] = mesh.cell_tags[kept[i]];
+  }
+  return out;
+}
+
+/// Sets the outer box of an exterior run from the mesh's bounding box.
+void set_outer_box(SurfacePipeline& p, const LagrangeMesh& mesh, double padding) {
+  p.exterior = true;
+  p.box_lo = mesh.nodes.colwise().minCoeff().transpose();
+  p.box_hi = mesh.nodes.colwise().maxCoeff().transpose();
+  p.box_tol = 1e-9 * (p.box_hi - p.box_lo).norm();
+  p.report["exterior"] = {
+      {"padding", padding},
+      {"box", {{p.box_lo[0], p.box_lo[1], p.box_lo[2]}, {p.box_hi[0], p.box_hi[1], p.box_hi[2]}}},
+      {"tets", mesh.num_cells()}};
+}
+
 /// Selection and value of a boundary condition at φ⁻¹(x) on the dense input. All boundary faces
 /// are flagged; the point filter does the selecting, point-wise on the input.
-Selected select_on_input(const BoundaryConditionSpec& bc, const SurfaceMesh& input,
-                         const mapping::BoundaryInverse& inverse, const LagrangeMesh& mesh,
-                         const fem::FunctionSpace& space, const std::string& file) {
+Selected select_on_input(const BoundaryConditionSpec& bc, const SurfacePipeline& p,
+                         const LagrangeMesh& mesh, const fem::FunctionSpace& space,
+                         const std::string& file) {
+  const SurfaceMesh& input = p.input;
+  const mapping::BoundaryInverse& inverse = *p.inverse;
   Selected out;
   out.faces.assign(space.boundary_faces.size(), 1);
   const Selection s = bc.select;
@@ -302,6 +366,17 @@ Selected select_on_input(const BoundaryConditionSpec& bc, const SurfaceMesh& inp
       return mapping::selects(s, mapping::site_of(input, inverse.at(x)));
     };
   }
+  if (p.exterior) {
+    // Exterior runs: points of the outer box are selected there (selects_point: only through
+    // outer_box), the others on the input as above.
+    out.where = [s, &p, on_input = out.where](const Eigen::Vector3d& x) {
+      mapping::SelectionSite site;
+      site.box_side = p.box_side(x);
+      if (site.box_side < 0) return !on_input || on_input(x);
+      site.x = x;
+      return mapping::selects_point(s, site);
+    };
+  }
   long long count = 0;
   fem::for_each_boundary_dof(space, out.faces, out.where, [&](int) { ++count; });
   if (count == 0 && bc.type == "neumann")
@@ -317,17 +392,6 @@ Selected select_on_input(const BoundaryConditionSpec& bc, const SurfaceMesh& inp
   return out;
 }
 
-/// The mesh of a dense-surface pipeline and what maps between it and the input.
-struct SurfacePipeline {
-  SurfaceMesh input;
-  std::optional<cv::CurvedMesh> curved;  // method curved
-  BoundaryMap identity_map;              // method dense
-  std::optional<mapping::BoundaryInverse> inverse;
-  json report;
-  bool valid = true;
-  const BoundaryMap& map() const { return curved ? curved->map : identity_map; }
-};
-
 void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress& progress,
                             Timings& timings, LagrangeMesh& mesh, SurfacePipeline& p) {
   {
@@ -335,7 +399,8 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     progress.update("load surface", 0.0);
     p.input = load_input_surface(spec);
     for (const auto& bc : spec.boundary_conditions)
-      check_selection_on_input(bc.select, p.input, spec.case_file.string());
+      if (!mapping::uses_outer_box(bc.select))  // may select the box only: checked on the mesh
+        check_selection_on_input(bc.select, p.input, spec.case_file.string());
     progress.end_stage();
   }
   p.report["input_vertices"] = p.input.num_vertices();
@@ -353,6 +418,8 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     options.threads = threads;
     options.deterministic = spec.deterministic;
     options.feature_edges = feature_edges(spec, p.input);
+    options.exterior = spec.exterior;
+    options.exterior_padding = spec.padding;
     cv::CurvedMeshStats stats;
     p.curved = cv::build_curved_mesh(p.input, options, stats, progress.callback());
     progress.end_stage();
@@ -387,20 +454,56 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
       p.valid = v.valid(spec.eps);
       progress.end_stage();
     }
+    if (spec.exterior) {
+      // The domain is the outside: the outer slab layer and the exterior (tags 3, 4; the whole
+      // mesh was validated above). The map's triangles are faces of outer slab tets too.
+      std::vector<int> old_to_new;
+      mesh = extract_cells(mesh, {3, 4}, old_to_new);
+      Eigen::VectorXi& to_volume = p.curved->map.boundary_node_to_volume;
+      for (Eigen::Index i = 0; i < to_volume.size(); ++i)
+        if (to_volume[i] >= 0) {
+          to_volume[i] = old_to_new[std::size_t(to_volume[i])];
+          if (to_volume[i] < 0)
+            throw MeshingError("exterior: a node of the curved surface is in no outer tet");
+        }
+      p.report["outer_slab_tets"] = stats.outer_slab_tets;
+      p.report["exterior_tets"] = stats.exterior_tets;
+      set_outer_box(p, mesh, spec.padding);
+    }
     p.inverse = mapping::BoundaryInverse::through_shell(p.curved->map, p.curved->shell, p.input);
   } else {
     ScopedTimer t(timings, "meshing");
     progress.update("tetrahedralize input", 0.0);
     meshing::tetfill::TetFillOptions options;
     options.threads = std::max(threads, 1);
-    const meshing::tetfill::TetFillResult fill =
-        meshing::tetfill::fill_interior(p.input.V, p.input.F, options);
+    meshing::tetfill::TetFillResult fill;
+    if (!spec.exterior) {
+      fill = meshing::tetfill::fill_interior(p.input.V, p.input.F, options);
+    } else {
+      // Outside the input, inside its bounding box padded as the curved mesher pads it: the
+      // input enters reversed, as the box's cavity; its vertices stay first (φ = identity).
+      const Eigen::Vector3d lo = p.input.V.colwise().minCoeff().transpose();
+      const Eigen::Vector3d hi = p.input.V.colwise().maxCoeff().transpose();
+      const Eigen::Vector3d pad = Eigen::Vector3d::Constant(spec.padding * (hi - lo).maxCoeff());
+      const SurfaceMesh box = make_box(lo - pad, hi + pad, 4);
+      const int nv = p.input.num_vertices();
+      Eigen::MatrixXd V(nv + box.num_vertices(), 3);
+      V << p.input.V, box.V;
+      Eigen::MatrixXi F(p.input.num_faces() + box.num_faces(), 3);
+      F.topRows(p.input.num_faces()) = p.input.F.rowwise().reverse();
+      F.bottomRows(box.num_faces()) = box.F.array() + nv;
+      fill = meshing::tetfill::fill_interior(V, F, options);
+    }
     progress.end_stage();
     mesh = LagrangeMesh{};
     mesh.kind = CellKind::tetrahedron;
     mesh.order = 1;
     mesh.nodes = fill.V;
     mesh.cells = fill.T;
+    if (spec.exterior) {
+      mesh.cell_tags = Eigen::VectorXi::Constant(mesh.num_cells(), 4);
+      set_outer_box(p, mesh, spec.padding);
+    }
     p.identity_map = mapping::make_identity_boundary_map(p.input);
     p.inverse = mapping::BoundaryInverse::identity(p.input);
     p.report["interior_vertices"] = fill.V.rows() - fill.boundary_vertices;
@@ -441,14 +544,15 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   }
   // Boundary data: on the mesh (given) or on the dense input through φ⁻¹ (curved, dense).
   auto select = [&](const BoundaryConditionSpec& bc) {
-    return spec.dense_surface()
-               ? select_on_input(bc, pipeline.input, *pipeline.inverse, mesh, space, case_name)
-               : select_faces(bc.select, face_tags, space, case_name);
+    return spec.dense_surface() ? select_on_input(bc, pipeline, mesh, space, case_name)
+                                : select_faces(bc.select, face_tags, space, case_name);
   };
   auto at_input = [&](const Expression& e) -> std::function<double(const Eigen::Vector3d&)> {
     if (!spec.dense_surface()) return [e](const Eigen::Vector3d& x) { return e(x); };
-    const mapping::BoundaryInverse* inv = &*pipeline.inverse;
-    return [e, inv](const Eigen::Vector3d& x) { return e(inv->at(x).position); };
+    const SurfacePipeline* sp = &pipeline;
+    return [e, sp](const Eigen::Vector3d& x) {
+      return e(sp->box_side(x) >= 0 ? x : sp->inverse->at(x).position);
+    };
   };
   log::info("mesh: ", mesh.num_cells(), " tetrahedra of order ", mesh.order, "; degree ",
             spec.degree, ": ", space.num_dofs, " nodes, ", space.boundary_faces.size(),
@@ -494,9 +598,9 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     };
     auto boundary_field = [&](const std::vector<Expression>& e) -> fem::VectorField {
       if (!spec.dense_surface()) return vector_field(e);
-      const mapping::BoundaryInverse* inv = &*pipeline.inverse;
-      return [e, inv](const Eigen::Vector3d& x) {
-        const Eigen::Vector3d y = inv->at(x).position;
+      const SurfacePipeline* sp = &pipeline;
+      return [e, sp](const Eigen::Vector3d& x) {
+        const Eigen::Vector3d y = sp->box_side(x) >= 0 ? x : sp->inverse->at(x).position;
         return Eigen::Vector3d(e[0](y), e[1](y), e[2](y));
       };
     };

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <optional>
 
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -12,6 +13,27 @@
 
 namespace cv = curvefem::meshing::curved;
 
+namespace {
+// A dev mesh of ../shared/data (nullopt when the data is absent: the caller skips), its options
+// at K = 3, ε = 1%, 2 threads, features above 60°.
+struct DevRun {
+  curvefem::SurfaceMesh input;
+  cv::CurvedMeshOptions options;
+};
+std::optional<DevRun> dev_mesh(const char* file) {
+  const auto dir = curvefem::test::shared_data_dir();
+  if (!dir) return std::nullopt;
+  DevRun r;
+  r.input = curvefem::io::read_surface(*dir / "dev" / file);
+  r.options.order = 3;
+  r.options.eps_rel = 1e-2;
+  r.options.threads = 2;
+  r.options.feature_edges = cv::detect_feature_edges(r.input, 60);
+  return r;
+}
+constexpr const char* k_no_data = "../shared/data not found: real-mesh curved test skipped";
+}  // namespace
+
 struct DataCase {
   const char* file;
   double max_face_ratio;  // boundary faces / input faces the coarsening must reach
@@ -19,14 +41,10 @@ struct DataCase {
 class CurvedData : public ::testing::TestWithParam<DataCase> {};
 
 TEST_P(CurvedData, ValidatorAcceptsTheCurvedMesh) {
-  const auto dir = curvefem::test::shared_data_dir();
-  if (!dir) GTEST_SKIP() << "../shared/data not found: real-mesh curved test skipped";
-  const curvefem::SurfaceMesh input = curvefem::io::read_surface(*dir / "dev" / GetParam().file);
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 1e-2;
-  o.threads = 2;
-  o.feature_edges = cv::detect_feature_edges(input, 60);
+  auto run = dev_mesh(GetParam().file);
+  if (!run) GTEST_SKIP() << k_no_data;
+  const curvefem::SurfaceMesh& input = run->input;
+  cv::CurvedMeshOptions& o = run->options;
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
@@ -60,14 +78,10 @@ INSTANTIATE_TEST_SUITE_P(SmallDevMeshes, CurvedData,
 // kept under the linear bound), the second meets ε everywhere; both the validator and the
 // comparison with the linear bound are asserted.
 TEST(CurvedData, CurvedAwareCoarseningRetriesAfterAMissAndMeetsEps) {
-  const auto dir = curvefem::test::shared_data_dir();
-  if (!dir) GTEST_SKIP() << "../shared/data not found: real-mesh curved test skipped";
-  const curvefem::SurfaceMesh input = curvefem::io::read_surface(*dir / "dev" / "spot.obj");
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 1e-2;
-  o.threads = 2;
-  o.feature_edges = cv::detect_feature_edges(input, 60);
+  auto run = dev_mesh("spot.obj");
+  if (!run) GTEST_SKIP() << k_no_data;
+  const curvefem::SurfaceMesh& input = run->input;
+  cv::CurvedMeshOptions& o = run->options;
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
@@ -91,14 +105,10 @@ TEST(CurvedData, CurvedAwareCoarseningRetriesAfterAMissAndMeetsEps) {
 // face whose slab the thickening pulled above the shell's base (attempt 3: 3 misses, attempt 4:
 // none, 640 faces); before the widening, bunny fell back to the linear bound everywhere (856).
 TEST(CurvedData, CurvedAwareCoarseningWidensAroundPulledSlabsOnBunny) {
-  const auto dir = curvefem::test::shared_data_dir();
-  if (!dir) GTEST_SKIP() << "../shared/data not found: real-mesh curved test skipped";
-  const curvefem::SurfaceMesh input = curvefem::io::read_surface(*dir / "dev" / "bunny.obj");
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 1e-2;
-  o.threads = 2;
-  o.feature_edges = cv::detect_feature_edges(input, 60);
+  auto run = dev_mesh("bunny.obj");
+  if (!run) GTEST_SKIP() << k_no_data;
+  const curvefem::SurfaceMesh& input = run->input;
+  cv::CurvedMeshOptions& o = run->options;
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
@@ -124,15 +134,11 @@ TEST(CurvedData, CurvedAwareCoarseningWidensAroundPulledSlabsOnBunny) {
 // K = 3: valid, 398 boundary faces in one attempt (the coarsening also certifies the outer slab
 // of every face it lets beyond ε of its linear triangle).
 TEST(CurvedData, ExteriorOnSpotRepairsTheOuterSurfaceAndIsValid) {
-  const auto dir = curvefem::test::shared_data_dir();
-  if (!dir) GTEST_SKIP() << "../shared/data not found: real-mesh curved test skipped";
-  const curvefem::SurfaceMesh input = curvefem::io::read_surface(*dir / "dev" / "spot.obj");
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 1e-2;
-  o.threads = 2;
+  auto run = dev_mesh("spot.obj");
+  if (!run) GTEST_SKIP() << k_no_data;
+  const curvefem::SurfaceMesh& input = run->input;
+  cv::CurvedMeshOptions& o = run->options;
   o.exterior = true;
-  o.feature_edges = cv::detect_feature_edges(input, 60);
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
