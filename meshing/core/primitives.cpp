@@ -79,7 +79,7 @@ SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n
     auto [it, inserted] = ids.try_emplace(g, static_cast<int>(v.size()));
     if (inserted) {
       Eigen::Vector3d p;
-      for (int d = 0; d < 3; ++d) p[d] = lo[d] + (hi[d] - lo[d]) * g[d] / n;
+      for (int d = 0; d < 3; ++d) p[d] = g[d] == n ? hi[d] : lo[d] + (hi[d] - lo[d]) * g[d] / n;
       v.push_back(p);
     }
     return it->second;

@@ -11,6 +11,7 @@
 // result.pvd, resolved_case.json, open_in_paraview.py (--paraview) and report.json (last). Nothing
 // is written before the solve succeeds; a failed run leaves no output directory it created.
 // The pipeline itself (run_case, run_case.hpp) is shared with `curvefem study`.
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -313,8 +314,14 @@ LagrangeMesh extract_cells(const LagrangeMesh& mesh, std::initializer_list<int> 
 /// Sets the outer box of an exterior run from the mesh's bounding box.
 void set_outer_box(SurfacePipeline& p, const LagrangeMesh& mesh, double padding) {
   p.exterior = true;
-  p.box_lo = mesh.nodes.colwise().minCoeff().transpose();
-  p.box_hi = mesh.nodes.colwise().maxCoeff().transpose();
+  // From the tets' vertices (a higher-order node on a box face can round past its corners).
+  p.box_lo = Eigen::Vector3d::Constant(HUGE_VAL);
+  p.box_hi = -p.box_lo;
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int j = 0; j < 4; ++j) {
+      p.box_lo = p.box_lo.cwiseMin(mesh.nodes.row(mesh.cells(c, j)).transpose());
+      p.box_hi = p.box_hi.cwiseMax(mesh.nodes.row(mesh.cells(c, j)).transpose());
+    }
   p.box_tol = 1e-9 * (p.box_hi - p.box_lo).norm();
   p.report["exterior"] = {
       {"padding", padding},

@@ -60,6 +60,14 @@ TEST(Primitives, ClosedOutwardWithExpectedVolume) {
   const auto box = make_box({0, 0, 0}, {1, 2, 3}, 3);
   EXPECT_EQ(box.num_faces(), 12 * 9);
   EXPECT_NEAR(signed_volume(box), 6.0, 1e-12);
+  // The corners are lo and hi exactly, also where lo + (hi − lo) rounds away from hi (these two
+  // were a knight_decimated exterior box before that was fixed).
+  const Eigen::Vector3d lo = Eigen::Vector3d::Constant(-0.835910610281003);
+  const Eigen::Vector3d hi = Eigen::Vector3d::Constant(2.6185843423430817);
+  ASSERT_NE(lo[0] + (hi[0] - lo[0]), hi[0]);
+  const auto odd = make_box(lo, hi, 4);
+  EXPECT_EQ(Eigen::Vector3d(odd.V.colwise().maxCoeff()), hi);
+  EXPECT_EQ(Eigen::Vector3d(odd.V.colwise().minCoeff()), lo);
   const auto torus = make_torus(2.0, 0.5, 64, 32);
   EXPECT_EQ(torus.num_vertices() - 3 * torus.num_faces() / 2 + torus.num_faces(), 0);
   // Polygonal ring: cross-section polygon area × path length of its centroid, discretized.

@@ -237,6 +237,20 @@ TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
     // Both tags 3 and 4 present, and each side's quality is reported.
     EXPECT_EQ(check.quality_by_tag.count(3), 1u);
     EXPECT_EQ(check.quality_by_tag.count(4), 1u);
+    // A higher-order node of a box face rounding past the box (a weighted mean of the face's
+    // corners can): the box is that of the tets' vertices, so every face is still on it.
+    curvefem::LagrangeMesh nudged = m.mesh;
+    const double top = nudged.nodes.col(2).maxCoeff();
+    int nudges = 0;
+    for (int n = 0; n < nudged.num_nodes() && nudges == 0; ++n)
+      if (nudged.nodes(n, 2) == top) {
+        bool vertex = false;
+        for (int c = 0; c < nudged.num_cells() && !vertex; ++c)
+          for (int j = 0; j < 4; ++j) vertex |= nudged.cells(c, j) == n;
+        if (!vertex) nudged.nodes(n, 2) = std::nextafter(top, HUGE_VAL), ++nudges;
+      }
+    ASSERT_EQ(nudges, 1);
+    EXPECT_EQ(cv::validate_curved_mesh(nudged, m.map, torus).exterior_faces_off_box, 0);
   }
 }
 
