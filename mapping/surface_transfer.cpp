@@ -28,7 +28,8 @@ SurfaceSamples locate_input_vertices(const LagrangeMesh& mesh, const BoundaryMap
   // The tet under each boundary triangle: the boundary triangles by their sorted corner node
   // ids, then one sweep over the faces of every tet, looking each up there (a map of every tet
   // face was 56 s of the surface transfer on a 5.7M-tet mesh). A boundary triangle must be the
-  // face of exactly one tet.
+  // face of one tet (a boundary face) or of two (an interface, e.g. the curved surface of an
+  // exterior mesh solved on both sides: the first tet is used, the field being continuous).
   struct KeyHash {
     std::size_t operator()(const std::array<int, 3>& k) const {
       std::size_t h = std::size_t(k[0]);
@@ -57,14 +58,14 @@ SurfaceSamples locate_input_vertices(const LagrangeMesh& mesh, const BoundaryMap
       std::sort(k.begin(), k.end());
       const auto it = triangle_of.find(k);
       if (it == triangle_of.end()) continue;
-      ++count[it->second];
-      cell_of[it->second] = c;
+      if (count[it->second]++ == 0) cell_of[it->second] = c;
     }
   std::vector<std::pair<int, std::array<int, 3>>> tet_of(nb);  // cell, local corner per tri corner
   for (int f = 0; f < nb; ++f) {
-    if (count[f] != 1)
+    if (count[f] < 1 || count[f] > 2)
       throw MeshingError("surface transfer: boundary triangle " + std::to_string(f) +
-                         " is not a boundary face of the tet mesh");
+                         " is a face of " + std::to_string(count[f]) +
+                         " tets of the mesh (1 or 2 expected)");
     const int c = cell_of[f];
     std::array<int, 3> local;
     for (int j = 0; j < 3; ++j)

@@ -35,7 +35,9 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
     geometry.evaluate(cell, g);
     for (int q = 0; q < nq; ++q) {
       const Eigen::Vector3d x = g.x.row(q).transpose();
-      const double kappa = problem.kappa ? problem.kappa(x) : 1.0;
+      const double kappa = problem.cell_kappa ? problem.cell_kappa(cell, x)
+                           : problem.kappa    ? problem.kappa(x)
+                                              : 1.0;
       G.middleCols<3>(3 * q).noalias() = basis.gradients[q] * g.jacobian_inv[q];
       Gw.middleCols<3>(3 * q) = (g.det_w[q] * kappa) * G.middleCols<3>(3 * q);
       if (problem.rhs)

@@ -15,7 +15,9 @@ namespace curvefem::fem {
 
 struct PoissonProblem {
   ScalarField kappa;  ///< empty = 1
-  ScalarField rhs;    ///< empty = 0
+  /// Optional, overrides kappa: κ per cell and point (e.g. a coefficient per region of the mesh).
+  std::function<double(int cell, const Eigen::Vector3d& x)> cell_kappa;
+  ScalarField rhs;  ///< empty = 0
   std::vector<ScalarDirichlet> dirichlet;
   std::vector<ScalarNeumann> neumann;
   int quadrature_degree = -1;  ///< -1: default_quadrature_degree(p, k, stiffness)

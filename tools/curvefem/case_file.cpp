@@ -314,7 +314,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     r.only_keys(*m, "/meshing",
                 {"method", "order", "eps", "thickness", "thickness_per_edge", "eps_samples",
                  "feature_chains", "curved_coarsening", "validate", "deterministic", "exterior",
-                 "padding"});
+                 "padding", "solve_on"});
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
     if (c.method != "given" && c.method != "curved" && c.method != "dense")
       fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
@@ -372,6 +372,12 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       if (c.exterior && !dense_input)
         fail("/meshing/exterior", "takes a dense surface (method curved or dense)", r.file);
     }
+    if (const json* v = r.get(*m, "solve_on")) {
+      if (!c.exterior) fail("/meshing/solve_on", "only with \"exterior\": true", r.file);
+      c.solve_on = r.string(*v, "/meshing/solve_on");
+      if (c.solve_on != "outside" && c.solve_on != "both")
+        fail("/meshing/solve_on", "'" + c.solve_on + "': expected outside or both", r.file);
+    }
     if (const json* v = r.get(*m, "padding")) {
       if (!c.exterior) fail("/meshing/padding", "only with \"exterior\": true", r.file);
       c.padding = r.number(*v, "/meshing/padding");
@@ -381,7 +387,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
 
   if (const json* p = r.get(j, "physics")) {
-    r.only_keys(*p, "/physics", {"type", "kappa", "E", "nu", "load_steps"});
+    r.only_keys(*p, "/physics", {"type", "kappa", "kappa_inside", "E", "nu", "load_steps"});
     if (const json* v = r.get(*p, "type")) c.physics = r.string(*v, "/physics/type");
     if (c.physics != "poisson" && c.physics != "linear_elasticity" && c.physics != "neo_hookean")
       fail("/physics/type",
@@ -390,6 +396,12 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*p, "kappa")) {
       if (elastic) fail("/physics/kappa", "only for poisson", r.file);
       c.kappa = r.expression(*v, "/physics/kappa");
+    }
+    if (const json* v = r.get(*p, "kappa_inside")) {
+      if (elastic) fail("/physics/kappa_inside", "only for poisson", r.file);
+      if (c.solve_on != "both")
+        fail("/physics/kappa_inside", "only with meshing.solve_on \"both\"", r.file);
+      c.kappa_inside = r.expression(*v, "/physics/kappa_inside");
     }
     for (const char* key : {"E", "nu"})
       if (r.get(*p, key) && !elastic)
@@ -471,6 +483,11 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       bc.select = read_selection(r, *select, p + "/select");
       if (!c.exterior && mapping::uses_outer_box(bc.select))
         fail(p + "/select", "outer_box needs meshing.exterior: true", r.file);
+      if (c.solve_on == "both" && !mapping::uses_outer_box(bc.select))
+        fail(p + "/select",
+             "with meshing.solve_on \"both\" the input surface is inside the domain: only the "
+             "outer box is boundary (select it with outer_box)",
+             r.file);
       if (!c.dense_surface()) {
         const auto k = bc.select.kind;
         if (k != Selection::Kind::all && k != Selection::Kind::tag && k != Selection::Kind::box &&
@@ -573,12 +590,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (c.dense_surface()) {
     res["meshing"]["exterior"] = c.exterior;
     if (c.exterior) res["meshing"]["padding"] = c.padding;
+    if (c.exterior) res["meshing"]["solve_on"] = c.solve_on;
   }
   res["physics"] = {{"type", c.physics}};
-  if (c.physics == "poisson")
+  if (c.physics == "poisson") {
     res["physics"]["kappa"] = c.kappa.text();
-  else
+    if (c.solve_on == "both")
+      res["physics"]["kappa_inside"] = (c.kappa_inside.empty() ? c.kappa : c.kappa_inside).text();
+  } else {
     res["physics"]["E"] = c.E, res["physics"]["nu"] = c.nu;
+  }
   if (c.physics == "neo_hookean") res["physics"]["load_steps"] = c.load_steps;
   res["discretization"] = {{"degree", c.degree},
                            {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)}};

@@ -59,11 +59,15 @@ struct CaseSpec {
   /// the longest bbox edge (the inside is not part of the domain).
   bool exterior = false;
   double padding = 0.25;
+  /// With exterior: "outside" (the domain is outside the surface) or "both" (the whole box; the
+  /// surface is an interface, the outer box the only boundary).
+  std::string solve_on = "outside";
   bool dense_surface() const { return method == "curved" || method == "dense"; }
   std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
   Expression kappa;                 ///< poisson
-  double E = 1.0, nu = 0.3;         ///< elasticity
-  int load_steps = 1;               ///< neo_hookean
+  Expression kappa_inside;   ///< poisson, solve_on both: κ inside the surface (empty: kappa)
+  double E = 1.0, nu = 0.3;  ///< elasticity
+  int load_steps = 1;        ///< neo_hookean
   int degree = 1;
   int quadrature = -1;          ///< -1 = default
   std::vector<Expression> rhs;  ///< empty, 1 or 3

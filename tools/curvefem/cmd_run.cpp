@@ -461,7 +461,13 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
       p.valid = v.valid(spec.eps);
       progress.end_stage();
     }
-    if (spec.exterior) {
+    if (spec.exterior && spec.solve_on == "both") {
+      // The whole box: the curved surface is an interface (its triangles are faces of a slab
+      // tet and of an outer slab tet), the box the only boundary.
+      p.report["outer_slab_tets"] = stats.outer_slab_tets;
+      p.report["exterior_tets"] = stats.exterior_tets;
+      set_outer_box(p, mesh, spec.padding);
+    } else if (spec.exterior) {
       // The domain is the outside: the outer slab layer and the exterior (tags 3, 4; the whole
       // mesh was validated above). The map's triangles are faces of outer slab tets too.
       std::vector<int> old_to_new;
@@ -484,6 +490,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     meshing::tetfill::TetFillOptions options;
     options.threads = std::max(threads, 1);
     meshing::tetfill::TetFillResult fill;
+    int inside_tets = 0;  // exterior, solve_on both: the first tets are the inside's
     if (!spec.exterior) {
       fill = meshing::tetfill::fill_interior(p.input.V, p.input.F, options);
     } else {
@@ -500,6 +507,22 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
       F.topRows(p.input.num_faces()) = p.input.F.rowwise().reverse();
       F.bottomRows(box.num_faces()) = box.F.array() + nv;
       fill = meshing::tetfill::fill_interior(V, F, options);
+      if (spec.solve_on == "both") {
+        // The inside too, sharing the input's vertices (both fills keep them first and keep the
+        // input's triangles): its other vertices go after the outside's, its tets first.
+        const meshing::tetfill::TetFillResult inside =
+            meshing::tetfill::fill_interior(p.input.V, p.input.F, options);
+        const Eigen::Index n_out = fill.V.rows(), extra = inside.V.rows() - nv;
+        fill.V.conservativeResize(n_out + extra, 3);
+        fill.V.bottomRows(extra) = inside.V.bottomRows(extra);
+        Eigen::MatrixXi T(inside.T.rows() + fill.T.rows(), 4);
+        for (Eigen::Index t = 0; t < inside.T.rows(); ++t)
+          for (int j = 0; j < 4; ++j)
+            T(t, j) = inside.T(t, j) < nv ? inside.T(t, j) : int(n_out) + inside.T(t, j) - nv;
+        T.bottomRows(fill.T.rows()) = fill.T;
+        inside_tets = int(inside.T.rows());
+        fill.T = T;
+      }
     }
     progress.end_stage();
     mesh = LagrangeMesh{};
@@ -509,6 +532,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     mesh.cells = fill.T;
     if (spec.exterior) {
       mesh.cell_tags = Eigen::VectorXi::Constant(mesh.num_cells(), 4);
+      mesh.cell_tags.head(inside_tets).setConstant(2);
       set_outer_box(p, mesh, spec.padding);
     }
     p.identity_map = mapping::make_identity_boundary_map(p.input);
@@ -578,6 +602,14 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     fem::PoissonProblem problem;
     const Expression kappa = spec.kappa;
     problem.kappa = [kappa](const Eigen::Vector3d& x) { return kappa(x); };
+    if (spec.solve_on == "both" && !spec.kappa_inside.empty()) {
+      // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
+      const Expression inside = spec.kappa_inside;
+      const Eigen::VectorXi* tags = &mesh.cell_tags;
+      problem.cell_kappa = [kappa, inside, tags](int cell, const Eigen::Vector3d& x) {
+        return (*tags)[cell] <= 2 ? inside(x) : kappa(x);
+      };
+    }
     if (!spec.rhs.empty()) {
       const Expression f = spec.rhs[0];
       problem.rhs = [f](const Eigen::Vector3d& x) { return f(x); };
