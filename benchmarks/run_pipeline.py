@@ -35,7 +35,7 @@ import time
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASES = ["poisson_curved_sphere", "poisson_curved_bracket", "elasticity_curved_elephant",
-         "neo_hookean_curved_elephant"]
+         "neo_hookean_curved_elephant", "potential_flow_sphere_exterior"]
 # Benchmark-only cases on the real meshes of ../shared/data (benchmarks/cases/; not shipped in
 # cases/, whose cases run without ../shared). Run by default when the data is there.
 DATA_CASES = {"poisson_curved_igea": "data/dev/igea.obj"}
@@ -91,7 +91,9 @@ def variant(name, method):
     with open(path) as f:
         case = absolute_paths(json.load(f), os.path.dirname(path))
     if method in ("dense", "reference"):
-        case["meshing"] = {"method": "dense"}
+        # Keep the domain keys (exterior problems): only the mesher changes.
+        case["meshing"] = {"method": "dense", **{k: v for k, v in case.get("meshing", {}).items()
+                                                 if k in ("exterior", "padding", "solve_on")}}
         case.setdefault("discretization", {})["degree"] = REFERENCE_DEGREE.get(name, 1) \
             if method == "reference" else 1
     out = os.path.join(args.work, name, method)
