@@ -32,15 +32,38 @@ std::filesystem::path write_case(const std::filesystem::path& dir, const std::st
   return file;
 }
 
+struct SphereRun {
+  std::filesystem::path dir;
+  int vertices = 0;       // of the input
+  nlohmann::json report;  // null when the run did not exit 0 (the failure is recorded)
+};
+// Writes the level-L icosphere as sphere.obj and `text` as case.json in a scratch folder named
+// `name`, and runs the case into dir/out.
+SphereRun run_on_sphere(const std::string& name, int level, const std::string& text) {
+  SphereRun run;
+  run.dir = test::scratch_dir(name);
+  const SurfaceMesh sphere = make_icosphere(level);
+  run.vertices = sphere.num_vertices();
+  io::write_surface(run.dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  std::string log;
+  const int code = run_case(write_case(run.dir, "case.json", text), run.dir / "out", &log);
+  EXPECT_EQ(code, 0) << log;
+  if (code == 0) run.report = read_json(run.dir / "out" / "report.json");
+  return run;
+}
+
+// A case on sphere.obj: the meshing object, the degree, and the remaining keys (physics, rhs,
+// boundary conditions, exact; boundary_conditions after physics and rhs).
+std::string sphere_case(const std::string& meshing, int degree, const std::string& rest) {
+  return R"({"geometry": {"surface": "sphere.obj"}, "meshing": )" + meshing +
+         R"(, "discretization": {"degree": )" + std::to_string(degree) + "},\n" + rest + "}";
+}
+
 // Poisson with u = x² + y² + z² (−Δu = −6) on a sphere of radius 1, Dirichlet data painted on
 // the whole input, a Neumann flux on the top cap (∂u/∂n = 2r = 2 there).
 std::string poisson_case(const std::string& meshing) {
-  return R"JSON({
-  "geometry": {"surface": "sphere.obj"},
-  "meshing": )JSON" +
-         meshing + R"JSON(,
+  return sphere_case(meshing, 2, R"JSON(
   "physics": {"type": "poisson"},
-  "discretization": {"degree": 2},
   "rhs": "-6",
   "boundary_conditions": [
     {"type": "dirichlet", "select": {"not": {"plane": {"point": [0, 0, 0.7], "normal": [0, 0, 1]}}},
@@ -48,8 +71,7 @@ std::string poisson_case(const std::string& meshing) {
     {"type": "neumann", "select": {"plane": {"point": [0, 0, 0.7], "normal": [0, 0, 1]}},
      "value": "2*sqrt(x*x+y*y+z*z)"}
   ],
-  "exact": "x*x+y*y+z*z"
-})JSON";
+  "exact": "x*x+y*y+z*z")JSON");
 }
 
 void expect_surface_output(const std::filesystem::path& out, int input_vertices,
@@ -77,22 +99,18 @@ void expect_surface_output(const std::filesystem::path& out, int input_vertices,
 }  // namespace
 
 TEST(RunSurface, CurvedPoissonOnSphereMatchesExactSolutionOnTheInput) {
-  const auto dir = test::scratch_dir("run_surface_curved");
-  const SurfaceMesh sphere = make_icosphere(3);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
   // Measured with the linear coarsening bound (the curved-aware one gives fewer, larger faces and
   // a larger discretization error: l2 3.2e-2, surface max 0.18).
-  const auto file = write_case(
-      dir, "case.json",
+  const SphereRun run = run_on_sphere(
+      "run_surface_curved", 3,
       poisson_case(R"({"method": "curved", "order": 2, "eps": 0.01, "curved_coarsening": false})"));
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   EXPECT_EQ(r["method"], "curved");
   EXPECT_EQ(r["order"], 2);
   EXPECT_GT(r["dofs"].get<int>(), 0);
   EXPECT_LT(r["tets"].get<int>(), 2000);
-  EXPECT_EQ(r["meshing"]["input_vertices"], sphere.num_vertices());
+  EXPECT_EQ(r["meshing"]["input_vertices"], run.vertices);
   // u is quadratic and p = k = 2, so what remains is (a) the geometric error — the curved boundary
   // is within ε of the faceted input and Dirichlet data are read on the input — and (b) the
   // point-wise Dirichlet/Neumann interface at z = 0.7 cutting through coarse faces: a free DOF just
@@ -106,13 +124,10 @@ TEST(RunSurface, CurvedPoissonOnSphereMatchesExactSolutionOnTheInput) {
   EXPECT_LT(r["surface_l2_error"].get<double>(), 6e-2);
   EXPECT_LT(r["surface_max_error"].get<double>(), 0.15);
   EXPECT_EQ(r["surface_unmapped_vertices"], 0);
-  expect_surface_output(dir / "out", sphere.num_vertices());
+  expect_surface_output(run.dir / "out", run.vertices);
 }
 
 TEST(RunSurface, CurvedDirichletPoissonIsoparametricIsWithinTheGeometricError) {
-  const auto dir = test::scratch_dir("run_surface_curved_dirichlet");
-  const SurfaceMesh sphere = make_icosphere(3);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
   // The linear coarsening bound (with the curved-aware one, fewer and larger faces: l2 2.9e-3).
   std::string text =
       poisson_case(R"({"method": "curved", "order": 2, "eps": 0.01, "curved_coarsening": false})");
@@ -121,10 +136,9 @@ TEST(RunSurface, CurvedDirichletPoissonIsoparametricIsWithinTheGeometricError) {
                                "value": "x*x+y*y+z*z"}],
   "exact": "x*x+y*y+z*z"
 })";
-  const auto file = write_case(dir, "case.json", text);
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  const SphereRun run = run_on_sphere("run_surface_curved_dirichlet", 3, text);
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   // p = k = 2: every boundary DOF is a fiber hit on the input, so the Dirichlet data are exact at
   // the DOFs and u = r² is in the space up to the geometric error. Measured: l2 4.8e-4, h1 1.5e-2,
   // surface max 9.1e-3 (≈ the 1.8e-3 boundary distance times |∇u| = 2, plus interpolation).
@@ -134,13 +148,10 @@ TEST(RunSurface, CurvedDirichletPoissonIsoparametricIsWithinTheGeometricError) {
 }
 
 TEST(RunSurface, DensePoissonOnSphereMatchesExactSolutionOnTheInput) {
-  const auto dir = test::scratch_dir("run_surface_dense");
-  const SurfaceMesh sphere = make_icosphere(2);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
-  const auto file = write_case(dir, "case.json", poisson_case(R"({"method": "dense"})"));
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  const SphereRun run =
+      run_on_sphere("run_surface_dense", 2, poisson_case(R"({"method": "dense"})"));
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   EXPECT_EQ(r["method"], "dense");
   EXPECT_EQ(r["order"], 1);
   // P1 on the input polyhedron. Measured: l2 5.3e-3, surface l2 1.2e-2, surface max 1.6e-2.
@@ -149,10 +160,11 @@ TEST(RunSurface, DensePoissonOnSphereMatchesExactSolutionOnTheInput) {
   EXPECT_LT(r["surface_l2_error"].get<double>(), 2.5e-2);
   EXPECT_LT(r["surface_max_error"].get<double>(), 4e-2);
   EXPECT_EQ(r["tets"].get<int>() > 0, true);
-  expect_surface_output(dir / "out", sphere.num_vertices());
+  expect_surface_output(run.dir / "out", run.vertices);
   // The resolved case is a valid case file that reproduces the run.
-  ASSERT_EQ(run_case(dir / "out" / "resolved_case.json", dir / "again", &log), 0) << log;
-  const auto again = read_json(dir / "again" / "report.json");
+  std::string log;
+  ASSERT_EQ(run_case(run.dir / "out" / "resolved_case.json", run.dir / "again", &log), 0) << log;
+  const auto again = read_json(run.dir / "again" / "report.json");
   EXPECT_EQ(again["dofs"], r["dofs"]);
   EXPECT_EQ(again["surface_l2_error"], r["surface_l2_error"]);
 }
@@ -235,13 +247,8 @@ namespace {
 // there. Dirichlet on the outer box (outer_box) and on the sphere below z = 0.2; on the cap above
 // it a Neumann flux with the *exterior* domain's outward normal, −r̂: ∂u/∂n = −∂u/∂r = 1/r².
 std::string exterior_case(const std::string& meshing, int degree) {
-  return R"JSON({
-  "geometry": {"surface": "sphere.obj"},
-  "meshing": )JSON" +
-         meshing + R"JSON(,
+  return sphere_case(meshing, degree, R"JSON(
   "physics": {"type": "poisson"},
-  "discretization": {"degree": )JSON" +
-         std::to_string(degree) + R"JSON(},
   "boundary_conditions": [
     {"type": "dirichlet", "select": {"outer_box": "all"}, "value": "1/sqrt(x*x+y*y+z*z)"},
     {"type": "dirichlet", "select": {"not": {"plane": {"point": [0, 0, 0.2], "normal": [0, 0, 1]}}},
@@ -249,21 +256,16 @@ std::string exterior_case(const std::string& meshing, int degree) {
     {"type": "neumann", "select": {"plane": {"point": [0, 0, 0.2], "normal": [0, 0, 1]}},
      "value": "1/(x*x+y*y+z*z)"}
   ],
-  "exact": "1/sqrt(x*x+y*y+z*z)"
-})JSON";
+  "exact": "1/sqrt(x*x+y*y+z*z)")JSON");
 }
 }  // namespace
 
 TEST(RunSurface, CurvedExteriorPoissonAroundSphereMatchesOneOverR) {
-  const auto dir = test::scratch_dir("run_surface_exterior");
-  const SurfaceMesh sphere = make_icosphere(3);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
-  const auto file = write_case(
-      dir, "case.json",
+  const SphereRun run = run_on_sphere(
+      "run_surface_exterior", 3,
       exterior_case(R"({"method": "curved", "order": 2, "eps": 0.01, "exterior": true})", 2));
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   ASSERT_TRUE(r["meshing"].contains("exterior")) << r.dump(1);
   // The domain is the outer slab layer and the exterior only (tags 3, 4).
   EXPECT_EQ(r["tets"],
@@ -284,18 +286,14 @@ TEST(RunSurface, CurvedExteriorPoissonAroundSphereMatchesOneOverR) {
   EXPECT_LT(r["surface_l2_error"].get<double>(), 9e-2);
   EXPECT_LT(r["surface_max_error"].get<double>(), 0.12);
   EXPECT_EQ(r["surface_unmapped_vertices"], 0);
-  expect_surface_output(dir / "out", sphere.num_vertices(), "bc2_neumann");
+  expect_surface_output(run.dir / "out", run.vertices, "bc2_neumann");
 }
 
 TEST(RunSurface, DenseExteriorPoissonAroundSphereMatchesOneOverR) {
-  const auto dir = test::scratch_dir("run_surface_exterior_dense");
-  const SurfaceMesh sphere = make_icosphere(2);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
-  const auto file =
-      write_case(dir, "case.json", exterior_case(R"({"method": "dense", "exterior": true})", 1));
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  const SphereRun run = run_on_sphere("run_surface_exterior_dense", 2,
+                                      exterior_case(R"({"method": "dense", "exterior": true})", 1));
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   const auto box = r["meshing"]["exterior"]["box"];
   for (int a = 0; a < 3; ++a) {
     EXPECT_DOUBLE_EQ(box[0][a].get<double>(), -1.5);
@@ -305,7 +303,7 @@ TEST(RunSurface, DenseExteriorPoissonAroundSphereMatchesOneOverR) {
   EXPECT_LT(r["l2_error"].get<double>(), 0.12);
   EXPECT_LT(r["surface_max_error"].get<double>(), 0.1);
   EXPECT_EQ(r["surface_unmapped_vertices"], 0);
-  expect_surface_output(dir / "out", sphere.num_vertices(), "bc2_neumann");
+  expect_surface_output(run.dir / "out", run.vertices, "bc2_neumann");
 }
 
 // The shipped exterior case: potential flow past the unit sphere, u = x (1 + 1/(2r³)), Dirichlet
@@ -331,31 +329,22 @@ namespace {
 // sides (−∇·(κ∇u) = −6 as rhs). u = r²/10 + 0.9 inside and r² outside: continuous at r = 1
 // with continuous flux κ ∂u/∂r = 2. Dirichlet data on the box only (the sphere is an interface).
 std::string two_region_case(const std::string& method, int degree) {
-  return R"JSON({
-  "geometry": {"surface": "sphere.obj"},
-  "meshing": {)JSON" +
-         method + R"JSON(, "exterior": true, "solve_on": "both"},
+  return sphere_case("{" + method + R"(, "exterior": true, "solve_on": "both"})", degree, R"JSON(
   "physics": {"type": "poisson", "kappa": 1, "kappa_inside": 10},
-  "discretization": {"degree": )JSON" +
-         std::to_string(degree) + R"JSON(},
   "rhs": "-6",
   "boundary_conditions": [
     {"type": "dirichlet", "select": {"outer_box": "all"}, "value": "x*x+y*y+z*z"}
   ],
-  "exact": "x*x+y*y+z*z < 1 ? (x*x+y*y+z*z)/10 + 0.9 : x*x+y*y+z*z"
-})JSON";
+  "exact": "x*x+y*y+z*z < 1 ? (x*x+y*y+z*z)/10 + 0.9 : x*x+y*y+z*z")JSON");
 }
 }  // namespace
 
 TEST(RunSurface, TwoRegionPoissonSolvesInsideAndOutsideWithTheirOwnKappa) {
-  const auto dir = test::scratch_dir("run_surface_two_region");
-  const SurfaceMesh sphere = make_icosphere(3);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
-  const auto file = write_case(
-      dir, "case.json", two_region_case(R"("method": "curved", "order": 2, "eps": 0.01)", 2));
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  const SphereRun run =
+      run_on_sphere("run_surface_two_region", 3,
+                    two_region_case(R"("method": "curved", "order": 2, "eps": 0.01)", 2));
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   // Every tet of the mesh: slab + interior + outer slab + exterior.
   EXPECT_EQ(r["tets"], r["meshing"]["slab_tets"].get<int>() +
                            r["meshing"]["interior_tets"].get<int>() +
@@ -370,13 +359,10 @@ TEST(RunSurface, TwoRegionPoissonSolvesInsideAndOutsideWithTheirOwnKappa) {
 }
 
 TEST(RunSurface, DenseTwoRegionPoissonMergesTheInsideAndOutsideFills) {
-  const auto dir = test::scratch_dir("run_surface_two_region_dense");
-  const SurfaceMesh sphere = make_icosphere(2);
-  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
-  const auto file = write_case(dir, "case.json", two_region_case(R"("method": "dense")", 2));
-  std::string log;
-  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
-  const auto r = read_json(dir / "out" / "report.json");
+  const SphereRun run =
+      run_on_sphere("run_surface_two_region_dense", 2, two_region_case(R"("method": "dense")", 2));
+  ASSERT_FALSE(run.report.is_null());
+  const auto& r = run.report;
   // P2 (r² is in the space): what remains is the polyhedral interface against the exact solution's
   // kink at r = 1. Measured (1,767 tets: 667 inside, 1,100 outside): l2 3.8e-2, surface max
   // 1.7e-2.
