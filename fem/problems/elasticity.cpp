@@ -100,7 +100,6 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
                                            const LinearSolverOptions& solver) {
   ElasticitySolution result;
   result.dofs = space.num_dofs;
-  const double lambda = problem.material.lambda(), mu = problem.material.mu();
   Stopwatch watch;
   const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
   const int n = setup.n;
@@ -110,6 +109,9 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   // With M = Σ_q w g_q g_qᵀ for the stacked gradients g_q (row i·n + a = G_ai), one matrix
   // product: Ke(3a+i, 3b+j) = λ M(in+a, jn+b) + μ M(jn+a, in+b) + δ_ij μ Σ_k M(kn+a, kn+b).
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd&) {
+    const ElasticMaterial material =
+        problem.cell_material ? problem.cell_material(cell) : problem.material;
+    const double lambda = material.lambda(), mu = material.mu();
     thread_local CellGeometry g;  // per-thread scratch: no allocation per cell after the first
     thread_local Eigen::MatrixXd S, Sw, M, G;
     S.resize(3 * n, nq);
@@ -160,9 +162,8 @@ struct NeoHookeanState {
 };
 
 NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mesh,
-                                     const FunctionSpace& space, const ElasticMaterial& material,
+                                     const FunctionSpace& space, const ElasticityProblem& problem,
                                      const Eigen::VectorXd& u, bool with_matrix) {
-  const double lambda = material.lambda(), mu = material.mu();
   const int n = setup.n;
   NeoHookeanState s;
   s.internal = Eigen::VectorXd::Zero(u.size());
@@ -176,6 +177,9 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
   // Σ μ w G Gᵀ = Gsᵀ Gm — three matrix products per cell instead of a loop over 9n² entries at
   // every point.
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Re) {
+    const ElasticMaterial material =
+        problem.cell_material ? problem.cell_material(cell) : problem.material;
+    const double lambda = material.lambda(), mu = material.mu();
     thread_local CellGeometry g;  // per-thread scratch
     thread_local Eigen::MatrixXd U, G, H, GP, Hs, Hl, Hc, Gs, Gm, Y, GG;
     const int Q = setup.geometry.num_points();
@@ -275,7 +279,7 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
     double first_residual = -1.0;
     bool converged = false;
     for (int it = 0; it < newton.max_iterations; ++it) {
-      NeoHookeanState state = assemble_neo_hookean(setup, mesh, space, problem.material, u, true);
+      NeoHookeanState state = assemble_neo_hookean(setup, mesh, space, problem, u, true);
       if (!state.valid)
         throw SolverError("Neo-Hookean: inverted deformation (det F <= 0) at load step " +
                           std::to_string(step) + "; use more load_steps");
@@ -302,8 +306,7 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
       const double slope = R.dot(du);
       for (int k = 0; k < 30; ++k, alpha *= 0.5) {
         const Eigen::VectorXd trial = u + alpha * du;
-        const NeoHookeanState t =
-            assemble_neo_hookean(setup, mesh, space, problem.material, trial, false);
+        const NeoHookeanState t = assemble_neo_hookean(setup, mesh, space, problem, trial, false);
         if (!t.valid) continue;
         const double e = t.strain_energy - f.dot(trial);
         if (moves_boundary || e <= energy + 1e-4 * alpha * slope) break;
@@ -332,8 +335,8 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
 }
 
 Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace& space,
-                                  const ElasticMaterial& material, const Eigen::VectorXd& u) {
-  const double lambda = material.lambda(), mu = material.mu();
+                                  const ElasticMaterial& material, const Eigen::VectorXd& u,
+                                  const std::function<ElasticMaterial(int cell)>& cell_material) {
   const Eigen::MatrixXd ref = lagrange_reference_nodes(CellKind::tetrahedron, space.degree);
   const GeometryEvaluator geometry(mesh, ref, Eigen::VectorXd::Ones(ref.rows()));
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, space.degree, ref);
@@ -342,6 +345,8 @@ Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace&
   CellGeometry g;
   Eigen::MatrixXd U(n, 3), G(n, 3);
   for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+    const ElasticMaterial m = cell_material ? cell_material(cell) : material;
+    const double lambda = m.lambda(), mu = m.mu();
     geometry.evaluate(cell, g);
     gather(space, u, cell, U);
     for (int l = 0; l < n; ++l) {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ struct ElasticMaterial {
 
 struct ElasticityProblem {
   ElasticMaterial material;
+  /// Optional, overrides material: the material of each cell (e.g. one per region of the mesh).
+  std::function<ElasticMaterial(int cell)> cell_material;
   VectorField body_force;  ///< empty = 0
   std::vector<VectorDirichlet> dirichlet;
   std::vector<VectorNeumann> traction;
@@ -65,8 +68,10 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
                                      const LinearSolverOptions& solver,
                                      const NewtonOptions& newton);
 
-/// Nodal von Mises stress of the linear solution at every DOF point (averaged over cells).
-Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace& space,
-                                  const ElasticMaterial& material, const Eigen::VectorXd& u);
+/// Nodal von Mises stress of the linear solution at every DOF point (averaged over cells);
+/// `cell_material`, when given, overrides `material` per cell.
+Eigen::VectorXd von_mises_at_dofs(
+    const LagrangeMesh& mesh, const FunctionSpace& space, const ElasticMaterial& material,
+    const Eigen::VectorXd& u, const std::function<ElasticMaterial(int cell)>& cell_material = {});
 
 }  // namespace curvefem::fem

@@ -387,7 +387,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
 
   if (const json* p = r.get(j, "physics")) {
-    r.only_keys(*p, "/physics", {"type", "kappa", "kappa_inside", "E", "nu", "load_steps"});
+    r.only_keys(
+        *p, "/physics",
+        {"type", "kappa", "kappa_inside", "E", "nu", "E_inside", "nu_inside", "load_steps"});
     if (const json* v = r.get(*p, "type")) c.physics = r.string(*v, "/physics/type");
     if (c.physics != "poisson" && c.physics != "linear_elasticity" && c.physics != "neo_hookean")
       fail("/physics/type",
@@ -410,6 +412,17 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*p, "nu")) c.nu = r.number(*v, "/physics/nu");
     if (!(c.E > 0)) fail("/physics/E", "must be positive", r.file);
     if (!(c.nu > -1 && c.nu < 0.5)) fail("/physics/nu", "must be in (-1, 0.5)", r.file);
+    for (const char* key : {"E_inside", "nu_inside"}) {
+      const json* v = r.get(*p, key);
+      if (!v) continue;
+      const std::string path = std::string("/physics/") + key;
+      if (!elastic) fail(path, "only for elasticity", r.file);
+      if (c.solve_on != "both") fail(path, "only with meshing.solve_on \"both\"", r.file);
+      (key[0] == 'E' ? c.E_inside : c.nu_inside) = r.number(*v, path);
+    }
+    if (c.E_inside && !(*c.E_inside > 0)) fail("/physics/E_inside", "must be positive", r.file);
+    if (c.nu_inside && !(*c.nu_inside > -1 && *c.nu_inside < 0.5))
+      fail("/physics/nu_inside", "must be in (-1, 0.5)", r.file);
     if (const json* v = r.get(*p, "load_steps")) {
       if (c.physics != "neo_hookean") fail("/physics/load_steps", "only for neo_hookean", r.file);
       c.load_steps = r.integer(*v, "/physics/load_steps", 1, 10000);
@@ -599,6 +612,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       res["physics"]["kappa_inside"] = (c.kappa_inside.empty() ? c.kappa : c.kappa_inside).text();
   } else {
     res["physics"]["E"] = c.E, res["physics"]["nu"] = c.nu;
+    if (c.solve_on == "both") {
+      res["physics"]["E_inside"] = c.E_inside.value_or(c.E);
+      res["physics"]["nu_inside"] = c.nu_inside.value_or(c.nu);
+    }
   }
   if (c.physics == "neo_hookean") res["physics"]["load_steps"] = c.load_steps;
   res["discretization"] = {{"degree", c.degree},

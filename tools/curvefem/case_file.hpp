@@ -67,7 +67,9 @@ struct CaseSpec {
   Expression kappa;                 ///< poisson
   Expression kappa_inside;   ///< poisson, solve_on both: κ inside the surface (empty: kappa)
   double E = 1.0, nu = 0.3;  ///< elasticity
-  int load_steps = 1;        ///< neo_hookean
+  /// Elasticity, solve_on both: the inside's material (unset: E, nu).
+  std::optional<double> E_inside, nu_inside;
+  int load_steps = 1;  ///< neo_hookean
   int degree = 1;
   int quadrature = -1;          ///< -1 = default
   std::vector<Expression> rhs;  ///< empty, 1 or 3

@@ -596,6 +596,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   const int c = spec.components();
   Eigen::VectorXd u;
   json physics_report;
+  std::function<fem::ElasticMaterial(int)> cell_material;  // elasticity, solve_on both
   fem::LinearSolveInfo solve_info;
   progress.update("solve " + spec.physics, 0.0);
   if (spec.physics == "poisson") {
@@ -631,6 +632,17 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   } else {
     fem::ElasticityProblem problem;
     problem.material = {spec.E, spec.nu};
+    if (spec.solve_on == "both") {
+      // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
+      const fem::ElasticMaterial inside{spec.E_inside.value_or(spec.E),
+                                        spec.nu_inside.value_or(spec.nu)};
+      const fem::ElasticMaterial outside = problem.material;
+      const Eigen::VectorXi* tags = &mesh.cell_tags;
+      problem.cell_material = [inside, outside, tags](int cell) {
+        return (*tags)[cell] <= 2 ? inside : outside;
+      };
+    }
+    cell_material = problem.cell_material;
     problem.quadrature_degree = spec.quadrature;
     auto vector_field = [](const std::vector<Expression>& e) {
       return [e](const Eigen::Vector3d& x) { return Eigen::Vector3d(e[0](x), e[1](x), e[2](x)); };
@@ -780,8 +792,8 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
         fields.point_data.push_back(err);
       }
       if (spec.physics == "linear_elasticity") {
-        const Eigen::VectorXd vm = fem::von_mises_at_dofs(mesh, out_space, {spec.E, spec.nu},
-                                                          values.transpose().reshaped());
+        const Eigen::VectorXd vm = fem::von_mises_at_dofs(
+            mesh, out_space, {spec.E, spec.nu}, values.transpose().reshaped(), cell_material);
         fields.point_data.push_back(
             {"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
       }
