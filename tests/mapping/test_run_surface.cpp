@@ -219,6 +219,10 @@ TEST(RunSurface, BrokenCasesExitTwoNameTheJsonPathAndLeaveNothing) {
          "physics": {"kappa_inside": 2}, )" +
            dirichlet,
        "/physics/kappa_inside: only with meshing.solve_on \"both\""},
+      {R"("geometry": {"surface": "sphere.obj"}, "meshing": {"method": "dense"},
+         "physics": {"type": "linear_elasticity", "E_inside": 2},
+         "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": [0, 0, 0]}])",
+       "/physics/E_inside: only with meshing.solve_on \"both\""},
   };
   for (const auto& c : cases) {
     const auto file = write_case(dir, "case.json", "{" + c.body + "}");
