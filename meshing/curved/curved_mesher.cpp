@@ -890,6 +890,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
                                    .max(b.outer.colwise().maxCoeff().array() + pad / 4)
                                    .transpose();
     const SurfaceMesh box = make_box(lo, hi, 4);
+    stats.exterior_box_lo = lo;
+    stats.exterior_box_hi = hi;
     box_vertices = box.num_vertices();
     Eigen::MatrixXd V(nv + box_vertices, 3);
     V << b.outer, box.V;

@@ -151,6 +151,8 @@ struct CurvedMeshStats {
   int curving_rounds = 0;
   int slab_tets = 0, interior_tets = 0, nodes = 0;
   int outer_slab_tets = 0, exterior_tets = 0;  // --exterior
+  Eigen::Vector3d exterior_box_lo = Eigen::Vector3d::Zero(),
+                  exterior_box_hi = Eigen::Vector3d::Zero();  // --exterior: the outer box
   int thickened_vertices = 0;
   // Exterior: outer surface vertices raised beyond the shell's top, and pulled below it (toward
   // the middle surface) to clear self-intersections of the shell's top.

@@ -314,6 +314,13 @@ void register_mesh(CLI::App& app) {
         {"exterior", args->exterior},
         {"exterior_padding_rel",
          args->exterior ? nlohmann::ordered_json(args->padding) : nlohmann::ordered_json(nullptr)},
+        {"exterior_box",
+         args->exterior ? nlohmann::ordered_json::array(
+                              {{stats.exterior_box_lo[0], stats.exterior_box_lo[1],
+                                stats.exterior_box_lo[2]},
+                               {stats.exterior_box_hi[0], stats.exterior_box_hi[1],
+                                stats.exterior_box_hi[2]}})
+                        : nlohmann::ordered_json(nullptr)},
         {"outer_slab_tets", stats.outer_slab_tets},
         {"outer_raised_vertices", stats.outer_raised_vertices},
         {"outer_lowered_vertices", stats.outer_lowered_vertices},

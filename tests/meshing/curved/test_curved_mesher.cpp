@@ -237,6 +237,20 @@ TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
     // Both tags 3 and 4 present, and each side's quality is reported.
     EXPECT_EQ(check.quality_by_tag.count(3), 1u);
     EXPECT_EQ(check.quality_by_tag.count(4), 1u);
+    // The box: the input's bounding box padded by 0.25 × its longest edge (2 × 1.4 for this
+    // torus), pushed out only where the outer surface comes within a quarter of that; it is the
+    // bounding box of the mesh.
+    const Eigen::Vector3d in_lo = torus.V.colwise().minCoeff().transpose();
+    const Eigen::Vector3d in_hi = torus.V.colwise().maxCoeff().transpose();
+    const double pad = 0.25 * (in_hi - in_lo).maxCoeff();
+    EXPECT_TRUE((stats.exterior_box_lo.array() <= in_lo.array() - pad).all());
+    EXPECT_TRUE((stats.exterior_box_hi.array() >= in_hi.array() + pad).all());
+    EXPECT_DOUBLE_EQ(stats.exterior_box_lo.x(), in_lo.x() - pad);  // the outer surface is far
+    Eigen::Vector3d v_lo = Eigen::Vector3d::Constant(HUGE_VAL);
+    for (int c = 0; c < m.mesh.num_cells(); ++c)
+      for (int j = 0; j < 4; ++j)
+        v_lo = v_lo.cwiseMin(m.mesh.nodes.row(m.mesh.cells(c, j)).transpose());
+    EXPECT_EQ(v_lo, stats.exterior_box_lo);  // of the tets' vertices
     // A higher-order node of a box face rounding past the box (a weighted mean of the face's
     // corners can): the box is that of the tets' vertices, so every face is still on it.
     curvefem::LagrangeMesh nudged = m.mesh;
