@@ -20,6 +20,16 @@ Eigen::MatrixXd LagrangeMesh::jacobian(int cell, const Eigen::Vector3d& xi) cons
   return J;
 }
 
+std::pair<Eigen::Vector3d, Eigen::Vector3d> vertex_bounding_box(const LagrangeMesh& mesh) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int j = 0; j < 4; ++j) {
+      lo = lo.cwiseMin(mesh.nodes.row(mesh.cells(c, j)).transpose());
+      hi = hi.cwiseMax(mesh.nodes.row(mesh.cells(c, j)).transpose());
+    }
+  return {lo, hi};
+}
+
 void validate_structure(const LagrangeMesh& mesh, const std::string& what) {
   if (mesh.order < 1 || mesh.order > k_max_order)
     throw InputError(what + ": geometric order " + std::to_string(mesh.order) + " is not in 1.." +

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "meshing/core/lagrange_nodes.hpp"
@@ -30,6 +31,10 @@ struct LagrangeMesh {
   /// 3 × dim Jacobian of the geometric map at xi.
   Eigen::MatrixXd jacobian(int cell, const Eigen::Vector3d& xi) const;
 };
+
+/// Bounding box {lo, hi} of the cells' vertices (corner nodes) of a tet mesh: a higher-order node
+/// on a flat face, a weighted mean of the face's corners, can round past them.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> vertex_bounding_box(const LagrangeMesh& mesh);
 
 /// Throws InputError naming the first defect: bad order, wrong column count, node id out of
 /// range, non-finite coordinate, tag count mismatch.

@@ -9,6 +9,12 @@ double bbox_longest_edge(const Eigen::MatrixXd& V) {
   return (V.colwise().maxCoeff() - V.colwise().minCoeff()).maxCoeff();
 }
 
+std::pair<Eigen::Vector3d, Eigen::Vector3d> padded_bounding_box(const Eigen::MatrixXd& V,
+                                                                double padding_rel) {
+  const Eigen::Vector3d pad = Eigen::Vector3d::Constant(padding_rel * bbox_longest_edge(V));
+  return {V.colwise().minCoeff().transpose() - pad, V.colwise().maxCoeff().transpose() + pad};
+}
+
 double signed_volume(const SurfaceMesh& mesh) {
   if (mesh.V.rows() == 0) return 0.0;
   const Eigen::RowVector3d c = mesh.V.colwise().mean();  // reduces cancellation

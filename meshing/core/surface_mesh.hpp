@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <map>
 #include <string>
+#include <utility>
 
 namespace curvefem {
 
@@ -26,6 +27,11 @@ struct SurfaceMesh {
 
 /// Longest edge of the axis-aligned bounding box (the unit of every `*_rel` figure); 0 if empty.
 double bbox_longest_edge(const Eigen::MatrixXd& V);
+
+/// The exterior box of a surface: the bounding box of V widened on every side by padding_rel ×
+/// its longest edge (`meshing.padding`, `curvefem mesh --padding`), as {lo, hi}.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> padded_bounding_box(const Eigen::MatrixXd& V,
+                                                                double padding_rel);
 
 /// Signed volume enclosed by the triangles (positive for a closed outward surface).
 double signed_volume(const SurfaceMesh& mesh);

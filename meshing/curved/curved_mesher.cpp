@@ -357,12 +357,14 @@ class Builder {
     return out;
   }
 
-  bool slabs_certified(int f) const {
-    const auto d = node_displacements(f);
-    for (int layer = 0; layer < (exterior ? 2 : 1); ++layer)
-      for (const auto& t : slab_tets(f, d, layer == 1))
-        if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
+  // Every tet of face f's bottom (upper = false) or top half-prism slab certified positive.
+  bool layer_certified(int f, bool upper) const {
+    for (const auto& t : slab_tets(f, node_displacements(f), upper))
+      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
     return true;
+  }
+  bool slabs_certified(int f) const {
+    return layer_certified(f, false) && (!exterior || layer_certified(f, true));
   }
 
   // Deepens the inner surface (and, with an exterior, raises the outer one) along the pillars:
@@ -802,11 +804,6 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.fiber_misses = b.fiber_misses;
   const int nf = b.nf, nv = b.nv;
   b.alpha.assign(nf, 1.0);
-  auto bottom_certified = [&](int f) {
-    for (const auto& t : b.slab_tets(f, b.node_displacements(f), false))
-      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
-    return true;
-  };
   std::vector<int> deferred_top;  // linear faces whose outer slab only thicken() can certify
   std::vector<int> work(nf);
   for (int f = 0; f < nf; ++f) work[f] = f;
@@ -831,7 +828,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
           for (int h : b.across(g)) next.push_back(h);
         if (!lowered.empty()) continue;
       }
-      if (b.alpha[f] == 0 && b.exterior && bottom_certified(f)) {
+      if (b.alpha[f] == 0 && b.exterior && b.layer_certified(f, false)) {
         // Only the outer slab fails on the linear patch (the shell's top can leave a half-prism
         // too thin for the floating-point certificate): thicken() raises the outer surface and
         // re-certifies every face, so the face is left to it.
@@ -882,13 +879,12 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   auto fill_exterior = [&] {
     // The input's bounding box padded by pad on every side (where a case expects it), pushed
     // out where the outer surface comes closer to it than pad / 4.
-    const double pad = options.exterior_padding * unit;
-    const Eigen::Vector3d lo = (input.V.colwise().minCoeff().array() - pad)
-                                   .min(b.outer.colwise().minCoeff().array() - pad / 4)
-                                   .transpose();
-    const Eigen::Vector3d hi = (input.V.colwise().maxCoeff().array() + pad)
-                                   .max(b.outer.colwise().maxCoeff().array() + pad / 4)
-                                   .transpose();
+    const auto [in_lo, in_hi] = padded_bounding_box(input.V, options.exterior_padding);
+    const double margin = options.exterior_padding * unit / 4;
+    const Eigen::Vector3d lo = in_lo.cwiseMin(b.outer.colwise().minCoeff().transpose() -
+                                              Eigen::Vector3d::Constant(margin));
+    const Eigen::Vector3d hi = in_hi.cwiseMax(b.outer.colwise().maxCoeff().transpose() +
+                                              Eigen::Vector3d::Constant(margin));
     const SurfaceMesh box = make_box(lo, hi, 4);
     stats.exterior_box_lo = lo;
     stats.exterior_box_hi = hi;

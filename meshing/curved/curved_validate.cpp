@@ -134,14 +134,7 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
     for (const auto& [f, n] : count)
       if (n == 1) volume_boundary.insert(f);
     if (r.exterior) {
-      // The box of the tets' vertices: a higher-order node on a box face, a weighted mean of
-      // its corners, can round past them.
-      Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(HUGE_VAL), hi = -lo;
-      for (int c = 0; c < nt; ++c)
-        for (int j = 0; j < 4; ++j) {
-          lo = lo.cwiseMin(mesh.nodes.row(mesh.cells(c, j)));
-          hi = hi.cwiseMax(mesh.nodes.row(mesh.cells(c, j)));
-        }
+      const auto [lo, hi] = vertex_bounding_box(mesh);
       for (const auto& [f, n] : count_all) {
         if (n != 1) continue;
         ++r.exterior_boundary_faces;

@@ -11,11 +11,11 @@
 // result.pvd, resolved_case.json, open_in_paraview.py (--paraview) and report.json (last). Nothing
 // is written before the solve succeeds; a failed run leaves no output directory it created.
 // The pipeline itself (run_case, run_case.hpp) is shared with `curvefem study`.
-#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <tuple>
 #include <unordered_map>
 
 #include "fem/assembly/face_integration.hpp"
@@ -314,14 +314,7 @@ LagrangeMesh extract_cells(const LagrangeMesh& mesh, std::initializer_list<int> 
 /// Sets the outer box of an exterior run from the mesh's bounding box.
 void set_outer_box(SurfacePipeline& p, const LagrangeMesh& mesh, double padding) {
   p.exterior = true;
-  // From the tets' vertices (a higher-order node on a box face can round past its corners).
-  p.box_lo = Eigen::Vector3d::Constant(HUGE_VAL);
-  p.box_hi = -p.box_lo;
-  for (int c = 0; c < mesh.num_cells(); ++c)
-    for (int j = 0; j < 4; ++j) {
-      p.box_lo = p.box_lo.cwiseMin(mesh.nodes.row(mesh.cells(c, j)).transpose());
-      p.box_hi = p.box_hi.cwiseMax(mesh.nodes.row(mesh.cells(c, j)).transpose());
-    }
+  std::tie(p.box_lo, p.box_hi) = vertex_bounding_box(mesh);
   p.box_tol = 1e-9 * (p.box_hi - p.box_lo).norm();
   p.report["exterior"] = {
       {"padding", padding},
@@ -496,10 +489,8 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     } else {
       // Outside the input, inside its bounding box padded as the curved mesher pads it: the
       // input enters reversed, as the box's cavity; its vertices stay first (φ = identity).
-      const Eigen::Vector3d lo = p.input.V.colwise().minCoeff().transpose();
-      const Eigen::Vector3d hi = p.input.V.colwise().maxCoeff().transpose();
-      const Eigen::Vector3d pad = Eigen::Vector3d::Constant(spec.padding * (hi - lo).maxCoeff());
-      const SurfaceMesh box = make_box(lo - pad, hi + pad, 4);
+      const auto [lo, hi] = padded_bounding_box(p.input.V, spec.padding);
+      const SurfaceMesh box = make_box(lo, hi, 4);
       const int nv = p.input.num_vertices();
       Eigen::MatrixXd V(nv + box.num_vertices(), 3);
       V << p.input.V, box.V;
