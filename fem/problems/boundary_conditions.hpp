@@ -20,6 +20,11 @@ using ScalarField = std::function<double(const Eigen::Vector3d&)>;
 /// used only where it returns true (selections by region act point-wise, not face-wise).
 using PointFilter = std::function<bool(const Eigen::Vector3d&)>;
 using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d&)>;
+/// Boundary data of a face quadrature point x, given also the mesh's outward unit normal n there.
+using BoundaryScalarField =
+    std::function<double(const Eigen::Vector3d& x, const Eigen::Vector3d& n)>;
+using BoundaryVectorField =
+    std::function<Eigen::Vector3d(const Eigen::Vector3d& x, const Eigen::Vector3d& n)>;
 
 struct ScalarDirichlet {
   std::vector<char> faces;
@@ -30,7 +35,7 @@ struct ScalarDirichlet {
 /// Flux g = κ ∂u/∂n (Poisson), integrated over the selected faces.
 struct ScalarNeumann {
   std::vector<char> faces;
-  ScalarField flux;
+  BoundaryScalarField flux;
   PointFilter where;
 };
 
@@ -45,7 +50,7 @@ struct VectorDirichlet {
 /// Traction t = σ n on the selected faces.
 struct VectorNeumann {
   std::vector<char> faces;
-  VectorField traction;
+  BoundaryVectorField traction;
   PointFilter where;
 };
 

@@ -60,9 +60,10 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
   for (const auto& bc : problem.traction) {
     const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
     std::vector<Eigen::Vector3d> traction(points.size(), Eigen::Vector3d::Zero());
-    const std::vector<char> used = evaluate_at_face_points(
-        points, bc.where,
-        [&](int k, const Eigen::Vector3d& x) { traction[std::size_t(k)] = bc.traction(x); });
+    const std::vector<char> used =
+        evaluate_at_face_points(points, bc.where, [&](int k, const Eigen::Vector3d& x) {
+          traction[std::size_t(k)] = bc.traction(x, points.normal.row(k).transpose());
+        });
     for (int k = 0; k < points.size(); ++k) {
       if (!used[k]) continue;
       const Eigen::Vector3d t = traction[k] * points.ds_w[k];

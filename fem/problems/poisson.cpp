@@ -53,9 +53,10 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   for (const auto& bc : problem.neumann) {
     const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
     std::vector<double> flux(points.size(), 0.0);
-    const std::vector<char> used = evaluate_at_face_points(
-        points, bc.where,
-        [&](int k, const Eigen::Vector3d& x) { flux[std::size_t(k)] = bc.flux(x); });
+    const std::vector<char> used =
+        evaluate_at_face_points(points, bc.where, [&](int k, const Eigen::Vector3d& x) {
+          flux[std::size_t(k)] = bc.flux(x, points.normal.row(k).transpose());
+        });
     for (int k = 0; k < points.size(); ++k) {
       if (!used[k]) continue;
       const double g = flux[k] * points.ds_w[k];

@@ -54,9 +54,14 @@ TEST(BoundaryTerms, PoissonNeumannReproducesQuadratic) {
   fem::PoissonProblem problem;
   problem.rhs = [](const Eigen::Vector3d&) { return -2.0; };
   problem.dirichlet.push_back({left, u, {}});
-  // Flux g = ∇u · n with the outward normal of each cube side (from the face quadrature point).
-  problem.neumann.push_back(
-      {others, [&](const Eigen::Vector3d& x) { return grad(x).dot(cube_normal(x)); }, {}});
+  // Flux g = ∇u · n with the normal the assembly passes (the mesh's outward normal), which must
+  // be each cube side's outward normal.
+  problem.neumann.push_back({others,
+                             [&](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+                               EXPECT_LT((n - cube_normal(x)).norm(), 1e-12);
+                               return grad(x).dot(n);
+                             },
+                             {}});
   const auto sol = fem::solve_poisson(mesh, space, problem, {});
   double worst = 0;
   for (int d = 0; d < space.num_dofs; ++d)
@@ -81,10 +86,12 @@ TEST(BoundaryTerms, ElasticityTractionReproducesLinearDisplacement) {
                                {true, true, true},
                                [A](const Eigen::Vector3d& x) { return Eigen::Vector3d(A * x); },
                                {}});
-  problem.traction.push_back(
-      {others,
-       [sigma](const Eigen::Vector3d& x) { return Eigen::Vector3d(sigma * cube_normal(x)); },
-       {}});
+  problem.traction.push_back({others,
+                              [sigma](const Eigen::Vector3d&, const Eigen::Vector3d& n) {
+                                return Eigen::Vector3d(
+                                    sigma * n);  // the mesh's outward normal from the assembly
+                              },
+                              {}});
   const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
   double worst = 0;
   for (int d = 0; d < space.num_dofs; ++d)

@@ -134,8 +134,11 @@ struct Cantilever {
                                  {true, true, true},
                                  [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); },
                                  {}});
-    problem.traction.push_back(
-        {right, [load](const Eigen::Vector3d&) { return Eigen::Vector3d(0, 0, -load); }, {}});
+    problem.traction.push_back({right,
+                                [load](const Eigen::Vector3d&, const Eigen::Vector3d&) {
+                                  return Eigen::Vector3d(0, 0, -load);
+                                },
+                                {}});
   }
 };
 }  // namespace

@@ -92,6 +92,10 @@ TEST(Run, BrokenCasesNameTheJsonPath) {
       {R"("exact": "x*x*y", "exact_gradient": ["2*x*y", "x", "0"])",
        "/exact_gradient/1: is not the derivative of exact"},
       {R"("exact_gradient": ["1", "0", "0"])", "/exact_gradient: needs \"exact\""},
+      {R"("rhs": "2*nx")", "/rhs: \"2*nx\" uses nx, ny or nz (the outward normal)"},
+      {R"("boundary_conditions": [{"type": "dirichlet", "select": {"tag": 1}, "value": "nz"}])",
+       "/boundary_conditions/0/value: nx, ny, nz (the mesh's outward normal at a quadrature "
+       "point) are for Neumann values"},
   };
   for (const auto& c : cases) {
     const auto file = write_case(dir, "{" + base_geometry + ", " + c.body + "}");
@@ -340,4 +344,25 @@ TEST(Run, DirichletByNormalConstrainsTheSelectedSidesEdges) {
   const auto j = report(dir / "out");
   EXPECT_EQ(j["dofs"].get<int>() - j["physics_details"]["free_dofs"].get<int>(), 25);
   EXPECT_LT(j["l2_error"].get<double>(), 1e-10);
+}
+
+// On a given mesh, nx, ny, nz in a Neumann value are the mesh's outward normal at the face
+// quadrature point: u = x² − yz + z is in P2, so the run is exact with the flux ∇u · n on the
+// five free sides of the unit cube.
+TEST(Run, NeumannValueOnAGivenMeshUsesTheMeshsNormal) {
+  const auto dir = test::scratch_dir("run_given_normal");
+  std::string bcs = R"({"type": "dirichlet", "select": {"tag": 1}, "value": "x*x - y*z + z"})";
+  for (int tag = 2; tag <= 6; ++tag)
+    bcs += R"(, {"type": "neumann", "select": {"tag": )" + std::to_string(tag) +
+           R"(}, "value": "2*x*nx - z*ny + (1 - y)*nz"})";
+  const auto file = write_case(dir, R"({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 2}},
+    "physics": {"type": "poisson"},
+    "discretization": {"degree": 2},
+    "rhs": "-2",
+    "boundary_conditions": [)" + bcs + R"(],
+    "exact": "x*x - y*z + z"})");
+  std::string log;
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  EXPECT_LT(report(dir / "out")["l2_error"].get<double>(), 1e-10);
 }

@@ -47,8 +47,8 @@ struct Reader {
       fail(path, "must be in " + std::to_string(lo) + ".." + std::to_string(hi), file);
     return static_cast<int>(v);
   }
-  /// An expression: a string or a number.
-  Expression expression(const json& j, const std::string& path) const {
+  /// An expression: a string or a number; `normal`: whether nx, ny, nz may appear.
+  Expression expression(const json& j, const std::string& path, bool normal = false) const {
     if (j.is_number()) {
       std::ostringstream s;
       s.precision(17);
@@ -57,23 +57,24 @@ struct Reader {
     }
     if (!j.is_string()) fail(path, "expected an expression (string or number)", file);
     try {
-      return Expression(j.get<std::string>(), path);
+      return Expression(j.get<std::string>(), path, normal);
     } catch (const InputError& e) {
       throw InputError(e.defect(), {.file = file});
     }
   }
   /// One expression (scalar problems) or an array of three (vector problems).
-  std::vector<Expression> expressions(const json& j, const std::string& path,
-                                      int components) const {
+  std::vector<Expression> expressions(const json& j, const std::string& path, int components,
+                                      bool normal = false) const {
     std::vector<Expression> out;
     if (components == 1) {
       if (j.is_array()) fail(path, "expected one expression (scalar problem)", file);
-      out.push_back(expression(j, path));
+      out.push_back(expression(j, path, normal));
       return out;
     }
     if (!j.is_array() || j.size() != 3)
       fail(path, "expected an array of three expressions (vector problem)", file);
-    for (int i = 0; i < 3; ++i) out.push_back(expression(j[i], path + "/" + std::to_string(i)));
+    for (int i = 0; i < 3; ++i)
+      out.push_back(expression(j[i], path + "/" + std::to_string(i), normal));
     return out;
   }
   Eigen::Vector3d point(const json& j, const std::string& path) const {
@@ -512,7 +513,14 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       }
       const json* value = r.get(b, "value");
       if (!value) fail(p + "/value", "missing", r.file);
-      bc.value = r.expressions(*value, p + "/value", comps);
+      bc.value = r.expressions(*value, p + "/value", comps, /*normal=*/true);
+      if (bc.type == "dirichlet")
+        for (std::size_t k = 0; k < bc.value.size(); ++k)
+          if (bc.value[k].uses_normal())
+            fail(p + "/value" + (comps == 1 ? "" : "/" + std::to_string(k)),
+                 "nx, ny, nz (the mesh's outward normal at a quadrature point) are for Neumann "
+                 "values: a Dirichlet node on an edge has no single normal",
+                 r.file);
       if (const json* m = r.get(b, "components")) {
         if (comps == 1 || bc.type != "dirichlet")
           fail(p + "/components", "only for vector Dirichlet conditions", r.file);

@@ -278,6 +278,11 @@ struct SurfacePipeline {
   int box_side(const Eigen::Vector3d& x) const {
     return exterior ? mapping::box_side_of(x, box_lo, box_hi, box_tol) : -1;
   }
+  /// Where boundary data of the mesh point x are evaluated: φ⁻¹(x) on the input, or x itself on
+  /// the outer box.
+  Eigen::Vector3d data_point(const Eigen::Vector3d& x) const {
+    return box_side(x) >= 0 ? x : inverse->at(x).position;
+  }
 };
 
 /// The cells of `mesh` tagged in `tags`, with the nodes they use (renumbered in order);
@@ -569,11 +574,20 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     return spec.dense_surface() ? select_on_input(bc, pipeline, mesh, space, case_name)
                                 : select_faces(bc.select, face_tags, space, case_name);
   };
-  auto at_input = [&](const Expression& e) -> std::function<double(const Eigen::Vector3d&)> {
-    if (!spec.dense_surface()) return [e](const Eigen::Vector3d& x) { return e(x); };
-    const SurfacePipeline* sp = &pipeline;
-    return [e, sp](const Eigen::Vector3d& x) {
-      return e(sp->box_side(x) >= 0 ? x : sp->inverse->at(x).position);
+  // Boundary values: on a dense input surface at data_point(x) (φ⁻¹(x) on the input), on a given
+  // mesh at x; the normal of a Neumann value is the mesh's outward normal at the quadrature point
+  // (the case file refuses nx, ny, nz in Dirichlet values).
+  const SurfacePipeline* sp = &pipeline;
+  const bool on_input = spec.dense_surface();
+  auto dirichlet_value = [&](const Expression& e) -> fem::ScalarField {
+    if (!on_input) return [e](const Eigen::Vector3d& x) { return e(x); };
+    return [e, sp](const Eigen::Vector3d& x) { return e(sp->data_point(x)); };
+  };
+  auto neumann_value = [&](const Expression& e) -> fem::BoundaryScalarField {
+    if (!on_input)
+      return [e](const Eigen::Vector3d& x, const Eigen::Vector3d& n) { return e(x, n); };
+    return [e, sp](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+      return e(sp->data_point(x), n);
     };
   };
   log::info("mesh: ", mesh.num_cells(), " tetrahedra of order ", mesh.order, "; degree ",
@@ -609,11 +623,10 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     problem.quadrature_degree = spec.quadrature;
     for (const auto& bc : spec.boundary_conditions) {
       Selected sel = select(bc);
-      auto value = at_input(bc.value[0]);
       if (bc.type == "dirichlet")
-        problem.dirichlet.push_back({sel.faces, value, sel.where});
+        problem.dirichlet.push_back({sel.faces, dirichlet_value(bc.value[0]), sel.where});
       else
-        problem.neumann.push_back({sel.faces, value, sel.where});
+        problem.neumann.push_back({sel.faces, neumann_value(bc.value[0]), sel.where});
     }
     const fem::PoissonSolution sol = fem::solve_poisson(mesh, space, problem, solver);
     u = sol.u;
@@ -638,12 +651,22 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     auto vector_field = [](const std::vector<Expression>& e) {
       return [e](const Eigen::Vector3d& x) { return Eigen::Vector3d(e[0](x), e[1](x), e[2](x)); };
     };
-    auto boundary_field = [&](const std::vector<Expression>& e) -> fem::VectorField {
-      if (!spec.dense_surface()) return vector_field(e);
-      const SurfacePipeline* sp = &pipeline;
+    auto at = [](const std::vector<Expression>& e, const Eigen::Vector3d& x,
+                 const Eigen::Vector3d& n) {
+      return Eigen::Vector3d(e[0](x, n), e[1](x, n), e[2](x, n));
+    };
+    auto dirichlet_field = [&](const std::vector<Expression>& e) -> fem::VectorField {
+      if (!on_input) return vector_field(e);
       return [e, sp](const Eigen::Vector3d& x) {
-        const Eigen::Vector3d y = sp->box_side(x) >= 0 ? x : sp->inverse->at(x).position;
+        const Eigen::Vector3d y = sp->data_point(x);
         return Eigen::Vector3d(e[0](y), e[1](y), e[2](y));
+      };
+    };
+    auto traction_field = [&](const std::vector<Expression>& e) -> fem::BoundaryVectorField {
+      if (!on_input)
+        return [e, at](const Eigen::Vector3d& x, const Eigen::Vector3d& n) { return at(e, x, n); };
+      return [e, sp, at](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+        return at(e, sp->data_point(x), n);
       };
     };
     if (!spec.rhs.empty()) problem.body_force = vector_field(spec.rhs);
@@ -651,9 +674,9 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
       Selected sel = select(bc);
       if (bc.type == "dirichlet")
         problem.dirichlet.push_back(
-            {sel.faces, bc.components, boundary_field(bc.value), sel.where});
+            {sel.faces, bc.components, dirichlet_field(bc.value), sel.where});
       else
-        problem.traction.push_back({sel.faces, boundary_field(bc.value), sel.where});
+        problem.traction.push_back({sel.faces, traction_field(bc.value), sel.where});
     }
     fem::ElasticitySolution sol;
     if (spec.physics == "linear_elasticity") {
