@@ -22,7 +22,7 @@ FacePoint FacePoints::point(int k) const {
 }
 
 FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
-                       const std::vector<char>& selected, int degree) {
+                       const std::vector<char>& selected, int degree, bool with_gradients) {
   CF_VERIFY(selected.size() == space.boundary_faces.size(), "face flags do not match the mesh");
   const QuadratureRule& rule = triangle_quadrature(degree);
   const int nq = rule.size();
@@ -31,7 +31,7 @@ FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
   const Eigen::Matrix<double, 4, 3> nref =  // outward reference normals of the face opposite j
       (Eigen::Matrix<double, 4, 3>() << 1, 1, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1).finished();
   struct FaceTables {
-    ReferenceTabulation geometry;
+    ReferenceTabulation geometry, space;  // space: only with gradients
     Eigen::Vector3d ts, tt;
   };
   std::array<FaceTables, 4> tables;
@@ -48,7 +48,9 @@ FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
       pts.row(q) = (1 - s - t) * vref.row(v[0]) + s * vref.row(v[1]) + t * vref.row(v[2]);
     }
     tables[j].geometry = tabulate(CellKind::tetrahedron, mesh.order, pts);
-    out.basis.middleRows(j * nq, nq) = tabulate(CellKind::tetrahedron, space.degree, pts).values;
+    ReferenceTabulation basis = tabulate(CellKind::tetrahedron, space.degree, pts);
+    out.basis.middleRows(j * nq, nq) = basis.values;
+    if (with_gradients) tables[j].space = std::move(basis);
     tables[j].ts = (vref.row(v[1]) - vref.row(v[0])).transpose();
     tables[j].tt = (vref.row(v[2]) - vref.row(v[0])).transpose();
   }
@@ -62,6 +64,7 @@ FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
   out.face.resize(total);
   out.cell.resize(total);
   out.basis_row.resize(total);
+  if (with_gradients) out.gradients.resize(std::size_t(total));
   const int nk = mesh.nodes_per_cell();
   tbb::parallel_for(
       tbb::blocked_range<int>(0, static_cast<int>(faces.size()), 64),
@@ -76,7 +79,8 @@ FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
             const int k = i * nq + q;
             const Eigen::Matrix3d J = X.transpose() * tab.geometry.gradients[q];
             Eigen::Vector3d N = (J * tab.ts).cross(J * tab.tt);
-            const Eigen::Vector3d outward = J.inverse().transpose() * nref.row(j).transpose();
+            const Eigen::Matrix3d Jinv = J.inverse();
+            const Eigen::Vector3d outward = Jinv.transpose() * nref.row(j).transpose();
             if (N.dot(outward) < 0) N = -N;
             out.x.row(k) = (X.transpose() * tab.geometry.values.row(q).transpose()).transpose();
             const double area = N.norm();
@@ -89,6 +93,7 @@ FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
             out.face[k] = f;
             out.cell[k] = cell;
             out.basis_row[k] = j * nq + q;
+            if (with_gradients) out.gradients[std::size_t(k)] = tab.space.gradients[q] * Jinv;
           }
         }
       });

@@ -30,6 +30,9 @@ struct FacePoints {
   Eigen::VectorXd ds_w;
   std::vector<int> face, cell, basis_row;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> basis;
+  /// Only with face_points(..., with_gradients = true): per point, the physical gradients of the
+  /// space basis (num_lagrange_nodes(tet, p) × 3).
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 3>> gradients;
 
   int size() const { return static_cast<int>(face.size()); }
   FacePoint point(int k) const;
@@ -39,7 +42,7 @@ struct FacePoints {
 /// whose flag is set; faces are processed in parallel (oneTBB), the result is independent of the
 /// thread count.
 FacePoints face_points(const LagrangeMesh& mesh, const FunctionSpace& space,
-                       const std::vector<char>& selected, int degree);
+                       const std::vector<char>& selected, int degree, bool with_gradients = false);
 
 /// Calls `evaluate(k, x)` in parallel (oneTBB) for every point k of `points` where `where` is
 /// empty or true, and returns those points' flags. `evaluate` writes its result to its own slot

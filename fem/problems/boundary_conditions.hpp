@@ -26,6 +26,13 @@ using BoundaryScalarField =
 using BoundaryVectorField =
     std::function<Eigen::Vector3d(const Eigen::Vector3d& x, const Eigen::Vector3d& n)>;
 
+/// How a Dirichlet condition acts on boundary faces its filter selects only in part
+/// (fem/problems/nitsche.hpp).
+enum class PartialDirichlet {
+  nitsche,  ///< weakly, by Nitsche's method on the selected face quadrature points
+  nodal,    ///< the DOFs that pass the filter are fixed, the others stay free
+};
+
 struct ScalarDirichlet {
   std::vector<char> faces;
   ScalarField value;

@@ -10,6 +10,7 @@
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
 #include "fem/problems/constraints.hpp"
+#include "fem/problems/nitsche.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -75,18 +76,85 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
   return F;
 }
 
-/// Fixed unknowns and their (full-load) values.
-Constraints dirichlet_constraints(const FunctionSpace& space, const ElasticityProblem& problem) {
+/// Fixed unknowns and their (full-load) values; `strong`: per condition, the faces whose DOFs
+/// are fixed (empty: every selected face, nodally).
+Constraints dirichlet_constraints(const FunctionSpace& space, const ElasticityProblem& problem,
+                                  const std::vector<DirichletFaceSplit>& strong = {}) {
   Constraints c;
   c.fixed.assign(3 * static_cast<std::size_t>(space.num_dofs), 0);
   c.values = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(space.num_dofs));
-  for (const auto& bc : problem.dirichlet)
-    for_each_boundary_dof(space, bc.faces, bc.where, [&](int d) {
-      const Eigen::Vector3d v = bc.value(space.dof_points.row(d).transpose());
-      for (int i = 0; i < 3; ++i)
-        if (bc.components[i]) c.fixed[3 * d + i] = 1, c.values[3 * d + i] = v[i];
-    });
+  for (std::size_t k = 0; k < problem.dirichlet.size(); ++k) {
+    const auto& bc = problem.dirichlet[k];
+    for_each_boundary_dof(space, strong.empty() ? bc.faces : strong[k].strong, bc.where,
+                          [&](int d) {
+                            const Eigen::Vector3d v = bc.value(space.dof_points.row(d).transpose());
+                            for (int i = 0; i < 3; ++i)
+                              if (bc.components[i])
+                                c.fixed[3 * d + i] = 1, c.values[3 * d + i] = v[i];
+                          });
+  }
   return c;
+}
+
+/// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F, on
+/// the constrained components i: −(σ(u)n)ᵢ vᵢ − (σ(v)n)ᵢ (uᵢ − gᵢ) + β (uᵢ − gᵢ) vᵢ.
+void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
+                 const ElasticityProblem& problem, const VectorDirichlet& bc,
+                 const DirichletFaceSplit& split, SparseMatrix& K, Eigen::VectorXd& F) {
+  const FacePoints& P = split.points;
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  Eigen::MatrixXd Ke(3 * n, 3 * n);
+  Eigen::VectorXd Fe(3 * n);
+  Eigen::MatrixXd T(3 * n, 3);  // row 3b + j: σ(φ_b e_j) n
+  for (int k = 0; k < P.size(); ++k) {
+    if (!split.used[std::size_t(k)]) continue;
+    const int cell = P.cell[k];
+    const ElasticMaterial m =
+        problem.cell_material ? problem.cell_material(cell) : problem.material;
+    const double lambda = m.lambda(), mu = m.mu();
+    const Eigen::Vector3d x = P.x.row(k).transpose();
+    const Eigen::Vector3d nrm = P.normal.row(k).transpose();
+    const double h =
+        nitsche_length(mesh, cell, space.boundary_faces[std::size_t(P.face[k])].opposite);
+    const double beta = (lambda + 2 * mu) * nitsche_penalty(space.degree, h);
+    const double* phi = P.basis.row(P.basis_row[k]).data();
+    const auto& G = P.gradients[std::size_t(k)];
+    for (int b = 0; b < n; ++b) {
+      const Eigen::Vector3d gb = G.row(b).transpose();
+      const double dn = gb.dot(nrm);
+      for (int j = 0; j < 3; ++j) {  // σ(φ e_j) n = λ ∂_j φ n + μ (∂φ/∂n e_j + n_j ∇φ)
+        T.row(3 * b + j) = (lambda * gb[j] * nrm + mu * nrm[j] * gb).transpose();
+        T(3 * b + j, j) += mu * dn;
+      }
+    }
+    const double w = P.ds_w[k];
+    const Eigen::Vector3d g = bc.value(x);
+    Ke.setZero();
+    Fe.setZero();
+    for (int a = 0; a < n; ++a)
+      for (int i = 0; i < 3; ++i) {
+        for (int b = 0; b < n; ++b)
+          for (int j = 0; j < 3; ++j) {
+            double v = 0;
+            if (bc.components[i]) v -= phi[a] * T(3 * b + j, i);
+            if (bc.components[j]) v -= phi[b] * T(3 * a + i, j);
+            if (i == j && bc.components[i]) v += beta * phi[a] * phi[b];
+            Ke(3 * a + i, 3 * b + j) = w * v;
+          }
+        double f = bc.components[i] ? beta * g[i] * phi[a] : 0.0;
+        for (int j = 0; j < 3; ++j)
+          if (bc.components[j]) f -= T(3 * a + i, j) * g[j];
+        Fe[3 * a + i] = w * f;
+      }
+    for (int a = 0; a < n; ++a)
+      for (int i = 0; i < 3; ++i) {
+        const int row = 3 * space.cell_dofs(cell, a) + i;
+        F[row] += Fe[3 * a + i];
+        for (int b = 0; b < n; ++b)
+          for (int j = 0; j < 3; ++j)
+            K.coeffRef(row, 3 * space.cell_dofs(cell, b) + j) += Ke(3 * a + i, 3 * b + j);
+      }
+  }
 }
 
 void gather(const FunctionSpace& space, const Eigen::VectorXd& u, int cell, Eigen::MatrixXd& U) {
@@ -139,10 +207,17 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   };
   assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, &values,
                  nullptr);
-  const Eigen::VectorXd F = external_load(mesh, space, problem, setup);
-  const SparseMatrix K = setup.pattern.matrix(values);
+  Eigen::VectorXd F = external_load(mesh, space, problem, setup);
+  SparseMatrix K = setup.pattern.matrix(values);
+  std::vector<DirichletFaceSplit> splits;
+  for (const auto& bc : problem.dirichlet) {
+    splits.push_back(
+        split_dirichlet_faces(mesh, space, bc.faces, bc.where, problem.partial_dirichlet));
+    add_nitsche(mesh, space, problem, bc, splits.back(), K, F);
+    result.nitsche_faces += splits.back().partial_faces;
+  }
   result.timings.add("assembly", watch.seconds());
-  const Constraints constraints = dirichlet_constraints(space, problem);
+  const Constraints constraints = dirichlet_constraints(space, problem, splits);
   result.free_unknowns = static_cast<int>(F.size()) - constraints.num_fixed();
   LinearSolverOptions options = solver;
   options.block_size = 3;

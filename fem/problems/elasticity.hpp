@@ -35,6 +35,9 @@ struct ElasticityProblem {
   std::vector<VectorDirichlet> dirichlet;
   std::vector<VectorNeumann> traction;
   int quadrature_degree = -1;
+  /// Dirichlet faces that a condition's filter selects only in part (fem/problems/nitsche.hpp):
+  /// linear elasticity only; Neo-Hookean always fixes the DOFs the filter passes (nodal).
+  PartialDirichlet partial_dirichlet = PartialDirichlet::nitsche;
 };
 
 struct NewtonStep {
@@ -47,7 +50,8 @@ struct NewtonStep {
 struct ElasticitySolution {
   Eigen::VectorXd u;  ///< 3 per DOF
   int dofs = 0, free_unknowns = 0;
-  LinearSolveInfo solve;           ///< last linear solve
+  int nitsche_faces = 0;  ///< boundary faces with Dirichlet data imposed weakly (linear only)
+  LinearSolveInfo solve;  ///< last linear solve
   std::vector<NewtonStep> newton;  ///< Neo-Hookean only
   Timings timings;
 };

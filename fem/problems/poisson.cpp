@@ -4,6 +4,7 @@
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
 #include "fem/problems/constraints.hpp"
+#include "fem/problems/nitsche.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -68,6 +69,43 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   return system;
 }
 
+namespace {
+
+/// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F.
+void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
+                 const PoissonProblem& problem, const ScalarDirichlet& bc,
+                 const DirichletFaceSplit& split, AssembledSystem& system) {
+  const FacePoints& P = split.points;
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  Eigen::MatrixXd Ke(n, n);
+  Eigen::VectorXd Fe(n);
+  for (int k = 0; k < P.size(); ++k) {
+    if (!split.used[std::size_t(k)]) continue;
+    const int cell = P.cell[k];
+    const Eigen::Vector3d x = P.x.row(k).transpose();
+    const Eigen::Vector3d normal = P.normal.row(k).transpose();
+    const double kappa = problem.cell_kappa ? problem.cell_kappa(cell, x)
+                         : problem.kappa    ? problem.kappa(x)
+                                            : 1.0;
+    const double h =
+        nitsche_length(mesh, cell, space.boundary_faces[std::size_t(P.face[k])].opposite);
+    const double beta = kappa * nitsche_penalty(space.degree, h);
+    const Eigen::Map<const Eigen::VectorXd> phi(P.basis.row(P.basis_row[k]).data(), n);
+    const Eigen::VectorXd dn = P.gradients[std::size_t(k)] * normal;  // ∂φ/∂n
+    const double w = P.ds_w[k], g = bc.value(x);
+    Ke.noalias() = (-w * kappa) * (phi * dn.transpose() + dn * phi.transpose());
+    Ke.noalias() += (w * beta) * (phi * phi.transpose());
+    Fe.noalias() = (w * g) * (beta * phi - kappa * dn);
+    for (int a = 0; a < n; ++a) {
+      const int da = space.cell_dofs(cell, a);
+      system.F[da] += Fe[a];
+      for (int b = 0; b < n; ++b) system.K.coeffRef(da, space.cell_dofs(cell, b)) += Ke(a, b);
+    }
+  }
+}
+
+}  // namespace
+
 PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
                               const PoissonProblem& problem, const LinearSolverOptions& solver) {
   PoissonSolution result;
@@ -77,14 +115,26 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
     ScopedTimer t(result.timings, "assembly");
     system = assemble_poisson(mesh, space, problem);
   }
+  std::vector<DirichletFaceSplit> splits;
+  {
+    ScopedTimer t(result.timings, "assembly");  // the Nitsche terms
+    for (const auto& bc : problem.dirichlet) {
+      splits.push_back(
+          split_dirichlet_faces(mesh, space, bc.faces, bc.where, problem.partial_dirichlet));
+      add_nitsche(mesh, space, problem, bc, splits.back(), system);
+      result.nitsche_faces += splits.back().partial_faces;
+    }
+  }
   Constraints constraints;
   constraints.fixed.assign(space.num_dofs, 0);
   constraints.values = Eigen::VectorXd::Zero(space.num_dofs);
-  for (const auto& bc : problem.dirichlet)
-    for_each_boundary_dof(space, bc.faces, bc.where, [&](int d) {
+  for (std::size_t i = 0; i < problem.dirichlet.size(); ++i) {
+    const auto& bc = problem.dirichlet[i];
+    for_each_boundary_dof(space, splits[i].strong, bc.where, [&](int d) {
       constraints.fixed[d] = 1;
       constraints.values[d] = bc.value(space.dof_points.row(d).transpose());
     });
+  }
   result.free_dofs = space.num_dofs - constraints.num_fixed();
   if (result.free_dofs == space.num_dofs && problem.dirichlet.empty())
     log::warn("Poisson problem without Dirichlet condition: the solution is not unique");

@@ -21,11 +21,14 @@ struct PoissonProblem {
   std::vector<ScalarDirichlet> dirichlet;
   std::vector<ScalarNeumann> neumann;
   int quadrature_degree = -1;  ///< -1: default_quadrature_degree(p, k, stiffness)
+  /// Dirichlet faces that a condition's filter selects only in part (fem/problems/nitsche.hpp).
+  PartialDirichlet partial_dirichlet = PartialDirichlet::nitsche;
 };
 
 struct PoissonSolution {
   Eigen::VectorXd u;  ///< per DOF
   int dofs = 0, free_dofs = 0;
+  int nitsche_faces = 0;  ///< boundary faces with Dirichlet data imposed weakly (partial faces)
   LinearSolveInfo solve;
   Timings timings;
 };

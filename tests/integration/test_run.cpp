@@ -92,6 +92,10 @@ TEST(Run, BrokenCasesNameTheJsonPath) {
       {R"("exact": "x*x*y", "exact_gradient": ["2*x*y", "x", "0"])",
        "/exact_gradient/1: is not the derivative of exact"},
       {R"("exact_gradient": ["1", "0", "0"])", "/exact_gradient: needs \"exact\""},
+      {R"("discretization": {"partial_dirichlet": "weak"})",
+       "/discretization/partial_dirichlet: 'weak': expected nitsche or nodal"},
+      {R"("physics": {"type": "neo_hookean"}, "discretization": {"partial_dirichlet": "nitsche"})",
+       "/discretization/partial_dirichlet: Neo-Hookean imposes Dirichlet data nodally only"},
       {R"("rhs": "2*nx")", "/rhs: \"2*nx\" uses nx, ny or nz (the outward normal)"},
       {R"("boundary_conditions": [{"type": "dirichlet", "select": {"tag": 1}, "value": "nz"}])",
        "/boundary_conditions/0/value: nx, ny, nz (the mesh's outward normal at a quadrature "

@@ -432,7 +432,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (c.kappa.empty() && c.physics == "poisson") c.kappa = Expression("1", "/physics/kappa");
 
   if (const json* d = r.get(j, "discretization")) {
-    r.only_keys(*d, "/discretization", {"degree", "quadrature"});
+    r.only_keys(*d, "/discretization", {"degree", "quadrature", "partial_dirichlet"});
+    if (const json* v = r.get(*d, "partial_dirichlet")) {
+      c.partial_dirichlet = r.string(*v, "/discretization/partial_dirichlet");
+      if (c.partial_dirichlet != "nitsche" && c.partial_dirichlet != "nodal")
+        fail("/discretization/partial_dirichlet",
+             "'" + c.partial_dirichlet + "': expected nitsche or nodal", r.file);
+      if (c.partial_dirichlet == "nitsche" && c.physics == "neo_hookean")
+        fail("/discretization/partial_dirichlet",
+             "Neo-Hookean imposes Dirichlet data nodally only (\"nodal\")", r.file);
+    }
     if (const json* v = r.get(*d, "degree"))
       c.degree = r.integer(*v, "/discretization/degree", 1, 4);
     if (const json* v = r.get(*d, "quadrature")) {
@@ -441,6 +450,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
         c.quadrature = r.integer(*v, "/discretization/quadrature", 0, 30);
     }
   }
+  if (c.partial_dirichlet.empty())
+    c.partial_dirichlet = c.physics == "neo_hookean" ? "nodal" : "nitsche";
   const int comps = c.components();
   if (const json* v = r.get(j, "rhs")) c.rhs = r.expressions(*v, "/rhs", comps);
   if (const json* v = r.get(j, "exact")) c.exact = r.expressions(*v, "/exact", comps);
@@ -627,7 +638,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
   if (c.physics == "neo_hookean") res["physics"]["load_steps"] = c.load_steps;
   res["discretization"] = {{"degree", c.degree},
-                           {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)}};
+                           {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
+                           {"partial_dirichlet", c.partial_dirichlet}};
   res["rhs"] = c.rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(c.rhs);
   res["boundary_conditions"] = json::array();
   for (const auto& bc : c.boundary_conditions) {

@@ -71,7 +71,10 @@ struct CaseSpec {
   std::optional<double> E_inside, nu_inside;
   int load_steps = 1;  ///< neo_hookean
   int degree = 1;
-  int quadrature = -1;          ///< -1 = default
+  int quadrature = -1;  ///< -1 = default
+  /// Dirichlet faces a selection covers in part: "nitsche" (weakly; Poisson, linear elasticity)
+  /// or "nodal" (the DOFs the selection covers are fixed; Neo-Hookean's only mode).
+  std::string partial_dirichlet;
   std::vector<Expression> rhs;  ///< empty, 1 or 3
   std::vector<BoundaryConditionSpec> boundary_conditions;
   std::vector<Expression> exact;  ///< empty, 1 or 3

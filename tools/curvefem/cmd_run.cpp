@@ -579,6 +579,9 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   // (the case file refuses nx, ny, nz in Dirichlet values).
   const SurfacePipeline* sp = &pipeline;
   const bool on_input = spec.dense_surface();
+  const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == "nodal"
+                                                      ? fem::PartialDirichlet::nodal
+                                                      : fem::PartialDirichlet::nitsche;
   auto dirichlet_value = [&](const Expression& e) -> fem::ScalarField {
     if (!on_input) return [e](const Eigen::Vector3d& x) { return e(x); };
     return [e, sp](const Eigen::Vector3d& x) { return e(sp->data_point(x)); };
@@ -621,6 +624,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
       problem.rhs = [f](const Eigen::Vector3d& x) { return f(x); };
     }
     problem.quadrature_degree = spec.quadrature;
+    problem.partial_dirichlet = partial_dirichlet;
     for (const auto& bc : spec.boundary_conditions) {
       Selected sel = select(bc);
       if (bc.type == "dirichlet")
@@ -633,6 +637,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     solve_info = sol.solve;
     for (const auto& [stage, s] : sol.timings.stages()) timings.add(stage, s);
     physics_report["free_dofs"] = sol.free_dofs;
+    physics_report["nitsche_faces"] = sol.nitsche_faces;
   } else {
     fem::ElasticityProblem problem;
     problem.material = {spec.E, spec.nu};
@@ -648,6 +653,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     }
     cell_material = problem.cell_material;
     problem.quadrature_degree = spec.quadrature;
+    problem.partial_dirichlet = partial_dirichlet;
     auto vector_field = [](const std::vector<Expression>& e) {
       return [e](const Eigen::Vector3d& x) { return Eigen::Vector3d(e[0](x), e[1](x), e[2](x)); };
     };
@@ -698,6 +704,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     solve_info = sol.solve;
     for (const auto& [stage, s] : sol.timings.stages()) timings.add(stage, s);
     physics_report["free_unknowns"] = sol.free_unknowns;
+    if (spec.physics == "linear_elasticity") physics_report["nitsche_faces"] = sol.nitsche_faces;
     physics_report["E"] = spec.E;
     physics_report["nu"] = spec.nu;
   }
