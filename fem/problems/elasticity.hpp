@@ -35,9 +35,11 @@ struct ElasticityProblem {
   std::vector<VectorDirichlet> dirichlet;
   std::vector<VectorNeumann> traction;
   int quadrature_degree = -1;
-  /// Dirichlet faces that a condition's filter selects only in part (fem/problems/nitsche.hpp):
-  /// linear elasticity only; Neo-Hookean always fixes the DOFs the filter passes (nodal).
-  PartialDirichlet partial_dirichlet = PartialDirichlet::nitsche;
+  /// Dirichlet faces that a condition's filter selects only in part (fem/problems/nitsche.hpp).
+  /// Nodal by default: a clamp whose edge cuts coarse faces comes out too stiff by Nitsche (the
+  /// face's polynomial, held near zero on part of the face, is held on all of it; fem/README.md).
+  /// Nitsche: linear elasticity only; Neo-Hookean always fixes the DOFs the filter passes.
+  PartialDirichlet partial_dirichlet = PartialDirichlet::nodal;
 };
 
 struct NewtonStep {

@@ -38,7 +38,8 @@ DirichletFaceSplit split_dirichlet_faces(const LagrangeMesh& mesh, const Functio
                                          const std::vector<char>& faces, const PointFilter& where,
                                          PartialDirichlet mode);
 
-/// h = 3 |T| / |F| with the corners of `cell` and of its face opposite local vertex j.
+/// h = 3 |T| / |F| with the corners of `cell` and of its face opposite local vertex j (at least
+/// 1e-3 √|F|: a curved cell's corners can be nearly coplanar).
 double nitsche_length(const LagrangeMesh& mesh, int cell, int j);
 
 /// β / κ = 4 (p + 1)(p + 3) / h.

@@ -72,8 +72,9 @@ struct CaseSpec {
   int load_steps = 1;  ///< neo_hookean
   int degree = 1;
   int quadrature = -1;  ///< -1 = default
-  /// Dirichlet faces a selection covers in part: "nitsche" (weakly; Poisson, linear elasticity)
-  /// or "nodal" (the DOFs the selection covers are fixed; Neo-Hookean's only mode).
+  /// Dirichlet faces a selection covers in part: "nitsche" (weakly; Poisson's default, linear
+  /// elasticity on request) or "nodal" (the DOFs the selection covers are fixed; elasticity's
+  /// default, Neo-Hookean's only mode).
   std::string partial_dirichlet;
   std::vector<Expression> rhs;  ///< empty, 1 or 3
   std::vector<BoundaryConditionSpec> boundary_conditions;
