@@ -557,4 +557,12 @@ TEST(RunSurface, PressureLoadOnTheCurvedBallUsesTheCurvedNormal) {
   EXPECT_EQ(run.report["physics_details"]["nitsche_faces"], 16);
   EXPECT_LT(run.report["l2_error"].get<double>(), kL2Bound);
   EXPECT_LT(run.report["surface_max_error"].get<double>(), kSurfaceMaxBound);
+  // Without the key, elasticity fixes the covered DOFs (its default): no Nitsche face, and the
+  // smooth data's error is the nodal one above.
+  const SphereRun nodal =
+      run_on_sphere("run_normal_pressure_curved_nodal", 3,
+                    pressure_case(R"({"method": "curved", "order": 2, "eps": 0.01})", 2));
+  ASSERT_FALSE(nodal.report.is_null());
+  EXPECT_EQ(nodal.report["physics_details"]["nitsche_faces"], 0);
+  EXPECT_GT(nodal.report["l2_error"].get<double>(), 10 * run.report["l2_error"].get<double>());
 }
