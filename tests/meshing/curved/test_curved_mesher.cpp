@@ -264,6 +264,54 @@ TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
   }
 }
 
+// A padding thinner than the shell: the outer slab surface reaches past the input's bounding box
+// padded by 0.1% of its longest edge, so the box is pushed out to keep a quarter of the padding
+// between it and the outer surface on every side, and the mesh is still valid.
+TEST(CurvedMesher, ExteriorBoxIsPushedOutWhereTheOuterSurfaceComesClose) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.4, 40, 16);
+  const Eigen::Vector3d in_lo = torus.V.colwise().minCoeff().transpose();
+  const Eigen::Vector3d in_hi = torus.V.colwise().maxCoeff().transpose();
+  const double unit = (in_hi - in_lo).maxCoeff(), pad = 0.001 * unit, margin = pad / 4;
+  for (const bool optimize : {false, true}) {
+    SCOPED_TRACE(optimize ? "optimized" : "not optimized");
+    cv::CurvedMeshOptions o;
+    o.order = 2;
+    o.exterior = true;
+    o.exterior_padding = 0.001;
+    if (!optimize) o.optimize.sweeps = 0, o.optimize.flips = false;
+    cv::CurvedMeshStats stats;
+    const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
+    const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+    EXPECT_TRUE(check.valid(1e-2));
+    EXPECT_EQ(check.exterior_faces_off_box, 0);
+    // Pushed out on every side: the outer surface, raised above the shell's top where coarse
+    // faces are long, reaches well past the padding (measured: lo.x −1.644 against −1.403).
+    EXPECT_TRUE((stats.exterior_box_lo.array() < in_lo.array() - pad).all());
+    EXPECT_TRUE((stats.exterior_box_hi.array() > in_hi.array() + pad).all());
+    // The outer slab's corners (tag 3): the box is set from the outer surface when the exterior
+    // is filled, exactly the margin away from it on every side; the optimization afterwards
+    // moves outer vertices inward only (measured gaps 0.092..0.123).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
+    for (int c = 0; c < m.mesh.num_cells(); ++c)
+      if (m.mesh.cell_tags[c] == 3)
+        for (int j = 0; j < 4; ++j) {
+          const Eigen::Vector3d x = m.mesh.nodes.row(m.mesh.cells(c, j)).transpose();
+          lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+        }
+    for (int a = 0; a < 3; ++a) {
+      const double below = lo[a] - stats.exterior_box_lo[a];
+      const double above = stats.exterior_box_hi[a] - hi[a];
+      if (optimize) {
+        EXPECT_GE(below, margin * (1 - 1e-9)) << "axis " << a;
+        EXPECT_GE(above, margin * (1 - 1e-9)) << "axis " << a;
+      } else {
+        EXPECT_NEAR(below, margin, 1e-12 * unit) << "axis " << a;
+        EXPECT_NEAR(above, margin, 1e-12 * unit) << "axis " << a;
+      }
+    }
+  }
+}
+
 // The outer slab layer is thickened like the inner one and repaired the same way: on a torus
 // with a narrow hole (radius 0.08), K = 2, the coarse shell's tops cross near the hole and the
 // repair pulls those outer vertices toward the middle surface (measured: 6), while elsewhere the
