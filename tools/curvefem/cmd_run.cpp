@@ -24,6 +24,7 @@
 #include "fem/problems/error_norms.hpp"
 #include "fem/problems/interpolation.hpp"
 #include "fem/problems/poisson.hpp"
+#include "fem/quadrature/simplex_quadrature.hpp"
 #include "fem/space/function_space.hpp"
 #include "mapping/boundary_inverse.hpp"
 #include "mapping/selection.hpp"
@@ -331,7 +332,7 @@ void set_outer_box(SurfacePipeline& p, const LagrangeMesh& mesh, double padding)
 /// are flagged; the point filter does the selecting, point-wise on the input.
 Selected select_on_input(const BoundaryConditionSpec& bc, const SurfacePipeline& p,
                          const LagrangeMesh& mesh, const fem::FunctionSpace& space,
-                         const std::string& file) {
+                         const std::string& file, bool weak_dirichlet) {
   const SurfaceMesh& input = p.input;
   const mapping::BoundaryInverse& inverse = *p.inverse;
   Selected out;
@@ -382,15 +383,18 @@ Selected select_on_input(const BoundaryConditionSpec& bc, const SurfacePipeline&
       return mapping::selects_point(s, site);
     };
   }
+  // A Neumann selection, or a Dirichlet one imposed by Nitsche on faces it cuts, acts at the
+  // face quadrature points the assembly uses; a nodal Dirichlet one at nodes.
+  const bool at_points = bc.type == "neumann" || weak_dirichlet;
   long long count = 0;
   fem::for_each_boundary_dof(space, out.faces, out.where, [&](int) { ++count; });
-  if (count == 0 && bc.type == "neumann")
+  if (count == 0 && at_points)
     fem::for_each_face_point(
-        mesh, space, out.faces, 2 * space.degree,
+        mesh, space, out.faces,
+        fem::default_quadrature_degree(space.degree, mesh.order, fem::QuadratureUse::mass),
         [&](int, int, const fem::FacePoint& p) { count += !out.where || out.where(p.x); });
   if (count == 0)
-    throw InputError(s.where + ": selects no boundary " +
-                         (bc.type == "neumann" ? "point" : "node") +
+    throw InputError(s.where + ": selects no boundary " + (at_points ? "point" : "node") +
                          " of the mesh (the selected part of the input is smaller than the "
                          "mesh resolution)",
                      {.file = file});
@@ -571,7 +575,8 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   }
   // Boundary data: on the mesh (given) or on the dense input through φ⁻¹ (curved, dense).
   auto select = [&](const BoundaryConditionSpec& bc) {
-    return spec.dense_surface() ? select_on_input(bc, pipeline, mesh, space, case_name)
+    return spec.dense_surface() ? select_on_input(bc, pipeline, mesh, space, case_name,
+                                                  spec.partial_dirichlet == "nitsche")
                                 : select_faces(bc.select, face_tags, space, case_name);
   };
   // Boundary values: on a dense input surface at data_point(x) (φ⁻¹(x) on the input), on a given
