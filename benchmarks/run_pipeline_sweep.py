@@ -23,6 +23,7 @@ One run at a time; `uptime` is recorded before each. Runs stay in --work; a fina
 """
 import argparse
 import datetime
+import functools
 import json
 import os
 import shlex
@@ -61,7 +62,8 @@ def manifest():
     return [dict(zip(head, r)) for r in rows[1:]]
 
 
-def bbox(path):
+@functools.lru_cache(maxsize=None)
+def bbox(path):  # read once per mesh (the curved and the dense case both need it)
     lo, hi = [float("inf")] * 3, [float("-inf")] * 3
     with open(path) as f:
         for line in f:

@@ -41,10 +41,11 @@ DirichletFaceSplit split_dirichlet_faces(const LagrangeMesh& mesh, const Functio
       evaluate_at_face_points(all, where, [](int, const Eigen::Vector3d&) {});
   // Per face: how many of its quadrature points pass, and whether all of its DOFs pass.
   const std::size_t nf = faces.size();
-  std::vector<int> points(nf, 0), passing(nf, 0);
+  std::vector<int> points(nf, 0), passing(nf, 0), first(nf, -1);
   for (int k = 0; k < all.size(); ++k) {
-    ++points[std::size_t(all.face[k])];
-    passing[std::size_t(all.face[k])] += used[std::size_t(k)];
+    const std::size_t f = std::size_t(all.face[k]);
+    if (points[f]++ == 0) first[f] = k;
+    passing[f] += used[std::size_t(k)];
   }
   const auto& lattice = lagrange_lattice(CellKind::tetrahedron, space.degree);
   const int n = static_cast<int>(space.cell_dofs.cols());
@@ -62,8 +63,15 @@ DirichletFaceSplit split_dirichlet_faces(const LagrangeMesh& mesh, const Functio
     ++out.partial_faces;
   }
   if (out.partial_faces == 0) return out;
+  // The same rule again, with gradients, on the partial faces only: each face's points come in
+  // the same order, so the filter's answers are taken from the first pass (no second φ⁻¹).
   out.points = face_points(mesh, space, partial, face_degree, /*with_gradients=*/true);
-  out.used = evaluate_at_face_points(out.points, where, [](int, const Eigen::Vector3d&) {});
+  out.used.resize(std::size_t(out.points.size()));
+  for (int k = 0, at = 0; k < out.points.size(); ++k) {
+    const std::size_t f = std::size_t(out.points.face[k]);
+    at = k > 0 && out.points.face[k - 1] == out.points.face[k] ? at + 1 : 0;
+    out.used[std::size_t(k)] = used[std::size_t(first[f] + at)];
+  }
   return out;
 }
 
