@@ -21,6 +21,7 @@
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/curved/slab_nodes.hpp"
 #include "meshing/editing/algorithms/tet_flips.hpp"
 #include "meshing/shell/bevel.hpp"
 #include "meshing/shell/projection.hpp"
@@ -36,8 +37,6 @@ namespace curvefem::meshing::curved {
 namespace {
 
 namespace sh = meshing::shell;
-
-constexpr double k_xy[3][2] = {{0, 0}, {1, 0}, {0, 1}};
 
 // A node is identified by the multiset of global corner ids it is a lattice point of (each id
 // repeated by its multi-index entry): the same point of the same sub-simplex in any cell.
@@ -73,56 +72,28 @@ struct TetNodes {
   Eigen::MatrixXd nodes;  // #lattice × 3, canonical order
 };
 
-Eigen::Vector3d evaluate_patch(const std::vector<Eigen::Vector3d>& d, int order, double u,
-                               double v) {
-  const Eigen::VectorXd phi =
-      lagrange_shape_values(CellKind::triangle, order, Eigen::Vector3d(u, v, 0));
-  Eigen::Vector3d out = Eigen::Vector3d::Zero();
-  for (int i = 0; i < phi.size(); ++i) out += phi[i] * d[std::size_t(i)];
-  return out;
-}
-
-// The nodes of an order-k slab tet with corners P, corner j at local triangle vertex lv[j] and
-// on the middle surface when on_mid[j]: each node is its linear point plus its share h of the
-// middle corners times the patch displacement d (per triangle lattice node) at its (u, v).
-Eigen::MatrixXd slab_tet_nodes(int k, const Eigen::Vector3d (&P)[4], const int (&lv)[4],
-                               const int (&on_mid)[4], const std::vector<Eigen::Vector3d>& d) {
-  const auto& tet_lattice = lagrange_lattice(CellKind::tetrahedron, k);
-  Eigen::MatrixXd nodes(Eigen::Index(tet_lattice.size()), 3);
-  for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
-    const auto& b = tet_lattice[n];
-    Eigen::Vector3d L = Eigen::Vector3d::Zero();
-    double u = 0, v = 0, h = 0;
-    for (int j = 0; j < 4; ++j) {
-      const double l = double(b[j]) / k;
-      L += l * P[j];
-      u += l * k_xy[lv[j]][0];
-      v += l * k_xy[lv[j]][1];
-      h += l * on_mid[j];
-    }
-    nodes.row(Eigen::Index(n)) = (h > 0 ? L + h * evaluate_patch(d, k, u, v) : L).transpose();
-  }
-  return nodes;
-}
-
 // Are the 3 bottom (with `upper`: top) slab tets of a prism (rotated corners, no pinch) with
-// its middle triangle displaced by d certified positive? `far`: the base (top) corners.
+// its middle triangle displaced by d certified positive, with the low-degree slab nodes or else
+// with the full shear (slab_nodes.hpp)? `far`: the base (top) corners.
 bool slab_certified(int k, const std::array<Eigen::Vector3d, 3>& far,
                     const std::array<Eigen::Vector3d, 3>& mid, bool upper, bool type_a,
                     const std::vector<Eigen::Vector3d>& d) {
-  for (const auto& tet : sh::split_tets(type_a)) {
-    Eigen::Vector3d P[4];
-    int lv[4], on_mid[4];
-    for (int j = 0; j < 4; ++j) {
-      lv[j] = tet[j] % 3;
-      on_mid[j] = (tet[j] >= 3) != upper;
-      P[j] = on_mid[j] ? mid[std::size_t(lv[j])] : far[std::size_t(lv[j])];
+  auto certified = [&](const SlabBlend& blend) {
+    for (const auto& tet : sh::split_tets(type_a)) {
+      Eigen::Vector3d P[4];
+      int lv[4], on_mid[4];
+      for (int j = 0; j < 4; ++j) {
+        lv[j] = tet[j] % 3;
+        on_mid[j] = (tet[j] >= 3) != upper;
+        P[j] = on_mid[j] ? mid[std::size_t(lv[j])] : far[std::size_t(lv[j])];
+      }
+      if (certify_tet_jacobian(k, slab_tet_nodes(k, P, lv, on_mid, d, blend)).verdict !=
+          JacobianVerdict::positive)
+        return false;
     }
-    if (certify_tet_jacobian(k, slab_tet_nodes(k, P, lv, on_mid, d)).verdict !=
-        JacobianVerdict::positive)
-      return false;
-  }
-  return true;
+    return true;
+  };
+  return certified({}) || (k > 2 && certified({false, {false, false, false}}));
 }
 
 class Builder {
@@ -155,6 +126,8 @@ class Builder {
   std::vector<std::vector<Eigen::Vector3d>>
       raw;  // per face, per triangle node: fiber target - linear
   std::vector<double> alpha;
+  // Per face: the low-degree slab nodes (1) or the full shear t · d (0), slab_nodes.hpp.
+  std::vector<char> smooth;
   std::vector<std::vector<Owned>> owned;
   int fiber_misses = 0;
 
@@ -316,8 +289,8 @@ class Builder {
   bool meets_eps(int f, double eps) const {
     const auto d = node_displacements(f);
     for (const Owned& o : owned[f])
-      if (!((linear_mid(f, o.u, o.v) + evaluate_patch(d, k, o.u, o.v) - point(o.vertex)).norm() <=
-            eps))
+      if (!((linear_mid(f, o.u, o.v) + patch_displacement(d, k, o.u, o.v) - point(o.vertex))
+                .norm() <= eps))
         return false;
     return true;
   }
@@ -351,11 +324,39 @@ class Builder {
       for (int i = 0; i < 4; ++i)
         for (int j = i + 1; j < 4; ++j) repeated |= t.gid[i] == t.gid[j];
       if (repeated) continue;
-      t.nodes = slab_tet_nodes(k, P, lv, on_mid, d);
+      t.nodes = slab_tet_nodes(k, P, lv, on_mid, d, blend_of(f));
       out.push_back(std::move(t));
     }
     return out;
   }
+
+  // Face f's slab construction: its own inside, the side quad over each edge low-degree only
+  // when every face on that edge is.
+  SlabBlend blend_of(int f) const {
+    SlabBlend b;
+    if (smooth.empty() || k < 3) return b;
+    b.face = smooth[f] != 0;
+    for (int i = 0; i < 3; ++i) {
+      const int p = rotated(f, (i + 1) % 3), q = rotated(f, (i + 2) % 3);
+      bool all = true;
+      for (int g : edge_faces.at({std::min(p, q), std::max(p, q)})) all = all && smooth[g];
+      b.edge[i] = all;
+    }
+    return b;
+  }
+  // Faces on the full shear try the low-degree slab again (after the thickening deepened the
+  // slabs), kept when their slabs and those of the faces across their edges certify.
+  void raise_smooth(double eps) {
+    if (k < 3) return;
+    for (int f = 0; f < nf; ++f) {
+      if (smooth[f]) continue;
+      smooth[f] = 1;
+      bool ok = face_check(f, eps) == 0;
+      for (int g : across(f)) ok = ok && face_check(g, eps) == 0;
+      if (!ok) smooth[f] = 0;
+    }
+  }
+  int shear_faces() const { return int(std::count(smooth.begin(), smooth.end(), 0)); }
 
   // Every tet of face f's bottom (upper = false) or top half-prism slab certified positive.
   bool layer_certified(int f, bool upper) const {
@@ -465,9 +466,24 @@ class Builder {
     const Eigen::MatrixXi F = s.F;
     bool clean = false;
     for (round = 0; round < 40 && !clean; ++round) {
-      std::vector<char> ok(nf, 1);
-      tbb::parallel_for(0, nf, [&](int f) { ok[f] = face_check(f, eps) == 0; });
+      std::vector<char> ok(nf, 1), uncertified(nf, 0);
+      tbb::parallel_for(0, nf, [&](int f) {
+        const int verdict = face_check(f, eps);
+        ok[f] = verdict == 0;
+        uncertified[f] = verdict == 1;
+      });
       clean = std::count(ok.begin(), ok.end(), 0) == 0;
+      // A face whose low-degree slab fails takes the full shear before anything moves.
+      bool sheared = false;
+      for (int f = 0; f < nf; ++f)
+        if (uncertified[f] && k > 2 && smooth[f]) {
+          smooth[f] = 0;
+          sheared = true;
+        }
+      if (sheared) {
+        clean = false;
+        continue;
+      }
       std::vector<std::vector<char>> shrink(std::size_t(layers), std::vector<char>(nv, 0));
       std::vector<std::vector<char>> deepen = shrink;  // toward the middle (intersections only)
       for (int f = 0; f < nf; ++f) {
@@ -521,6 +537,7 @@ class Builder {
                          " surface of the slab layer could not be made free of "
                          "self-intersections with certified slabs in 40 rounds");
     if (recurve) raise_alpha(eps);
+    raise_smooth(eps);
     int moved = 0;
     pulled_above.assign(nv, 0);
     for (int v = 0; v < nv; ++v) {
@@ -804,6 +821,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.fiber_misses = b.fiber_misses;
   const int nf = b.nf, nv = b.nv;
   b.alpha.assign(nf, 1.0);
+  b.smooth.assign(nf, 1);
   std::vector<int> deferred_top;  // linear faces whose outer slab only thicken() can certify
   std::vector<int> work(nf);
   for (int f = 0; f < nf; ++f) work[f] = f;
@@ -821,7 +839,17 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     }
     if (failing.empty()) break;
     std::vector<int> next;
+    for (std::size_t i = 0; i < work.size(); ++i) {
+      // A face whose low-degree slab is not certified takes the full shear first.
+      const int f = work[i];
+      if (verdict[i] == 1 && k > 2 && b.smooth[f]) {
+        b.smooth[f] = 0;
+        for (int g : b.across(f)) next.push_back(g);
+      }
+    }
     for (int f : failing) {
+      if (k > 2 && !b.smooth[f] && std::find(next.begin(), next.end(), f) != next.end())
+        continue;             // just sheared: checked again first
       if (b.alpha[f] == 0) {  // lower the faces across its edges that need full curving
         const std::vector<int> lowered = b.lower_for(f);
         for (int g : lowered)
@@ -907,6 +935,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.outer_raised_vertices = b.outer_raised;
     stats.outer_lowered_vertices = b.outer_lowered;
     stats.faces_recurved = b.alpha_raised;
+    stats.faces_sheared = b.shear_faces();
     stats.stage_seconds.emplace_back(attempt ? "thicken (retry)" : "thicken", watch.seconds());
     watch = Stopwatch();
     if (progress) progress("fill interior", 0.0);

@@ -146,6 +146,9 @@ struct CurvedMeshStats {
   int curve_deferred_outer = 0;
   // Faces whose α rose again once the slab layer was deepened (the counts above are final).
   int faces_recurved = 0;
+  // Faces whose slab keeps the full shear t · d (slab_nodes.hpp): the low-degree slab nodes were
+  // not certified there (thin slabs under an inward bulge). 0 at K ≤ 2.
+  int faces_sheared = 0;
   int distance_points = 0;  // constraint points + samples (besides the input vertices)
   int fiber_misses = 0;     // curved nodes whose fiber found no input point (kept linear)
   int curving_rounds = 0;

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "meshing/check/self_intersections.hpp"
+#include "meshing/curved/element_distortion.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 
 namespace curvefem::meshing::curved {
@@ -84,12 +85,14 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
   // Positivity certificates and quality.
   std::vector<JacobianVerdict> verdict(nt);
   std::vector<double> sj(nt), mips(nt);
+  std::vector<ElementDistortion> distortion(nt);
   tbb::parallel_for(0, nt, [&](int c) {
     Eigen::MatrixXd X(mesh.cells.cols(), 3);
     for (int n = 0; n < X.rows(); ++n) X.row(n) = mesh.nodes.row(mesh.cells(c, n));
     verdict[c] = certify_tet_jacobian(k, X).verdict;
     sj[c] = min_scaled_jacobian(k, X);
     mips[c] = curved_mips(k, X);
+    distortion[c] = element_distortion(k, X);
   });
   r.min_scaled_jacobian = nt ? HUGE_VAL : 0;
   for (int c = 0; c < nt; ++c) {
@@ -99,15 +102,30 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
     r.min_scaled_jacobian = std::min(r.min_scaled_jacobian, sj[c]);
     r.mean_mips += mips[c] / std::max(nt, 1);
     r.max_mips = std::max(r.max_mips, mips[c]);
+    const ElementDistortion& d = distortion[c];
+    r.min_jacobian_ratio = std::min(r.min_jacobian_ratio, d.jacobian_ratio);
+    r.max_d2 = std::max(r.max_d2, d.d2);
+    r.max_d3 = std::max(r.max_d3, d.d3);
+    r.mean_d2 += d.d2 / std::max(nt, 1);
+    r.mean_d3 += d.d3 / std::max(nt, 1);
     if (mesh.cell_tags.size() == nt) {
       auto& q = r.quality_by_tag[mesh.cell_tags[c]];
       ++q.tets;
       q.min_scaled_jacobian = std::min(q.min_scaled_jacobian, sj[c]);
       q.mean_mips += mips[c];
       q.max_mips = std::max(q.max_mips, mips[c]);
+      q.min_jacobian_ratio = std::min(q.min_jacobian_ratio, d.jacobian_ratio);
+      q.max_d2 = std::max(q.max_d2, d.d2);
+      q.max_d3 = std::max(q.max_d3, d.d3);
+      q.mean_d2 += d.d2;
+      q.mean_d3 += d.d3;
     }
   }
-  for (auto& [tag, q] : r.quality_by_tag) q.mean_mips /= std::max(q.tets, 1);
+  for (auto& [tag, q] : r.quality_by_tag) {
+    q.mean_mips /= std::max(q.tets, 1);
+    q.mean_d2 /= std::max(q.tets, 1);
+    q.mean_d3 /= std::max(q.tets, 1);
+  }
   r.cell_certificate.resize(nt);
   for (int c = 0; c < nt; ++c)
     r.cell_certificate[c] = verdict[c] == JacobianVerdict::positive       ? 1
@@ -115,6 +133,14 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
                                                                           : 0;
   r.cell_scaled_jacobian = std::move(sj);
   r.cell_mips = std::move(mips);
+  r.cell_jacobian_ratio.resize(nt);
+  r.cell_d2.resize(nt);
+  r.cell_d3.resize(nt);
+  for (int c = 0; c < nt; ++c) {
+    r.cell_jacobian_ratio[c] = distortion[c].jacobian_ratio;
+    r.cell_d2[c] = distortion[c].d2;
+    r.cell_d3[c] = distortion[c].d3;
+  }
 
   // Boundary faces of the volume (by corner nodes) against the map's triangles.
   {

@@ -32,15 +32,19 @@ struct CurvedValidation {
   int tets = 0, non_positive_tets = 0, undecided_tets = 0;
   int first_bad_tet = -1;
   double min_scaled_jacobian = 0, mean_mips = 0, max_mips = 0;
+  // Distortion of the element maps (element_distortion.hpp): worst and mean over the tets.
+  double min_jacobian_ratio = 1, max_d2 = 0, mean_d2 = 0, max_d3 = 0, mean_d3 = 0;
   struct Quality {
     int tets = 0;
     double min_scaled_jacobian = HUGE_VAL, mean_mips = 0, max_mips = 0;
+    double min_jacobian_ratio = HUGE_VAL, max_d2 = 0, mean_d2 = 0, max_d3 = 0, mean_d3 = 0;
   };
   std::map<int, Quality> quality_by_tag;  // by LagrangeMesh::cell_tags (1 slab, 2 interior)
   // Per tet: certificate (1 positive, 0 undecided, -1 not positive), sampled min scaled Jacobian
   // and curved MIPS (estimates, see jacobian_certificate.hpp).
   std::vector<int> cell_certificate;
   std::vector<double> cell_scaled_jacobian, cell_mips;
+  std::vector<double> cell_jacobian_ratio, cell_d2, cell_d3;  // element_distortion.hpp
   int boundary_faces = 0, boundary_faces_missing = 0, boundary_faces_extra = 0;
   int boundary_node_mismatches = 0;
   // --exterior meshes: the boundary of the whole mesh must lie on its bounding box.

@@ -59,7 +59,12 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
                       : std::to_string(tag)] = {{"tets", q.tets},
                                                 {"min_scaled_jacobian", q.min_scaled_jacobian},
                                                 {"mean_mips", q.mean_mips},
-                                                {"max_mips", q.max_mips}};
+                                                {"max_mips", q.max_mips},
+                                                {"min_jacobian_ratio", q.min_jacobian_ratio},
+                                                {"max_d2", q.max_d2},
+                                                {"mean_d2", q.mean_d2},
+                                                {"max_d3", q.max_d3},
+                                                {"mean_d3", q.mean_d3}};
   return {{"valid", v.valid(eps_rel)},
           {"tets", v.tets},
           {"min_jacobian_certified", v.certified()},
@@ -69,6 +74,15 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"min_scaled_jacobian", v.min_scaled_jacobian},
           {"mean_mips", v.mean_mips},
           {"max_mips", v.max_mips},
+          {"distortion",
+           {{"definition",
+             "per tet, sampled: jacobian_ratio = min/max det J; d2 = |D2F| |DF^-1|, d3 = |D3F| "
+             "|DF^-1| (reference tet; 0 when straight), element_distortion.hpp"},
+            {"min_jacobian_ratio", v.min_jacobian_ratio},
+            {"max_d2", v.max_d2},
+            {"mean_d2", v.mean_d2},
+            {"max_d3", v.max_d3},
+            {"mean_d3", v.mean_d3}}},
           {"quality_by_tag", by_tag},
           {"boundary_faces", v.boundary_faces},
           {"boundary_faces_missing", v.boundary_faces_missing},
@@ -289,6 +303,9 @@ void register_mesh(CLI::App& app) {
          std::vector<double>(check.cell_certificate.begin(), check.cell_certificate.end())});
     quality.cell_data.push_back({"scaled_jacobian", 1, check.cell_scaled_jacobian});
     quality.cell_data.push_back({"curved_mips", 1, check.cell_mips});
+    quality.cell_data.push_back({"jacobian_ratio", 1, check.cell_jacobian_ratio});
+    quality.cell_data.push_back({"distortion_d2", 1, check.cell_d2});
+    quality.cell_data.push_back({"distortion_d3", 1, check.cell_d3});
     io::write_vtu(out.path("mesh.vtu"), result.mesh, quality);
     io::write_msh(out.path("mesh.msh"), result.mesh);
     const std::string input_abs = std::filesystem::absolute(args->input).string();
@@ -368,6 +385,7 @@ void register_mesh(CLI::App& app) {
           {"distance", stats.curve_refused_distance},
           {"deferred_outer", stats.curve_deferred_outer}}},
         {"faces_recurved", stats.faces_recurved},
+        {"faces_sheared", stats.faces_sheared},
         {"fiber_misses", stats.fiber_misses},
         {"linear_max_distance_rel", stats.linear_max_distance_rel},
         {"optimize", optimize_json(stats.optimize)},

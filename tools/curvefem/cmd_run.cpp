@@ -270,6 +270,9 @@ struct SurfacePipeline {
   std::optional<mapping::BoundaryInverse> inverse;
   json report;
   bool valid = true;
+  // Per tet of the curved mesh, from the validation (volume.vtu cell data): certificate,
+  // scaled Jacobian, curved MIPS and the distortion of element_distortion.hpp.
+  std::vector<Field> cell_quality;
   const BoundaryMap& map() const { return curved ? curved->map : identity_map; }
   // Exterior runs: the outer box (the mesh's bounding box) and the tolerance of a point on it.
   bool exterior = false;
@@ -446,6 +449,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
                                  {"distance", stats.curve_refused_distance},
                                  {"deferred_outer", stats.curve_deferred_outer}};
     p.report["faces_recurved"] = stats.faces_recurved;
+    p.report["faces_sheared"] = stats.faces_sheared;
     p.report["fiber_misses"] = stats.fiber_misses;
     p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
     p.report["curved_coarsening"] = {{"curved_aware", stats.curved_coarsening},
@@ -461,6 +465,13 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
       p.report["max_distance_rel"] = v.max_distance_rel;
       p.report["min_jacobian_certified"] = v.certified();
       p.valid = v.valid(spec.eps);
+      p.cell_quality = {{"certified", 1,
+                         std::vector<double>(v.cell_certificate.begin(), v.cell_certificate.end())},
+                        {"scaled_jacobian", 1, v.cell_scaled_jacobian},
+                        {"curved_mips", 1, v.cell_mips},
+                        {"jacobian_ratio", 1, v.cell_jacobian_ratio},
+                        {"distortion_d2", 1, v.cell_d2},
+                        {"distortion_d3", 1, v.cell_d3}};
       progress.end_stage();
     }
     if (spec.exterior && spec.solve_on == "both") {
@@ -823,6 +834,8 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
         fields.point_data.push_back(
             {"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
       }
+      for (const Field& f : sp->cell_quality)
+        if (int(f.values.size()) == mesh.num_cells()) fields.cell_data.push_back(f);
       io::write_vtu(out.path("volume.vtu"), fem::lagrange_mesh_of_space(mesh, out_space), fields);
       write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
     }
