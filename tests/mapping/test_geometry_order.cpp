@@ -14,10 +14,12 @@
 #include <cstdio>
 #include <unordered_map>
 
+#include "fem/problems/elasticity.hpp"
 #include "fem/problems/error_norms.hpp"
 #include "fem/problems/interpolation.hpp"
 #include "fem/problems/poisson.hpp"
 #include "fem/space/function_space.hpp"
+#include "meshing/core/geometry_degree.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -189,6 +191,55 @@ TEST(GeometryOrder, DegreeElevatedGeometryGivesTheSameAnswer) {
       EXPECT_EQ(e.dofs, base.dofs);
       EXPECT_NEAR(e.l2, base.l2, 1e-6 * base.l2) << "p = " << p << ", order " << m;
       EXPECT_NEAR(e.h1, base.h1, 1e-6 * base.h1) << "p = " << p << ", order " << m;
+    }
+  }
+}
+
+TEST(GeometryOrder, RigidAndLinearFieldsNeedTheGeometryDegreeAtMostP) {
+  // The cause of the too-stiff P2 elasticity at k = 3 and 4 (issue 20): on a map of degree k > p
+  // the degree-p space misses the linear displacements, the rigid rotations among them, so
+  // bending of thin parts locks. A linear u with exact Dirichlet data everywhere is reproduced to
+  // rounding when k <= p, and on the degree-p interpolant of the order-4 mesh (what `curvefem
+  // run` solves on by default, discretization.geometry "iso"), but not on the order-k maps
+  // themselves.
+  const fem::ElasticMaterial material{1.0, 0.3};
+  const Eigen::Matrix3d A{{0.02, -0.3, 0.05}, {0.3, -0.01, 0.2}, {-0.05, -0.2, 0.03}};
+  const Eigen::Vector3d b(0.1, -0.05, 0.2);
+  auto linear_error = [&](const LagrangeMesh& mesh, int p) {
+    const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+    fem::ElasticityProblem problem;
+    problem.material = material;
+    problem.dirichlet.push_back(
+        {std::vector<char>(space.boundary_faces.size(), 1),
+         {true, true, true},
+         [&](const Eigen::Vector3d& x) { return Eigen::Vector3d(A * x + b); },
+         {}});
+    const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
+    return fem::compute_errors(
+               mesh, space, sol.u, 3,
+               [&](const Eigen::Vector3d& x, double* v) {
+                 Eigen::Map<Eigen::Vector3d> m(v);
+                 m = A * x + b;
+               },
+               [&](const Eigen::Vector3d&, double* g) {
+                 Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> m(g);
+                 m = A;
+               })
+        .h1_semi;
+  };
+  const LagrangeMesh& mesh4 = sphere_k4().mesh;
+  for (int p = 1; p <= 3; ++p) {
+    int kept = -1;
+    const LagrangeMesh iso = lower_geometry_degree(mesh4, p, {}, &kept);
+    EXPECT_EQ(kept, 0);
+    EXPECT_LT(linear_error(iso, p), 1e-9) << "degree-" << p << " interpolant, p = " << p;
+    for (int k = 1; k <= 4; ++k) {
+      const double e = linear_error(with_order(mesh4, k), p);
+      std::printf("p = %d on the order-%d maps: H1 error of a linear field %.2e\n", p, k, e);
+      if (k <= p)
+        EXPECT_LT(e, 1e-9) << "k = " << k << ", p = " << p;
+      else
+        EXPECT_GT(e, 1e-6) << "super-parametric k = " << k << ", p = " << p;
     }
   }
 }

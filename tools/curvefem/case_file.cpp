@@ -432,7 +432,12 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (c.kappa.empty() && c.physics == "poisson") c.kappa = Expression("1", "/physics/kappa");
 
   if (const json* d = r.get(j, "discretization")) {
-    r.only_keys(*d, "/discretization", {"degree", "quadrature", "partial_dirichlet"});
+    r.only_keys(*d, "/discretization", {"degree", "quadrature", "partial_dirichlet", "geometry"});
+    if (const json* v = r.get(*d, "geometry")) {
+      c.geometry = r.string(*v, "/discretization/geometry");
+      if (c.geometry != "iso" && c.geometry != "mesh")
+        fail("/discretization/geometry", "'" + c.geometry + "': expected iso or mesh", r.file);
+    }
     if (const json* v = r.get(*d, "partial_dirichlet")) {
       c.partial_dirichlet = r.string(*v, "/discretization/partial_dirichlet");
       if (c.partial_dirichlet != "nitsche" && c.partial_dirichlet != "nodal")
@@ -639,7 +644,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (c.physics == "neo_hookean") res["physics"]["load_steps"] = c.load_steps;
   res["discretization"] = {{"degree", c.degree},
                            {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
-                           {"partial_dirichlet", c.partial_dirichlet}};
+                           {"partial_dirichlet", c.partial_dirichlet},
+                           {"geometry", c.geometry}};
   res["rhs"] = c.rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(c.rhs);
   res["boundary_conditions"] = json::array();
   for (const auto& bc : c.boundary_conditions) {

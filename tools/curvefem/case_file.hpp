@@ -76,6 +76,10 @@ struct CaseSpec {
   /// elasticity on request) or "nodal" (the DOFs the selection covers are fixed; elasticity's
   /// default, Neo-Hookean's only mode).
   std::string partial_dirichlet;
+  /// "iso" (default): a mesh of order k > p is solved on the degree-p interpolant of its maps
+  /// (meshing/core/geometry_degree.hpp), certified first; "mesh": on the mesh's own maps
+  /// (super-parametric).
+  std::string geometry = "iso";
   std::vector<Expression> rhs;  ///< empty, 1 or 3
   std::vector<BoundaryConditionSpec> boundary_conditions;
   std::vector<Expression> exact;  ///< empty, 1 or 3

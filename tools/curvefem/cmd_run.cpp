@@ -11,6 +11,7 @@
 // result.pvd, resolved_case.json, open_in_paraview.py (--paraview) and report.json (last). Nothing
 // is written before the solve succeeds; a failed run leaves no output directory it created.
 // The pipeline itself (run_case, run_case.hpp) is shared with `curvefem study`.
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -32,12 +33,14 @@
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/geometry_degree.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/features.hpp"
+#include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/io/cad_part.hpp"
 #include "meshing/io/msh_io.hpp"
 #include "meshing/io/pvd.hpp"
@@ -270,6 +273,9 @@ struct SurfacePipeline {
   std::optional<mapping::BoundaryInverse> inverse;
   json report;
   bool valid = true;
+  // The map with its boundary triangles on the solve's geometry (lower_geometry_for_solve), for
+  // locating the solver's boundary points; φ itself is the curved mesh's.
+  std::optional<BoundaryMap> solve_map;
   // Per tet of the curved mesh, from the validation (volume.vtu cell data): certificate,
   // scaled Jacobian, curved MIPS and the distortion of element_distortion.hpp.
   std::vector<Field> cell_quality;
@@ -553,6 +559,31 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
   }
 }
 
+// discretization.geometry "iso": a mesh of order k > p is solved on the degree-p interpolant of
+// its maps (meshing/core/geometry_degree.hpp: a degree-p space on a degree-k map misses the
+// linear functions, and P2 elasticity locked on curved slabs), once every tet of that interpolant
+// is certified positive; otherwise, and with "mesh", on the mesh itself.
+json lower_geometry_for_solve(const CaseSpec& spec, LagrangeMesh& mesh) {
+  json r = {{"mode", spec.geometry}, {"mesh_order", mesh.order}, {"degree", mesh.order}};
+  if (spec.geometry != "iso" || spec.degree >= mesh.order) return r;
+  int kept = 0;
+  mesh = lower_geometry_degree(
+      mesh, spec.degree,
+      [order = mesh.order](int, const Eigen::MatrixXd& X) {
+        return meshing::curved::certify_tet_jacobian(order, X).verdict ==
+               meshing::curved::JacobianVerdict::positive;
+      },
+      &kept);
+  r["degree"] = spec.degree;
+  r["tets"] = mesh.num_cells();
+  r["tets_kept_at_mesh_order"] = kept;  // their degree-p interpolant was not certified positive
+  if (kept > 0)
+    log::info("run: " + std::to_string(kept) + " of " + std::to_string(mesh.num_cells()) +
+              " tets keep their order-" + std::to_string(mesh.order) + " map (the degree-" +
+              std::to_string(spec.degree) + " interpolant was not certified positive)");
+  return r;
+}
+
 }  // namespace
 
 RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalProgress& progress) {
@@ -564,9 +595,22 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   fem::FunctionSpace space;
   std::vector<int> face_tags;
   SurfacePipeline pipeline;  // dense-surface methods only
+  json solve_geometry;
   if (spec.dense_surface()) {
     build_surface_pipeline(spec, settings.threads, progress, timings, mesh, pipeline);
     ScopedTimer t(timings, "build_space");
+    solve_geometry = lower_geometry_for_solve(spec, mesh);
+    if (pipeline.curved && solve_geometry["degree"] != solve_geometry["mesh_order"]) {
+      // Boundary data are read at the solver's points, on the lowered boundary: locate them on
+      // the boundary triangles moved with it (same faces, same (u, v)).
+      pipeline.solve_map = pipeline.curved->map;
+      const Eigen::VectorXi& to_volume = pipeline.curved->map.boundary_node_to_volume;
+      for (Eigen::Index i = 0; i < to_volume.size(); ++i)
+        if (to_volume[i] >= 0)
+          pipeline.solve_map->boundary.nodes.row(i) = mesh.nodes.row(to_volume[i]);
+      pipeline.inverse = mapping::BoundaryInverse::through_shell(
+          *pipeline.solve_map, pipeline.curved->shell, pipeline.input);
+    }
     space = fem::build_function_space(mesh, spec.degree);
   } else {
     ScopedTimer t(timings, "load_mesh");
@@ -579,6 +623,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     else
       mesh = load_mesh(spec.mesh);
     progress.update("build space", 0.5);
+    solve_geometry = lower_geometry_for_solve(spec, mesh);
     space = fem::build_function_space(mesh, spec.degree);
     face_tags = spec.builtin == "cube" ? cube_face_tags(mesh, space)
                                        : boundary_face_tags(spec.mesh, mesh, space);
@@ -877,6 +922,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     report["tets"] = mesh.num_cells();
     report["order"] = mesh.order;
     report["degree"] = spec.degree;
+    report["solve_geometry"] = solve_geometry;
     report["physics"] = spec.physics;
     report["dofs"] = static_cast<long long>(space.num_dofs) * c;
     report["nodes"] = space.num_dofs;
