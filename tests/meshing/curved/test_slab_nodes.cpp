@@ -35,6 +35,21 @@ std::vector<Eigen::Vector3d> patch(int k, double cubic) {
   return d;
 }
 
+// The corners of split tet `tet` of the bottom half-prism, as slab_tet_nodes takes them.
+struct Corners {
+  Eigen::Vector3d P[4];
+  int lv[4], on_mid[4];
+};
+Corners corners_of(const Prism& p, const std::array<int, 4>& tet) {
+  Corners c;
+  for (int j = 0; j < 4; ++j) {
+    c.lv[j] = tet[std::size_t(j)] % 3;
+    c.on_mid[j] = tet[std::size_t(j)] >= 3;
+    c.P[j] = c.on_mid[j] ? p.mid[c.lv[j]] : p.base[c.lv[j]];
+  }
+  return c;
+}
+
 struct SlabTet {
   int corner[4];  // prism corners 0..2 base, 3..5 middle
   Eigen::MatrixXd nodes;
@@ -43,16 +58,10 @@ std::vector<SlabTet> slab(int k, const Prism& p, const std::vector<Eigen::Vector
                           bool type_a) {
   std::vector<SlabTet> out;
   for (const auto& tet : sh::split_tets(type_a)) {
-    Eigen::Vector3d P[4];
-    int lv[4], on_mid[4];
+    const Corners c = corners_of(p, tet);
     SlabTet t;
-    for (int j = 0; j < 4; ++j) {
-      lv[j] = tet[j] % 3;
-      on_mid[j] = tet[j] >= 3;
-      P[j] = on_mid[j] ? p.mid[lv[j]] : p.base[lv[j]];
-      t.corner[j] = tet[j];
-    }
-    t.nodes = cv::slab_tet_nodes(k, P, lv, on_mid, d);
+    for (int j = 0; j < 4; ++j) t.corner[j] = tet[std::size_t(j)];
+    t.nodes = cv::slab_tet_nodes(k, c.P, c.lv, c.on_mid, d);
     out.push_back(std::move(t));
   }
   return out;
@@ -199,13 +208,10 @@ TEST(SlabNodes, TheShearFallbackConformsEdgeByEdge) {
       const auto d = patch(k, 1.0);
       const auto& lattice = lagrange_lattice(CellKind::tetrahedron, k);
       for (const auto& tet : sh::split_tets(type_a)) {
-        Eigen::Vector3d P[4];
-        int lv[4], on_mid[4];
-        for (int j = 0; j < 4; ++j) {
-          lv[j] = tet[j] % 3;
-          on_mid[j] = tet[j] >= 3;
-          P[j] = on_mid[j] ? p.mid[lv[j]] : p.base[lv[j]];
-        }
+        const Corners cs = corners_of(p, tet);
+        const auto& P = cs.P;
+        const auto& lv = cs.lv;
+        const auto& on_mid = cs.on_mid;
         const Eigen::MatrixXd shear = full_shear(k, p, tet, d);
         const Eigen::MatrixXd low = cv::slab_tet_nodes(k, P, lv, on_mid, d);
         EXPECT_LT((cv::slab_tet_nodes(k, P, lv, on_mid, d, {false, {false, false, false}}) - shear)
@@ -244,13 +250,10 @@ TEST(SlabNodes, TheShearCertifiesThinSlabsUnderLargerInwardBulges) {
   for (bool type_a : {true, false}) {
     bool low_ok = true, shear_ok = true;
     for (const auto& tet : sh::split_tets(type_a)) {
-      Eigen::Vector3d P[4];
-      int lv[4], on_mid[4];
-      for (int j = 0; j < 4; ++j) {
-        lv[j] = tet[j] % 3;
-        on_mid[j] = tet[j] >= 3;
-        P[j] = on_mid[j] ? p.mid[lv[j]] : p.base[lv[j]];
-      }
+      const Corners cs = corners_of(p, tet);
+      const auto& P = cs.P;
+      const auto& lv = cs.lv;
+      const auto& on_mid = cs.on_mid;
       low_ok =
           low_ok && cv::certify_tet_jacobian(k, cv::slab_tet_nodes(k, P, lv, on_mid, d)).verdict ==
                         cv::JacobianVerdict::positive;
