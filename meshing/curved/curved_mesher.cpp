@@ -128,8 +128,10 @@ class Builder {
   std::vector<std::vector<Eigen::Vector3d>>
       raw;  // per face, per triangle node: fiber target - linear
   std::vector<double> alpha;
-  // Per face: the low-degree slab nodes (1) or the full shear t · d (0), slab_nodes.hpp.
+  // Per face: the low-degree slab nodes (1) or the full shear t · d (0), slab_nodes.hpp; all 0
+  // unless CurvedMeshOptions::low_degree_slabs.
   std::vector<char> smooth;
+  bool low_degree = false;
   std::vector<std::vector<Owned>> owned;
   int fiber_misses = 0;
 
@@ -349,7 +351,7 @@ class Builder {
   // Faces on the full shear try the low-degree slab again (after the thickening deepened the
   // slabs), kept when their slabs and those of the faces across their edges certify.
   void raise_smooth(double eps) {
-    if (k < 3) return;
+    if (k < 3 || !low_degree) return;
     for (int f = 0; f < nf; ++f) {
       if (smooth[f]) continue;
       smooth[f] = 1;
@@ -816,6 +818,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   Builder b(shell, surface, k);
   b.exterior = options.exterior;
   b.recurve = options.recurve;
+  b.low_degree = options.low_degree_slabs;
   b.extra = points;
   b.compute_targets(progress);
   b.locate_input(progress);
@@ -823,7 +826,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.fiber_misses = b.fiber_misses;
   const int nf = b.nf, nv = b.nv;
   b.alpha.assign(nf, 1.0);
-  b.smooth.assign(nf, 1);
+  b.smooth.assign(nf, options.low_degree_slabs ? 1 : 0);
   std::vector<int> deferred_top;  // linear faces whose outer slab only thicken() can certify
   std::vector<int> work(nf);
   for (int f = 0; f < nf; ++f) work[f] = f;

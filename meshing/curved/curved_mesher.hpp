@@ -65,6 +65,13 @@ struct CurvedMeshOptions {
   // Once the slab layer is deeper, faces curved below α = 1 try a larger α again (Builder::
   // raise_alpha in curved_mesher.cpp).
   bool recurve = true;
+  // Slab nodes (slab_nodes.hpp): false (default) the full shear t·d of the patch; true the
+  // low-degree nodes (the patch's quadratic part at degree 2, the rest sheared), with the shear as
+  // a per-face fallback. Measured at K = 3 (issue 20): less cubic content and a lower pure
+  // discretization error on the icosphere (P3 2.76e-4 against 3.89e-4), but on the elephant the
+  // thickening then left a different mesh and P3 elasticity moved from 0.40% to 0.94% RMS away
+  // from a dense P2 reference (3% stiffer); hence off by default.
+  bool low_degree_slabs = false;
   // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
   double max_triangle_mips = 10;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse

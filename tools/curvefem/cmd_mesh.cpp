@@ -140,7 +140,8 @@ struct MeshArgs {
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
-       no_pan = false, no_feature_chains = false, linear_coarsening = false;
+       low_degree_slabs = false, no_pan = false, no_feature_chains = false,
+       linear_coarsening = false;
   double split_mips = 0;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
@@ -241,6 +242,9 @@ void register_mesh(CLI::App& app) {
                   "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
                   "exceeds this (2 = equilateral; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
+                "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
+                "(meshing/curved/README.md, step 7; off: the full shear)");
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -270,6 +274,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.sweeps = args->optimize_sweeps;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
+    options.low_degree_slabs = args->low_degree_slabs;
     options.shell_pan = !args->no_pan;
     options.feature_chains = !args->no_feature_chains;
     options.curved_coarsening = !args->linear_coarsening;
