@@ -66,8 +66,9 @@ LagrangeMesh lower_geometry_degree(const LagrangeMesh& mesh, int m, const CellAc
   while (!check.empty()) {
     std::vector<int> refused;
     for (int c : check) {
+      if (!lower[std::size_t(c)]) continue;  // already on its own map
       for (Eigen::Index n = 0; n < per; ++n) X.row(n) = out.nodes.row(mesh.cells(c, n));
-      if (!accept(c, X) && lower[std::size_t(c)]) refused.push_back(c);
+      if (!accept(c, X)) refused.push_back(c);
     }
     std::vector<int> next;
     for (int c : refused) {

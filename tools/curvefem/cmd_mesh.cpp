@@ -48,6 +48,17 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
         {"seconds", s.flips.seconds}}}};
 }
 
+// Per tet, from the independent validation (mesh.vtu, run's volume.vtu; for ParaView).
+std::vector<Field> curved_validation_cell_fields(const meshing::curved::CurvedValidation& v) {
+  return {
+      {"certified", 1, std::vector<double>(v.cell_certificate.begin(), v.cell_certificate.end())},
+      {"scaled_jacobian", 1, v.cell_scaled_jacobian},
+      {"curved_mips", 1, v.cell_mips},
+      {"jacobian_ratio", 1, v.cell_jacobian_ratio},
+      {"distortion_d2", 1, v.cell_d2},
+      {"distortion_d3", 1, v.cell_d3}};
+}
+
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
                                               double eps_rel) {
   nlohmann::ordered_json by_tag = nlohmann::ordered_json::object();
@@ -302,15 +313,8 @@ void register_mesh(CLI::App& app) {
 
     StagedOutputDir out(args->output);
     Stopwatch write;
-    MeshFields quality;  // per tet, from the independent validation (for ParaView)
-    quality.cell_data.push_back(
-        {"certified", 1,
-         std::vector<double>(check.cell_certificate.begin(), check.cell_certificate.end())});
-    quality.cell_data.push_back({"scaled_jacobian", 1, check.cell_scaled_jacobian});
-    quality.cell_data.push_back({"curved_mips", 1, check.cell_mips});
-    quality.cell_data.push_back({"jacobian_ratio", 1, check.cell_jacobian_ratio});
-    quality.cell_data.push_back({"distortion_d2", 1, check.cell_d2});
-    quality.cell_data.push_back({"distortion_d3", 1, check.cell_d3});
+    MeshFields quality;
+    quality.cell_data = curved_validation_cell_fields(check);
     io::write_vtu(out.path("mesh.vtu"), result.mesh, quality);
     io::write_msh(out.path("mesh.msh"), result.mesh);
     const std::string input_abs = std::filesystem::absolute(args->input).string();

@@ -60,6 +60,7 @@ namespace curvefem::cli {
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
                                               double eps_rel);
 nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s);
+std::vector<Field> curved_validation_cell_fields(const meshing::curved::CurvedValidation& v);
 
 namespace {
 namespace cv = meshing::curved;
@@ -471,13 +472,7 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
       p.report["max_distance_rel"] = v.max_distance_rel;
       p.report["min_jacobian_certified"] = v.certified();
       p.valid = v.valid(spec.eps);
-      p.cell_quality = {{"certified", 1,
-                         std::vector<double>(v.cell_certificate.begin(), v.cell_certificate.end())},
-                        {"scaled_jacobian", 1, v.cell_scaled_jacobian},
-                        {"curved_mips", 1, v.cell_mips},
-                        {"jacobian_ratio", 1, v.cell_jacobian_ratio},
-                        {"distortion_d2", 1, v.cell_d2},
-                        {"distortion_d3", 1, v.cell_d3}};
+      p.cell_quality = curved_validation_cell_fields(v);
       progress.end_stage();
     }
     if (spec.exterior && spec.solve_on == "both") {
