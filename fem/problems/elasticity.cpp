@@ -410,6 +410,86 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
   return result;
 }
 
+ForceBalance force_balance(const LagrangeMesh& mesh, const FunctionSpace& space,
+                           const ElasticityProblem& problem, const Eigen::VectorXd& u,
+                           bool neo_hookean) {
+  ForceBalance out;
+  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
+  const int n = setup.n;
+  // Applied load, without the basis: Σ_q f(x_q) w_q and Σ_k t(x_k) ds_k.
+  if (problem.body_force) {
+    CellGeometry g;
+    for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+      setup.geometry.evaluate(cell, g);
+      for (int q = 0; q < setup.geometry.num_points(); ++q)
+        out.applied += problem.body_force(g.x.row(q).transpose()) * g.det_w[q];
+    }
+  }
+  const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
+  for (const auto& bc : problem.traction) {
+    const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
+    std::vector<Eigen::Vector3d> t(points.size(), Eigen::Vector3d::Zero());
+    const std::vector<char> used =
+        evaluate_at_face_points(points, bc.where, [&](int k, const Eigen::Vector3d& x) {
+          t[std::size_t(k)] = bc.traction(x, points.normal.row(k).transpose());
+        });
+    for (int k = 0; k < points.size(); ++k)
+      if (used[std::size_t(k)]) out.applied += t[std::size_t(k)] * points.ds_w[k];
+  }
+  // Internal force from the stress of u at the quadrature points.
+  Eigen::VectorXd internal = Eigen::VectorXd::Zero(u.size());
+  const ElementKernel kernel = [&](int cell, Eigen::MatrixXd&, Eigen::VectorXd& Re) {
+    const ElasticMaterial m = problem.cell_material ? problem.cell_material(cell) : problem.material;
+    const double lambda = m.lambda(), mu = m.mu();
+    thread_local CellGeometry g;
+    thread_local Eigen::MatrixXd U, G;
+    U.resize(n, 3);
+    G.resize(n, 3);
+    setup.geometry.evaluate(cell, g);
+    gather(space, u, cell, U);
+    for (int q = 0; q < setup.geometry.num_points(); ++q) {
+      G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
+      const Eigen::Matrix3d grad = U.transpose() * G;  // ∂u_i/∂x_j
+      Eigen::Matrix3d P;
+      if (neo_hookean) {
+        const Eigen::Matrix3d F = Eigen::Matrix3d::Identity() + grad;
+        const double J = F.determinant();
+        const Eigen::Matrix3d FinvT = F.inverse().transpose();
+        P = mu * (F - FinvT) + lambda * std::log(J) * FinvT;
+      } else {
+        const Eigen::Matrix3d eps = 0.5 * (grad + grad.transpose());
+        P = lambda * eps.trace() * Eigen::Matrix3d::Identity() + 2 * mu * eps;
+      }
+      const Eigen::MatrixXd GP = G * P.transpose();
+      for (int a = 0; a < n; ++a)
+        for (int i = 0; i < 3; ++i) Re[3 * a + i] += g.det_w[q] * GP(a, i);
+    }
+  };
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, nullptr,
+                 &internal);
+  const Eigen::VectorXd residual = internal - external_load(mesh, space, problem, setup);
+  // Supported unknowns: the fixed ones, and every unknown of a cell with a Nitsche face.
+  std::vector<DirichletFaceSplit> splits;
+  if (!neo_hookean)
+    for (const auto& bc : problem.dirichlet)
+      splits.push_back(
+          split_dirichlet_faces(mesh, space, bc.faces, bc.where, problem.partial_dirichlet));
+  const Constraints c = dirichlet_constraints(space, problem, splits);
+  std::vector<char> supported(c.fixed.begin(), c.fixed.end());
+  for (const auto& split : splits)
+    for (int k = 0; k < split.points.size(); ++k)
+      if (split.used[std::size_t(k)])
+        for (int a = 0; a < n; ++a)
+          for (int i = 0; i < 3; ++i)
+            supported[3 * std::size_t(space.cell_dofs(split.points.cell[k], a)) + i] = 1;
+  for (Eigen::Index r = 0; r < residual.size(); ++r)
+    if (supported[std::size_t(r)]) {
+      out.reaction[r % 3] += residual[r];
+      ++out.supported_unknowns;
+    }
+  return out;
+}
+
 Eigen::VectorXd von_mises_at_dofs(const LagrangeMesh& mesh, const FunctionSpace& space,
                                   const ElasticMaterial& material, const Eigen::VectorXd& u,
                                   const std::function<ElasticMaterial(int cell)>& cell_material) {

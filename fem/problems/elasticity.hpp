@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <vector>
@@ -73,6 +74,28 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
                                      const ElasticityProblem& problem,
                                      const LinearSolverOptions& solver,
                                      const NewtonOptions& newton);
+
+/// Equilibrium of a solution, computed from u alone (not from the solver's matrices): the total
+/// applied load (body force over the cells, tractions over the faces their filters pass) and the
+/// total force of the supports on the body — the internal force ∫σ(u):∇φ (linear) or ∫P(F):∇φ
+/// (Neo-Hookean) minus the applied load, summed over the supported unknowns (the fixed ones and,
+/// for Nitsche-imposed faces, every unknown of their cells). By partition of unity the internal
+/// force sums to zero, so applied + reaction is minus the residual left at the free unknowns:
+/// zero up to the solver's tolerance when the solve and the load are consistent.
+struct ForceBalance {
+  Eigen::Vector3d applied = Eigen::Vector3d::Zero();
+  Eigen::Vector3d reaction = Eigen::Vector3d::Zero();
+  int supported_unknowns = 0;
+  /// ‖applied + reaction‖ / max(‖applied‖, ‖reaction‖) (0 when both vanish).
+  double imbalance() const {
+    const double scale = std::max(applied.norm(), reaction.norm());
+    return scale > 0 ? (applied + reaction).norm() / scale : 0.0;
+  }
+};
+
+ForceBalance force_balance(const LagrangeMesh& mesh, const FunctionSpace& space,
+                           const ElasticityProblem& problem, const Eigen::VectorXd& u,
+                           bool neo_hookean);
 
 /// Nodal von Mises stress of the linear solution at every DOF point (averaged over cells);
 /// `cell_material`, when given, overrides `material` per cell.

@@ -173,3 +173,45 @@ TEST(NeoHookean, NewtonConvergesQuadratically) {
       best = std::max(best, std::log(r[k + 1] / r[k]) / std::log(r[k] / r[k - 1]));
   EXPECT_GT(best, 1.7);
 }
+
+// Equilibrium (issue 20): the supports' force, recomputed from u, balances the applied load.
+TEST(ForceBalance, CantileverReactionEqualsTheTractionTimesTheArea) {
+  for (int p = 1; p <= 3; ++p) {
+    Cantilever c(1.5, p);
+    c.problem.body_force = [](const Eigen::Vector3d&) { return Eigen::Vector3d(0.2, 0, -1); };
+    const auto sol = fem::solve_linear_elasticity(c.mesh, c.space, c.problem, {});
+    const fem::ForceBalance fb = fem::force_balance(c.mesh, c.space, c.problem, sol.u, false);
+    // Applied: traction (0, 0, -1.5) on the 0.25 x 0.25 end, body force over the 1/16 volume.
+    const Eigen::Vector3d expected(0.2 / 16, 0, -1.5 / 16 - 1.0 / 16);
+    EXPECT_LT((fb.applied - expected).norm(), 1e-12) << "p = " << p;
+    EXPECT_LT(fb.imbalance(), 1e-10) << "p = " << p;
+    EXPECT_GT(fb.supported_unknowns, 0);
+    // A solution that is not the equilibrium one shows: the imbalance is the residual left.
+    const fem::ForceBalance off = fem::force_balance(c.mesh, c.space, c.problem, 0.9 * sol.u, false);
+    EXPECT_GT(off.imbalance(), 1e-2) << "p = " << p;
+  }
+}
+
+TEST(ForceBalance, NitscheSupportsAndNeoHookeanBalanceTheLoad) {
+  // A clamp by the filter x < 0.1 on every boundary face: it passes the x = 0 end whole and the
+  // side faces of the first layer in part, which Nitsche's method imposes weakly.
+  Cantilever c(1.0, 2);
+  c.problem.dirichlet[0].faces.assign(c.space.boundary_faces.size(), 1);
+  c.problem.dirichlet[0].where = [](const Eigen::Vector3d& x) { return x[0] < 0.1; };
+  c.problem.partial_dirichlet = fem::PartialDirichlet::nitsche;
+  const auto lin = fem::solve_linear_elasticity(c.mesh, c.space, c.problem, {});
+  ASSERT_GT(lin.nitsche_faces, 0);
+  const fem::ForceBalance fb = fem::force_balance(c.mesh, c.space, c.problem, lin.u, false);
+  EXPECT_NEAR(fb.applied[2], -1.0 / 16, 1e-12);
+  EXPECT_LT(fb.imbalance(), 1e-10);
+  Cantilever d(2.0, 2);
+  fem::NewtonOptions newton;
+  newton.load_steps = 2;
+  const auto nh = fem::solve_neo_hookean(d.mesh, d.space, d.problem, {}, newton);
+  const fem::ForceBalance fn = fem::force_balance(d.mesh, d.space, d.problem, nh.u, true);
+  EXPECT_NEAR(fn.applied[2], -2.0 / 16, 1e-12);
+  EXPECT_LT(fn.imbalance(), 1e-8);
+  // The linear stress of the large-deformation solution does not balance: the check sees the
+  // constitutive law.
+  EXPECT_GT(fem::force_balance(d.mesh, d.space, d.problem, nh.u, false).imbalance(), 1e-3);
+}

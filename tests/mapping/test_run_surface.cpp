@@ -641,3 +641,43 @@ TEST(RunSurface, DirichletSelectionInsideOneFaceActsThroughNitsche) {
   EXPECT_NE(log.find("/boundary_conditions/0/select: selects no boundary node"), std::string::npos)
       << log;
 }
+
+TEST(RunSurface, PaintedDataErrorIsWithinTheGeometricErrorAtEveryOrderAndDegree) {
+  // Issue 20's matrix, part (b): Dirichlet data painted on the faceted input and read through
+  // φ⁻¹, every geometry order k with every degree p (the default "iso" solve for k > p). The
+  // curved boundary lies within ε of the input, so the data carry an error up to ε·|∇u| and, by
+  // the maximum principle, so does the solution; what p adds on top is its discretization error.
+  // u = sin x cos y e^z on the unit icosphere (level 3), ε = 1% of the bbox edge 2 = 0.02, and
+  // max |∇u| = e on the ball: ε·|∇u| = 0.054. Asserted on the input vertices and in L2 over the
+  // mesh, for p ≥ 2; p = 1 on these coarse meshes (135 DOFs at k ≥ 2) is discretization-limited
+  // and asserted at 4 times the bound. Measured (2026-12-01): surface max 0.12–0.66 of the bound
+  // for p ≥ 2, 1.1–3.4 at p = 1; relative L2 1.2e-4 (k = p = 4) to 1.0e-2 (k = 1). At p > k the
+  // boundary DOFs are not fiber hits on the input, so their data carry the ε error the nodes of
+  // k = p do not: k = 3, p = 4 gives 1.0e-3 against 4.3e-4 at p = 3 (k = 4, p = 4: 1.2e-4).
+  const double bound = 0.02 * std::exp(1.0);
+  for (int k = 1; k <= 4; ++k)
+    for (int p = 1; p <= 4; ++p) {
+      if (p == 4 && k < 3) continue;  // k = 3, 4 cover p = 4
+      const std::string text = sphere_case(
+          R"({"method": "curved", "order": )" + std::to_string(k) + R"(, "eps": 0.01})", p,
+          R"JSON(
+  "physics": {"type": "poisson"},
+  "rhs": "sin(x)*cos(y)*exp(z)",
+  "boundary_conditions": [{"type": "dirichlet", "select": {"all": true},
+                           "value": "sin(x)*cos(y)*exp(z)"}],
+  "exact": "sin(x)*cos(y)*exp(z)")JSON");
+      const SphereRun run = run_on_sphere(
+          "run_surface_painted_k" + std::to_string(k) + "_p" + std::to_string(p), 3, text);
+      ASSERT_FALSE(run.report.is_null()) << "k = " << k << ", p = " << p;
+      const auto& r = run.report;
+      const double smax = r["surface_max_error"].get<double>();
+      const double l2 = r["l2_error"].get<double>() / r["l2_norm_exact"].get<double>();
+      std::printf("painted k = %d p = %d: %d tets, %d dofs, surface max %.3e (%.2f of eps|grad u|),"
+                  " relative L2 %.3e\n",
+                  k, p, r["tets"].get<int>(), r["dofs"].get<int>(), smax, smax / bound, l2);
+      const double c = p == 1 ? 4.0 : 1.0;
+      EXPECT_LT(smax, c * bound) << "k = " << k << ", p = " << p;
+      EXPECT_LT(l2, c * bound) << "k = " << k << ", p = " << p;
+      EXPECT_EQ(r["solve_geometry"]["degree"].get<int>(), std::min(k, p));
+    }
+}

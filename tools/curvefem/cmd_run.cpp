@@ -759,6 +759,20 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     u = sol.u;
     solve_info = sol.solve;
     for (const auto& [stage, s] : sol.timings.stages()) timings.add(stage, s);
+    {
+      // Equilibrium, recomputed from u: the supports' force against the applied load.
+      ScopedTimer t(timings, "force_balance");
+      const fem::ForceBalance fb =
+          fem::force_balance(mesh, space, problem, u, spec.physics != "linear_elasticity");
+      auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
+      physics_report["force_balance"] = {{"applied", vec(fb.applied)},
+                                         {"reaction", vec(fb.reaction)},
+                                         {"supported_unknowns", fb.supported_unknowns},
+                                         {"imbalance", fb.imbalance()}};
+      if (fb.imbalance() > 1e-6)
+        log::warn("force balance: applied + reaction is ", fb.imbalance(),
+                  " of the load (the solve did not converge to equilibrium)");
+    }
     physics_report["free_unknowns"] = sol.free_unknowns;
     if (spec.physics == "linear_elasticity") physics_report["nitsche_faces"] = sol.nitsche_faces;
     physics_report["E"] = spec.E;
