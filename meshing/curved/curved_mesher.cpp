@@ -328,7 +328,10 @@ class Builder {
       for (int i = 0; i < 4; ++i)
         for (int j = i + 1; j < 4; ++j) repeated |= t.gid[i] == t.gid[j];
       if (repeated) continue;
-      t.nodes = slab_tet_nodes(k, P, lv, on_mid, d, blend_of(f));
+      unsigned pinched = 0;
+      for (int j = 0; j < 4; ++j)
+        if (s.singular[rotated(f, lv[j])]) pinched |= 1u << j;
+      t.nodes = slab_tet_nodes(k, P, lv, on_mid, d, blend_of(f), pinched);
       out.push_back(std::move(t));
     }
     return out;
@@ -520,8 +523,14 @@ class Builder {
             for (int v : {F(f, c), F(g, c)})
               if (!free_corner || !is_protected(v)) sh[v] = dp[v] = 1;
         }
-        clean =
-            clean && si.pairs.empty() && std::count(degenerate.begin(), degenerate.end(), 1) == 0;
+        // Folds much sharper than the middle surface's at the same edge (a knife edge whose
+        // inner surface closes in on itself: Gmsh's boundary recovery refuses dihedral angles
+        // far below the input's) move their four corners back like an intersecting pair.
+        const std::vector<std::array<int, 4>> folds = sharp_folds(X);
+        for (const auto& q : folds)
+          for (int v : q) sh[v] = dp[v] = 1;
+        clean = clean && si.pairs.empty() && folds.empty() &&
+                std::count(degenerate.begin(), degenerate.end(), 1) == 0;
       }
       for (int i = 0; i < layers; ++i) {
         Layer& l = L[std::size_t(i)];
@@ -558,6 +567,33 @@ class Builder {
     return moved;
   }
   int outer_raised = 0, outer_lowered = 0;
+
+  // Interior dihedral angle (radians, in [0, π]) at edge (a, b) between faces f and g of X.
+  double dihedral(const Eigen::MatrixXd& X, int f, int g) const {
+    auto normal = [&](int h) {
+      const Eigen::Vector3d p = X.row(s.F(h, 0)), q = X.row(s.F(h, 1)), r = X.row(s.F(h, 2));
+      return Eigen::Vector3d((q - p).cross(r - p).normalized());
+    };
+    return M_PI - std::acos(std::clamp(normal(f).dot(normal(g)), -1.0, 1.0));
+  }
+  // Edges (with the four corners of their two faces) where the surface X folds to less than half
+  // the middle surface's dihedral angle there and below 10°.
+  std::vector<std::array<int, 4>> sharp_folds(const Eigen::MatrixXd& X) const {
+    std::vector<std::array<int, 4>> out;
+    for (const auto& [e, faces] : edge_faces) {
+      if (faces.size() != 2) continue;
+      const double d = dihedral(X, faces[0], faces[1]);
+      if (!(d < 10 * M_PI / 180) || !(d < 0.5 * dihedral(s.mid, faces[0], faces[1]))) continue;
+      std::array<int, 4> q{e.first, e.second, -1, -1};
+      for (int i = 0; i < 2; ++i)
+        for (int c = 0; c < 3; ++c) {
+          const int v = s.F(faces[std::size_t(i)], c);
+          if (v != e.first && v != e.second) q[std::size_t(2 + i)] = v;
+        }
+      out.push_back(q);
+    }
+    return out;
+  }
 
   // Curving was decided on slabs down to the shell's base; the deeper inner surface leaves the
   // curved patch room. Each face below α = 1 tries 1, 1/2, ... down to (not including) its α,

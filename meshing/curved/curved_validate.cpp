@@ -267,6 +267,47 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         const int a = cells(f, c), b = cells(f, (c + 1) % 3);
         edges.insert({std::min(a, b), std::max(a, b)});
       }
+    // An input edge between two singular vertices is split by the shell (a pinch split at its
+    // midpoint, bevel points: shell vertices that are no input vertex's image). Its image is then
+    // a path of boundary edges through such corner nodes, which must lie on the input edge.
+    std::map<int, std::vector<int>> corner_neighbours;
+    for (const auto& [a, b] : edges) {
+      corner_neighbours[a].push_back(b);
+      corner_neighbours[b].push_back(a);
+    }
+    std::set<int> images;  // corner nodes that are images of input vertices
+    for (int v = 0; v < map.num_input_vertices(); ++v) {
+      const int f = map.vertex_face[v];
+      if (f < 0 || f >= cells.rows()) continue;
+      const double u = map.vertex_uv(v, 0), w = map.vertex_uv(v, 1), l[3] = {1 - u - w, u, w};
+      for (int c = 0; c < 3; ++c)
+        if (std::abs(l[c] - 1) <= 1e-9) images.insert(cells(f, c));
+    }
+    const double unit = bbox_longest_edge(input.V);
+    auto through_split_point = [&](int va, int vb, int a, int b) {
+      const Eigen::Vector3d A = input.V.row(va), B = input.V.row(vb);
+      auto on_segment = [&](int m) {
+        const Eigen::Vector3d X = map.boundary.nodes.row(m);
+        const double t = std::clamp((X - A).dot(B - A) / (B - A).squaredNorm(), 0.0, 1.0);
+        return (A + t * (B - A) - X).norm() <= 1e-9 * unit;
+      };
+      // Breadth-first from a to b through corner nodes on the segment that no input vertex maps
+      // to (the shell's split points: pinch splits and bevel points, several per edge).
+      std::vector<int> frontier{a};
+      std::set<int> seen{a};
+      for (int step = 0; step < 16 && !frontier.empty(); ++step) {
+        std::vector<int> next;
+        for (int x : frontier)
+          for (int m : corner_neighbours[x]) {
+            if (m == b && x != a) return true;
+            if (seen.count(m) || images.count(m) || !on_segment(m)) continue;
+            seen.insert(m);
+            next.push_back(m);
+          }
+        frontier = std::move(next);
+      }
+      return false;
+    };
     // {node, -1}: at corner node; {a, b} (a < b): inside that edge; {-1, -1}: off the edges.
     auto where = [&](int v) -> std::pair<int, int> {
       if (v < 0 || v >= map.num_input_vertices()) return {-1, -1};
@@ -299,7 +340,9 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         else if (q.second >= 0)
           ok = p.first == q.first || p.first == q.second;
         else
-          ok = edges.count({std::min(p.first, q.first), std::max(p.first, q.first)}) > 0;
+          ok = edges.count({std::min(p.first, q.first), std::max(p.first, q.first)}) > 0 ||
+               through_split_point(map.feature_edges[i][0], map.feature_edges[i][1], p.first,
+                                   q.first);
       }
       if (!ok) {
         ++r.features_off_edges;

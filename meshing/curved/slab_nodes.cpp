@@ -19,7 +19,8 @@ Eigen::Vector3d patch_displacement(const std::vector<Eigen::Vector3d>& d, int or
 
 Eigen::MatrixXd slab_tet_nodes(int k, const Eigen::Vector3d (&P)[4], const int (&lv)[4],
                                const int (&on_mid)[4], const std::vector<Eigen::Vector3d>& d,
-                               const SlabBlend& blend) {
+                               const SlabBlend& blend, unsigned pinched) {
+  auto is_pinched = [&](int j) { return ((pinched >> j) & 1u) != 0; };
   const auto& tet_lattice = lagrange_lattice(CellKind::tetrahedron, k);
   // The patch at the midpoints of the triangle's edges: mid_d[a][b], a ≠ b local vertices.
   Eigen::Vector3d mid_d[3][3];
@@ -36,21 +37,32 @@ Eigen::MatrixXd slab_tet_nodes(int k, const Eigen::Vector3d (&P)[4], const int (
   // Values of t · d₂ at the tet's edge midpoints (0 at its corners): t is the mean of the two
   // ends' shares, the fiber point the midpoint of their triangle vertices.
   Eigen::Vector3d q[4][4];
+  // A pinched corner has no share of its own: its edges take the other end's.
   for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) q[i][j] = 0.5 * (on_mid[i] + on_mid[j]) * mid_d[lv[i]][lv[j]];
+    for (int j = 0; j < 4; ++j)
+      q[i][j] = (is_pinched(i)   ? double(on_mid[j])
+                 : is_pinched(j) ? double(on_mid[i])
+                                 : 0.5 * (on_mid[i] + on_mid[j])) *
+                mid_d[lv[i]][lv[j]];
   Eigen::MatrixXd nodes(Eigen::Index(tet_lattice.size()), 3);
   for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
     const auto& b = tet_lattice[n];
     double l[4];
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
-    double u = 0, v = 0, h = 0;
+    double u = 0, v = 0, h = 0, rest = 0;
     for (int j = 0; j < 4; ++j) {
       l[j] = double(b[j]) / k;
       x += l[j] * P[j];
       u += l[j] * k_xy[lv[j]][0];
       v += l[j] * k_xy[lv[j]][1];
+      if (is_pinched(j)) continue;
       h += l[j] * on_mid[j];
+      rest += l[j];
     }
+    // The share of the middle corners among the corners that are not pinched: a pinched corner
+    // is base and middle at once, so a node's share must not depend on which of the two the tet
+    // names (the fiber there has length 0 and the patch displacement is 0).
+    if (pinched != 0u) h = rest > 0 ? h / rest : 0.0;
     if (h <= 0) {
       nodes.row(Eigen::Index(n)) = x.transpose();
       continue;

@@ -46,9 +46,15 @@ struct SlabBlend {
 
 /// The nodes (#tet lattice × 3, canonical order) of an order-k slab tet with corners P, corner j
 /// above local triangle vertex lv[j] and on the middle triangle when on_mid[j] != 0. Tets with
-/// no middle corner come out straight with the low-degree construction.
+/// no middle corner come out straight with the low-degree construction. Bit j of `pinched`:
+/// corner j stands on a pinched vertex (singular: base = middle, a pillar of length 0); its
+/// share of the middle is then that of the other corners of the node's sub-simplex, so an edge
+/// from it to a base corner is straight (it is an edge of the inner surface, which the straight
+/// interior shares) and one to a middle corner follows the patch, whichever level the tet names
+/// the pinched corner by (issue 21: the two namings have one global id, and a slab tet's curved
+/// diagonal reached the interior as its edge, which then inverted).
 Eigen::MatrixXd slab_tet_nodes(int order, const Eigen::Vector3d (&P)[4], const int (&lv)[4],
                                const int (&on_mid)[4], const std::vector<Eigen::Vector3d>& d,
-                               const SlabBlend& blend = {});
+                               const SlabBlend& blend = {}, unsigned pinched = 0);
 
 }  // namespace curvefem::meshing::curved

@@ -97,41 +97,61 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
   for (int f = 0; f < input.F.rows(); ++f) {
     F[f] = input.F.row(f);
     parent[f] = f;
-    if (singular[F[f][0]] && singular[F[f][1]] && singular[F[f][2]])
-      throw MeshingError(
-          "face " + std::to_string(f) + " has three singular vertices: no prism can be built",
-          ErrorContext{.face = f});
   }
   {
+    // Every edge between two singular vertices is split at its midpoint, whose pillar is the
+    // normalized sum of the normals of the faces at the edge (thesis §4.2.5), until no such edge
+    // is left: then no prism has more than one singular corner. A face with three singular
+    // corners needs three splits and becomes four faces; an edge whose faces changed during a pass
+    // (it belongs to a face split across another edge) waits for the next pass, so both sides of
+    // every split edge are split together.
     auto face_normal = [&](const Eigen::Vector3i& f) {
       return Eigen::Vector3d((V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized());
     };
-    std::map<std::pair<int, int>, std::vector<int>> to_split;  // singular-singular edge -> faces
-    for (int f = 0; f < int(F.size()); ++f)
-      for (int k = 0; k < 3; ++k) {
-        const int a = F[f][k], b = F[f][(k + 1) % 3];
-        if (singular[a] && singular[b]) to_split[{std::min(a, b), std::max(a, b)}].push_back(f);
+    auto has_edge = [&](const Eigen::Vector3i& g, int a, int b) {
+      for (int k = 0; k < 3; ++k)
+        if ((g[k] == a && g[(k + 1) % 3] == b) || (g[k] == b && g[(k + 1) % 3] == a)) return true;
+      return false;
+    };
+    for (;;) {
+      std::map<std::pair<int, int>, std::vector<int>> to_split;  // singular-singular edge -> faces
+      for (int f = 0; f < int(F.size()); ++f)
+        for (int k = 0; k < 3; ++k) {
+          const int a = F[f][k], b = F[f][(k + 1) % 3];
+          if (singular[a] && singular[b]) to_split[{std::min(a, b), std::max(a, b)}].push_back(f);
+        }
+      if (to_split.empty()) break;  // every pass splits its first edge at least: it ends
+      for (const auto& [e, faces] : to_split) {
+        bool current = true;
+        for (int f : faces) current &= has_edge(F[f], e.first, e.second);
+        if (!current) continue;  // the next pass
+        Eigen::Vector3d n = Eigen::Vector3d::Zero();
+        for (int f : faces) n += face_normal(F[f]);
+        if (!(n.norm() > 1e-9))
+          throw MeshingError("edge (" + std::to_string(e.first) + ", " +
+                                 std::to_string(e.second) +
+                                 ") joins two singular vertices and its faces are folded flat onto "
+                                 "each other (opposite normals): no pillar sees both",
+                             ErrorContext{.vertex = e.first < stats.input_vertices ? e.first : -1,
+                                          .face = parent[faces.front()]});
+        const int m = int(V.size());
+        V.push_back(0.5 * (V[e.first] + V[e.second]));
+        N.push_back(n.normalized());
+        singular.push_back(0);
+        for (int f : faces) {
+          // Face (a, b, c) with edge (a, b) becomes (a, m, c) and (m, b, c).
+          Eigen::Vector3i g = F[f];
+          int k = 0;
+          while (!((g[k] == e.first && g[(k + 1) % 3] == e.second) ||
+                   (g[k] == e.second && g[(k + 1) % 3] == e.first)))
+            ++k;
+          const int a = g[k], b = g[(k + 1) % 3], c = g[(k + 2) % 3];
+          F[f] = Eigen::Vector3i(a, m, c);
+          F.push_back(Eigen::Vector3i(m, b, c));
+          parent.push_back(parent[f]);
+        }
+        ++stats.pinch_splits;
       }
-    for (const auto& [e, faces] : to_split) {
-      const int m = int(V.size());
-      V.push_back(0.5 * (V[e.first] + V[e.second]));
-      Eigen::Vector3d n = Eigen::Vector3d::Zero();
-      for (int f : faces) n += face_normal(F[f]);
-      N.push_back(n.normalized());
-      singular.push_back(0);
-      for (int f : faces) {
-        // Face (a, b, c) with edge (a, b) becomes (a, m, c) and (m, b, c).
-        Eigen::Vector3i g = F[f];
-        int k = 0;
-        while (!((g[k] == e.first && g[(k + 1) % 3] == e.second) ||
-                 (g[k] == e.second && g[(k + 1) % 3] == e.first)))
-          ++k;
-        const int a = g[k], b = g[(k + 1) % 3], c = g[(k + 2) % 3];
-        F[f] = Eigen::Vector3i(a, m, c);
-        F.push_back(Eigen::Vector3i(m, b, c));
-        parent.push_back(parent[f]);
-      }
-      ++stats.pinch_splits;
     }
   }
   const int nv = int(V.size()), nf = int(F.size());

@@ -54,7 +54,9 @@ struct ShellStats {
 };
 
 // Throws InputError if the input is not a closed, consistently oriented manifold, MeshingError
-// if a face has three singular vertices or a prism cannot be made positive.
+// if a prism cannot be made positive or an edge between two singular vertices is folded flat
+// (its two faces' normals opposite). Edges between singular vertices are split (repeatedly: a
+// face with three singular corners becomes four faces), so every prism has at most one.
 Shell build_shell(const SurfaceMesh& input, const ShellOptions& options, ShellStats& stats,
                   const ProgressFn& progress = {});
 

@@ -13,6 +13,7 @@ void add_command(CLI::App* sub, std::function<int()> run);
 void register_check(CLI::App& app);     // cmd_check.cpp
 void register_convert(CLI::App& app);   // cmd_convert.cpp
 void register_demo(CLI::App& app);      // cmd_demo.cpp
+void register_generate(CLI::App& app);  // cmd_generate.cpp
 void register_run(CLI::App& app);       // cmd_run.cpp
 void register_remesh(CLI::App& app);    // cmd_remesh.cpp
 void register_shell(CLI::App& app);     // cmd_shell.cpp
@@ -24,6 +25,7 @@ inline void register_commands(CLI::App& app) {
   register_check(app);
   register_convert(app);
   register_demo(app);
+  register_generate(app);
   register_run(app);
   register_remesh(app);
   register_shell(app);

@@ -266,3 +266,75 @@ TEST(SlabNodes, TheShearCertifiesThinSlabsUnderLargerInwardBulges) {
     EXPECT_TRUE(shear_ok);
   }
 }
+
+TEST(SlabNodes, APinchedCornerGivesOneNodeWhicheverLevelNamesIt) {
+  // Issue 21: at a singular (pinched) vertex the base and middle corners are one point with one
+  // global id. Every sub-simplex through it must get the same nodes whether a tet names the
+  // corner on the base or on the middle triangle, the edges to base corners straight (they are
+  // edges of the inner surface the straight interior shares) and those to middle corners on the
+  // patch. Before, the full shear gave the diagonal (middle 0, base 1) the patch's share along
+  // it, and stitched into the interior as its edge (0, base 1) that tet inverted (the knife disc).
+  Prism p;
+  p.base[0] = p.mid[0];
+  const cv::SlabBlend shear{false, {false, false, false}};
+  for (int k : {2, 3, 4})
+    for (const cv::SlabBlend& blend : {cv::SlabBlend{}, shear}) {
+      const auto d = patch(k, 1.0);
+      const auto& lattice = lagrange_lattice(CellKind::tetrahedron, k);
+      // Tets naming the pinched corner 0 on the base (prism corner 0) or the middle (3): the
+      // same point and the same node keys when 0 and 3 are identified.
+      std::map<Key, Eigen::Vector3d> seen;
+      int compared = 0;
+      for (const std::array<int, 4>& tet :
+           {std::array<int, 4>{0, 1, 2, 4}, std::array<int, 4>{3, 1, 2, 4},
+            std::array<int, 4>{0, 4, 5, 2}, std::array<int, 4>{3, 4, 5, 2},
+            std::array<int, 4>{0, 1, 4, 5}, std::array<int, 4>{3, 1, 4, 5}}) {
+        Corners c = corners_of(p, tet);
+        const Eigen::MatrixXd X = cv::slab_tet_nodes(k, c.P, c.lv, c.on_mid, d, blend, 1u);
+        SlabTet t;
+        for (int j = 0; j < 4; ++j) t.corner[j] = tet[std::size_t(j)] == 3 ? 0 : tet[std::size_t(j)];
+        for (std::size_t n = 0; n < lattice.size(); ++n) {
+          const Eigen::Vector3d x = X.row(Eigen::Index(n)).transpose();
+          const Key key = key_of(t, lattice[n], k);
+          if (auto [it, fresh] = seen.try_emplace(key, x); !fresh) {
+            EXPECT_LT((it->second - x).norm(), 1e-14) << "k = " << k;
+            ++compared;
+          }
+          // On an edge from the pinched corner to a base corner: the straight segment.
+          int others = 0, other = -1;
+          for (int j = 0; j < 4; ++j)
+            if (lattice[n][j] > 0 && t.corner[j] != 0) ++others, other = t.corner[j];
+          if (others == 1 && other < 3 && lattice[n][0] + lattice[n][1] + lattice[n][2] +
+                                                  lattice[n][3] == k) {
+            double l0 = 0;
+            for (int j = 0; j < 4; ++j)
+              if (t.corner[j] == 0) l0 += double(lattice[n][j]) / k;
+            const Eigen::Vector3d L = l0 * p.mid[0] + (1 - l0) * p.base[other];
+            EXPECT_LT((x - L).norm(), 1e-14) << "k = " << k << ", edge (0, base " << other << ")";
+          }
+          // On an edge from it to a middle corner: the patch.
+          if (others == 1 && other >= 3) {
+            double l0 = 0;
+            for (int j = 0; j < 4; ++j)
+              if (t.corner[j] == 0) l0 += double(lattice[n][j]) / k;
+            const double w[3] = {other == 3 ? 1.0 : l0, other == 4 ? 1 - l0 : 0.0,
+                                 other == 5 ? 1 - l0 : 0.0};
+            const Eigen::Vector3d L = w[0] * p.mid[0] + w[1] * p.mid[1] + w[2] * p.mid[2];
+            EXPECT_LT((x - L - cv::patch_displacement(d, k, w[1], w[2])).norm(), 1e-14)
+                << "k = " << k << ", edge (0, middle " << other << ")";
+          }
+        }
+      }
+      EXPECT_GT(compared, 0);
+      // Without the flag the diagonal (middle 0, base 1) is curved: the defect this guards.
+      if (!blend.face) {
+        Corners c = corners_of(p, {3, 1, 2, 4});
+        const Eigen::MatrixXd X = cv::slab_tet_nodes(k, c.P, c.lv, c.on_mid, d, blend);
+        const Eigen::Vector3d e = X.row(4).transpose();  // first node on edge (0, 1)
+        const auto& a = lattice[4];
+        ASSERT_TRUE(a[0] > 0 && a[1] > 0 && a[2] == 0 && a[3] == 0);
+        const double l0 = double(a[0]) / k;
+        EXPECT_GT((e - (l0 * p.mid[0] + (1 - l0) * p.base[1])).norm(), 1e-4) << "k = " << k;
+      }
+    }
+}

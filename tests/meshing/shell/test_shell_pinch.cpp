@@ -13,6 +13,7 @@
 #include <random>
 #include <vector>
 
+#include "meshing/core/adversarial.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/shell/bevel.hpp"
 #include "meshing/shell/projection.hpp"
@@ -307,4 +308,36 @@ TEST(ShellPinch, ProjectionOntoASurfaceMissingThePinchPoint) {
   ASSERT_TRUE(exact.has_value());
   EXPECT_EQ(exact->face, 0);
   EXPECT_TRUE(exact->position == Vector3d(s.V.row(0)));
+}
+
+TEST(ShellPinch, FacesWithThreeSingularCornersAreSplitUntilEachPrismHasOne) {
+  // Issue 21: a knife-edged disc (rim half angle 0.4°, below the 0.57° of the singularity
+  // tolerance: every rim vertex singular) with 6 rim slivers, each a face whose three corners are
+  // rim vertices. Before: build_shell stopped with "face N has three singular vertices". Now the
+  // edges between singular vertices are split until no prism has two singular corners.
+  const SurfaceMesh s = curvefem::make_adversarial("knife_disc_slivers");
+  const sh::ExtrusionDirections d = sh::extrusion_directions(s.V, s.F);
+  int three = 0;
+  for (int f = 0; f < s.F.rows(); ++f)
+    three += d.singular[std::size_t(s.F(f, 0))] && d.singular[std::size_t(s.F(f, 1))] &&
+             d.singular[std::size_t(s.F(f, 2))];
+  EXPECT_EQ(three, 6);
+  EXPECT_EQ(d.singular_count, 64);  // the rim
+  // The plain shell is positive and separated; 8 of its prisms miss the section condition there,
+  // which the bevel (what the curved mesher builds) restores.
+  const Case plain = plain_shell(s);
+  const sh::ShellVerification pv = sh::verify_shell(plain.shell, plain.surface);
+  EXPECT_TRUE(pv.positive() && pv.separated());
+  for (const Case& c : {beveled_shell(s)}) {
+    EXPECT_EQ(c.singular, 64);
+    for (int f = 0; f < c.shell.F.rows(); ++f) {
+      int n = 0;
+      for (int k = 0; k < 3; ++k) n += c.shell.singular[std::size_t(c.shell.F(f, k))];
+      EXPECT_LE(n, 1) << "shell face " << f;
+    }
+    const sh::ShellVerification v = sh::verify_shell(c.shell, c.surface);
+    EXPECT_TRUE(v.valid()) << v.non_positive_faces << " " << v.intersecting_input_faces << " "
+                           << v.non_section_faces << " " << v.roundtrip_failures;
+    EXPECT_LE(roundtrip_every_vertex(c), 1e-9);
+  }
 }
