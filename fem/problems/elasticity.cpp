@@ -439,7 +439,8 @@ ForceBalance force_balance(const LagrangeMesh& mesh, const FunctionSpace& space,
   // Internal force from the stress of u at the quadrature points.
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(u.size());
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd&, Eigen::VectorXd& Re) {
-    const ElasticMaterial m = problem.cell_material ? problem.cell_material(cell) : problem.material;
+    const ElasticMaterial m =
+        problem.cell_material ? problem.cell_material(cell) : problem.material;
     const double lambda = m.lambda(), mu = m.mu();
     thread_local CellGeometry g;
     thread_local Eigen::MatrixXd U, G;

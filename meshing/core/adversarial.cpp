@@ -80,7 +80,8 @@ SurfaceMesh make_knife_disc(int n, int rings, double rim_half_angle_deg, double 
 
 namespace {
 
-SurfaceMesh from_lists(const std::vector<Eigen::Vector3d>& V, const std::vector<Eigen::Vector3i>& F) {
+SurfaceMesh from_lists(const std::vector<Eigen::Vector3d>& V,
+                       const std::vector<Eigen::Vector3i>& F) {
   SurfaceMesh m;
   m.V.resize(Eigen::Index(V.size()), 3);
   for (std::size_t i = 0; i < V.size(); ++i) m.V.row(Eigen::Index(i)) = V[i];
@@ -195,8 +196,7 @@ SurfaceMesh make_sliver_sphere(int level, int slivers, double t, unsigned seed) 
   return from_lists(V, F);
 }
 
-SurfaceMesh make_radial_noise_sphere(int level, double amplitude, double fraction,
-                                     unsigned seed) {
+SurfaceMesh make_radial_noise_sphere(int level, double amplitude, double fraction, unsigned seed) {
   SurfaceMesh m = make_icosphere(level);
   const double h = mean_edge(m);
   std::mt19937 rng(seed);
@@ -236,15 +236,17 @@ SurfaceMesh make_split_ring(double r_in, double r_out, double height, double gap
   SurfaceMesh m = from_lists(V, F);
   // Outward by the signed volume.
   double vol = 0;
-  for (const auto& f : F) vol += V[std::size_t(f[0])].dot(V[std::size_t(f[1])].cross(V[std::size_t(f[2])]));
+  for (const auto& f : F)
+    vol += V[std::size_t(f[0])].dot(V[std::size_t(f[1])].cross(V[std::size_t(f[2])]));
   if (vol < 0) m.F.col(1).swap(m.F.col(2));
   return m;
 }
 
 const std::vector<AdversarialSurface>& adversarial_surfaces() {
   static const std::vector<AdversarialSurface> list = {
-      {"knife_disc", "a disc whose rim is a 0.4° knife edge (0.25° + the last ring): every rim "
-                     "vertex singular"},
+      {"knife_disc",
+       "a disc whose rim is a 0.4° knife edge (0.25° + the last ring): every rim "
+       "vertex singular"},
       {"knife_disc_slivers",
        "the knife disc with 6 rim slivers: faces with three singular corners, min angle 0.1°"},
       {"knife_disc_sharp", "a 0.15° knife edge, 12 slivers"},

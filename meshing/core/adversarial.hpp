@@ -26,9 +26,9 @@ SurfaceMesh make_adversarial(const std::string& name);
 /// A disc of radius 1 whose rim is a knife edge: the surface of revolution z = ±f(r),
 /// f(r) = s (1 − r) + c (1 − r)² with rim slope s = tan(rim_half_angle_deg), n vertices around
 /// and `rings` rings per side (the last at r = 0.99, so the rim faces lean by s + 0.01 c). With
-/// a lean below 0.57° (the shell's singularity tolerance 1e-2) every rim vertex is singular. `slivers` places that many triangles with three rim
-/// vertices (B_i, B_i+1, B_i+2) on the top side, evenly around: faces with three singular
-/// corners and a min angle of about 180°/n.
+/// a lean below 0.57° (the shell's singularity tolerance 1e-2) every rim vertex is singular.
+/// `slivers` places that many triangles with three rim vertices (B_i, B_i+1, B_i+2) on the top
+/// side, evenly around: faces with three singular corners and a min angle of about 180°/n.
 SurfaceMesh make_knife_disc(int n, int rings, double rim_half_angle_deg, double c, int slivers);
 
 /// An icosphere with `needles` thin cones pointing out of spread vertices: each vertex's faces
@@ -44,8 +44,7 @@ SurfaceMesh make_sliver_sphere(int level, int slivers, double t, unsigned seed);
 /// An icosphere whose vertices (each with probability `fraction`) move radially by up to
 /// `amplitude` mean edge lengths: a radial graph, embedded for any amplitude, folded and with
 /// clusters of singular vertices when the amplitude is above an edge.
-SurfaceMesh make_radial_noise_sphere(int level, double amplitude, double fraction,
-                                     unsigned seed);
+SurfaceMesh make_radial_noise_sphere(int level, double amplitude, double fraction, unsigned seed);
 
 /// A rectangular ring (radii r_in..r_out, height) cut by a slit: its two flat ends face each
 /// other `gap` apart at the inner radius. n sections around.

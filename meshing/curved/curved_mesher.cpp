@@ -764,6 +764,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.rounds = options.simplify_rounds;
   simplify_options.max_distance = eps;
   simplify_options.max_mips = options.max_triangle_mips;
+  simplify_options.max_edge_per_thickness = options.max_edge_per_thickness;
   simplify_options.flips = options.shell_flips;
   simplify_options.pan = options.shell_pan;
   simplify_options.split_mips = options.shell_split_mips;
@@ -827,7 +828,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.coarsen_rejections = {{"shape", why.shape},           {"distance", why.distance},
                                 {"positivity", why.positivity}, {"intersection", why.intersection},
                                 {"section", why.section},       {"coverage", why.coverage},
-                                {"curved", why.curved}};
+                                {"curved", why.curved},         {"thickness", why.thickness}};
   }
   stats.coarse_min_thickness_rel = simplify_stats.min_half_thickness / unit;
   stats.linear_max_distance_rel = simplify_stats.max_distance / unit;

@@ -74,6 +74,10 @@ struct CurvedMeshOptions {
   bool low_degree_slabs = false;
   // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
   double max_triangle_mips = 10;
+  // Thickness guard of the coarsening (SimplifyOptions::max_edge_per_thickness; 0: off): no
+  // coarse edge longer than this many times the object's local thickness at its ends, so slab
+  // tets in thin parts (plates, knife edges, thin limbs) are not flatter than that.
+  double max_edge_per_thickness = 8;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.

@@ -100,6 +100,8 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
     if (verdict[c] == JacobianVerdict::undecided) ++r.undecided_tets;
     if (verdict[c] != JacobianVerdict::positive && r.first_bad_tet < 0) r.first_bad_tet = c;
     r.min_scaled_jacobian = std::min(r.min_scaled_jacobian, sj[c]);
+    r.tets_sj_below_1e2 += sj[c] < 1e-2;
+    r.tets_sj_below_1e3 += sj[c] < 1e-3;
     r.mean_mips += mips[c] / std::max(nt, 1);
     r.max_mips = std::max(r.max_mips, mips[c]);
     const ElementDistortion& d = distortion[c];
@@ -112,6 +114,8 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
       auto& q = r.quality_by_tag[mesh.cell_tags[c]];
       ++q.tets;
       q.min_scaled_jacobian = std::min(q.min_scaled_jacobian, sj[c]);
+      q.tets_sj_below_1e2 += sj[c] < 1e-2;
+      q.tets_sj_below_1e3 += sj[c] < 1e-3;
       q.mean_mips += mips[c];
       q.max_mips = std::max(q.max_mips, mips[c]);
       q.min_jacobian_ratio = std::min(q.min_jacobian_ratio, d.jacobian_ratio);

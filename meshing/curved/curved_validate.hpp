@@ -32,11 +32,13 @@ struct CurvedValidation {
   int tets = 0, non_positive_tets = 0, undecided_tets = 0;
   int first_bad_tet = -1;
   double min_scaled_jacobian = 0, mean_mips = 0, max_mips = 0;
+  int tets_sj_below_1e2 = 0, tets_sj_below_1e3 = 0;  // sampled scaled Jacobian < 0.01, < 0.001
   // Distortion of the element maps (element_distortion.hpp): worst and mean over the tets.
   double min_jacobian_ratio = 1, max_d2 = 0, mean_d2 = 0, max_d3 = 0, mean_d3 = 0;
   struct Quality {
     int tets = 0;
     double min_scaled_jacobian = HUGE_VAL, mean_mips = 0, max_mips = 0;
+    int tets_sj_below_1e2 = 0, tets_sj_below_1e3 = 0;
     double min_jacobian_ratio = HUGE_VAL, max_d2 = 0, mean_d2 = 0, max_d3 = 0, mean_d3 = 0;
   };
   std::map<int, Quality> quality_by_tag;  // by LagrangeMesh::cell_tags (1 slab, 2 interior)

@@ -128,8 +128,7 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
         Eigen::Vector3d n = Eigen::Vector3d::Zero();
         for (int f : faces) n += face_normal(F[f]);
         if (!(n.norm() > 1e-9))
-          throw MeshingError("edge (" + std::to_string(e.first) + ", " +
-                                 std::to_string(e.second) +
+          throw MeshingError("edge (" + std::to_string(e.first) + ", " + std::to_string(e.second) +
                                  ") joins two singular vertices and its faces are folded flat onto "
                                  "each other (opposite normals): no pillar sees both",
                              ErrorContext{.vertex = e.first < stats.input_vertices ? e.first : -1,

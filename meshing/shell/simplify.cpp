@@ -1,5 +1,7 @@
 #include "meshing/shell/simplify.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -83,6 +85,27 @@ class ShellMesh : public TriMesh {
     return relaxed_distance;
   }
   double max_mips = 0;
+  double max_edge_per_thickness = 0;
+  std::vector<double> thickness;  // per input vertex (thickness guard)
+  // Worst edge length / local thickness over the cell's edges (0 without thickness data).
+  double thickness_ratio(Id f) const {
+    const Cell& c = cell(f);
+    double worst = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int a = input_vertex[c[k]], b = input_vertex[c[(k + 1) % 3]];
+      if (a < 0 || b < 0) continue;  // pinch points
+      const double t = std::min(thickness[std::size_t(a)], thickness[std::size_t(b)]);
+      if (!(t < HUGE_VAL)) continue;
+      worst = std::max(worst, (mid[c[k]] - mid[c[(k + 1) % 3]]).norm() / t);
+    }
+    return worst;
+  }
+  bool thickness_ok(const OperationRecord& r) const {
+    double before = max_edge_per_thickness, after = 0;
+    for (Id f : r.old_cells) before = std::max(before, thickness_ratio(f));
+    for (Id f : r.new_cells) after = std::max(after, thickness_ratio(f));
+    return after <= before;
+  }
   const std::vector<char>* frozen = nullptr;
   enum class Smoothing { rotate, zoom, pan };
   Smoothing smoothing_mode = Smoothing::rotate;
@@ -105,6 +128,7 @@ class ShellMesh : public TriMesh {
     section,
     coverage,
     curved,
+    thin,
     n_reasons
   };
   std::array<std::atomic<long>, n_reasons> rejections{};
@@ -769,6 +793,10 @@ class ShellMesh : public TriMesh {
       note(shape);
       return Check::shape;
     }
+    if (max_edge_per_thickness > 0 && !r.old_cells.empty() && !thickness_ok(r)) {
+      note(thin);
+      return Check::shape;
+    }
     if (max_distance > 0 && !rehome_owned(r)) {
       note(distance);
       return Check::shell;
@@ -928,6 +956,21 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   for (int f = 0; f < input.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) vf[input.F(f, k)].push_back(f);
   m.vf = &vf;
+  if (options.max_edge_per_thickness > 0) {
+    m.max_edge_per_thickness = options.max_edge_per_thickness;
+    m.thickness.assign(std::size_t(input.num_vertices()), HUGE_VAL);
+    tbb::parallel_for(0, input.num_vertices(), [&](int x) {
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      for (int f : vf[std::size_t(x)]) {
+        const Eigen::Vector3d a = input.V.row(input.F(f, 0)), b = input.V.row(input.F(f, 1)),
+                              c = input.V.row(input.F(f, 2));
+        n += (b - a).cross(c - a);
+      }
+      if (!(n.norm() > 0)) return;
+      m.thickness[std::size_t(x)] =
+          index.ray_distance(input.V.row(x).transpose(), -n.normalized(), vf[std::size_t(x)]);
+    });
+  }
   m.max_half_thickness = options.zoom;
   m.zoom_ray_fraction = options.zoom_ray_fraction;
 
@@ -1124,6 +1167,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   why.section = m.rejections[ShellMesh::section];
   why.coverage = m.rejections[ShellMesh::coverage];
   why.curved = m.rejections[ShellMesh::curved];
+  why.thickness = m.rejections[ShellMesh::thin];
 
   m.consolidate();
   Shell out;

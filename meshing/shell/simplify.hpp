@@ -51,6 +51,12 @@ struct SimplifyOptions {
   // 2-D MIPS energy (|e0|²+|e1|²+|e2|²)/(2√3·area), 2 for the equilateral triangle, than both
   // the removed ones and this bound is rejected.
   double max_mips = 0;
+  // > 0: thickness guard (issue 21). The local thickness T(x) of the object at each input vertex
+  // x is the distance along the inward vertex normal to the input beyond x's own faces. A
+  // collapse whose new middle triangles have an edge (a, b) longer than this many times
+  // min(T(a), T(b)), and longer in that ratio than every removed triangle's, is rejected: in a
+  // thin part the slab tets, no deeper than the part is thick, stay this flat at worst.
+  double max_edge_per_thickness = 0;
   bool flips = true;   // flip passes between collapse rounds
   bool rotate = true;  // pillar rotation passes
   // Pan passes (one thread): a middle vertex next to a collapse refused for the triangle shape
@@ -109,7 +115,8 @@ struct SimplifyStats {
   // refused earlier (link condition, frozen or singular vertex) are not counted here.
   struct Rejections {
     long shape = 0, distance = 0, positivity = 0, intersection = 0, section = 0, coverage = 0;
-    long curved = 0;  // the curved-aware bound (curved_order)
+    long curved = 0;     // the curved-aware bound (curved_order)
+    long thickness = 0;  // the thickness guard (max_edge_per_thickness)
   } collapse_rejections;
   // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
   double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;

@@ -187,7 +187,8 @@ TEST(ForceBalance, CantileverReactionEqualsTheTractionTimesTheArea) {
     EXPECT_LT(fb.imbalance(), 1e-10) << "p = " << p;
     EXPECT_GT(fb.supported_unknowns, 0);
     // A solution that is not the equilibrium one shows: the imbalance is the residual left.
-    const fem::ForceBalance off = fem::force_balance(c.mesh, c.space, c.problem, 0.9 * sol.u, false);
+    const fem::ForceBalance off =
+        fem::force_balance(c.mesh, c.space, c.problem, 0.9 * sol.u, false);
     EXPECT_GT(off.imbalance(), 1e-2) << "p = " << p;
   }
 }

@@ -18,10 +18,10 @@
 #include "fem/space/function_space.hpp"
 #include "meshing/core/geometry_degree.hpp"
 #include "meshing/core/primitives.hpp"
-#include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/features.hpp"
+#include "meshing/curved/jacobian_certificate.hpp"
 #include "tests/fem/manufactured.hpp"
 
 using namespace curvefem;
@@ -192,16 +192,16 @@ TEST(GeometryMatrix, LinearElasticityErrorsAndEquilibrium) {
                                      {true, true, true},
                                      [ex](const Eigen::Vector3d& x) { return ex.value(x); },
                                      {}});
-        problem.traction.push_back(
-            {faces_below(mesh, space, s.z_clamp, false),
-             [ex, m](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
-               const Eigen::Matrix3d g = ex.gradient(x);
-               const Eigen::Matrix3d eps = 0.5 * (g + g.transpose());
-               const Eigen::Matrix3d sigma =
-                   m.lambda() * eps.trace() * Eigen::Matrix3d::Identity() + 2 * m.mu() * eps;
-               return Eigen::Vector3d(sigma * n);
-             },
-             {}});
+        problem.traction.push_back({faces_below(mesh, space, s.z_clamp, false),
+                                    [ex, m](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+                                      const Eigen::Matrix3d g = ex.gradient(x);
+                                      const Eigen::Matrix3d eps = 0.5 * (g + g.transpose());
+                                      const Eigen::Matrix3d sigma =
+                                          m.lambda() * eps.trace() * Eigen::Matrix3d::Identity() +
+                                          2 * m.mu() * eps;
+                                      return Eigen::Vector3d(sigma * n);
+                                    },
+                                    {}});
         const auto sol = fem::solve_linear_elasticity(mesh, space, problem, {});
         const fem::ForceBalance fb = fem::force_balance(mesh, space, problem, sol.u, false);
         const auto e = fem::compute_errors(
@@ -240,27 +240,25 @@ TEST(GeometryMatrix, NeoHookeanEquilibriumAtEveryOrder) {
         const fem::FunctionSpace space = fem::build_function_space(mesh, p);
         fem::ElasticityProblem problem;
         problem.material = {10.0, 0.3};
-        problem.dirichlet.push_back(
-            {faces_below(mesh, space, s.z_clamp, true),
-             {true, true, true},
-             [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); },
-             {}});
-        problem.traction.push_back(
-            {faces_below(mesh, space, s.z_clamp, false),
-             [](const Eigen::Vector3d&, const Eigen::Vector3d&) {
-               return Eigen::Vector3d(0.3, 0, 0.5);
-             },
-             {}});
+        problem.dirichlet.push_back({faces_below(mesh, space, s.z_clamp, true),
+                                     {true, true, true},
+                                     [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); },
+                                     {}});
+        problem.traction.push_back({faces_below(mesh, space, s.z_clamp, false),
+                                    [](const Eigen::Vector3d&, const Eigen::Vector3d&) {
+                                      return Eigen::Vector3d(0.3, 0, 0.5);
+                                    },
+                                    {}});
         fem::NewtonOptions newton;
         newton.load_steps = 2;
         const auto sol = fem::solve_neo_hookean(mesh, space, problem, {}, newton);
         const fem::ForceBalance fb = fem::force_balance(mesh, space, problem, sol.u, true);
-        std::printf("%s neo-hookean k=%d p=%d: max |u| %.3e, applied (%.4f %.4f %.4f), imbalance %.2e\n",
-                    s.name, k, p, sol.u.cwiseAbs().maxCoeff(), fb.applied[0], fb.applied[1],
-                    fb.applied[2], fb.imbalance());
+        std::printf(
+            "%s neo-hookean k=%d p=%d: max |u| %.3e, applied (%.4f %.4f %.4f), imbalance %.2e\n",
+            s.name, k, p, sol.u.cwiseAbs().maxCoeff(), fb.applied[0], fb.applied[1], fb.applied[2],
+            fb.imbalance());
         EXPECT_LT(fb.imbalance(), 1e-8) << s.name << " k = " << k << " p = " << p;
         EXPECT_GT(sol.u.cwiseAbs().maxCoeff(), 1e-2);  // a visible deformation
       }
   }
 }
-

@@ -672,9 +672,10 @@ TEST(RunSurface, PaintedDataErrorIsWithinTheGeometricErrorAtEveryOrderAndDegree)
       const auto& r = run.report;
       const double smax = r["surface_max_error"].get<double>();
       const double l2 = r["l2_error"].get<double>() / r["l2_norm_exact"].get<double>();
-      std::printf("painted k = %d p = %d: %d tets, %d dofs, surface max %.3e (%.2f of eps|grad u|),"
-                  " relative L2 %.3e\n",
-                  k, p, r["tets"].get<int>(), r["dofs"].get<int>(), smax, smax / bound, l2);
+      std::printf(
+          "painted k = %d p = %d: %d tets, %d dofs, surface max %.3e (%.2f of eps|grad u|),"
+          " relative L2 %.3e\n",
+          k, p, r["tets"].get<int>(), r["dofs"].get<int>(), smax, smax / bound, l2);
       const double c = p == 1 ? 4.0 : 1.0;
       EXPECT_LT(smax, c * bound) << "k = " << k << ", p = " << p;
       EXPECT_LT(l2, c * bound) << "k = " << k << ", p = " << p;

@@ -67,15 +67,18 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
            : tag == 2 ? "interior"
            : tag == 3 ? "outer_slab"
            : tag == 4 ? "exterior"
-                      : std::to_string(tag)] = {{"tets", q.tets},
-                                                {"min_scaled_jacobian", q.min_scaled_jacobian},
-                                                {"mean_mips", q.mean_mips},
-                                                {"max_mips", q.max_mips},
-                                                {"min_jacobian_ratio", q.min_jacobian_ratio},
-                                                {"max_d2", q.max_d2},
-                                                {"mean_d2", q.mean_d2},
-                                                {"max_d3", q.max_d3},
-                                                {"mean_d3", q.mean_d3}};
+                      : std::to_string(tag)] = {
+        {"tets", q.tets},
+        {"min_scaled_jacobian", q.min_scaled_jacobian},
+        {"tets_scaled_jacobian_below_0.01", q.tets_sj_below_1e2},
+        {"tets_scaled_jacobian_below_0.001", q.tets_sj_below_1e3},
+        {"mean_mips", q.mean_mips},
+        {"max_mips", q.max_mips},
+        {"min_jacobian_ratio", q.min_jacobian_ratio},
+        {"max_d2", q.max_d2},
+        {"mean_d2", q.mean_d2},
+        {"max_d3", q.max_d3},
+        {"mean_d3", q.mean_d3}};
   return {{"valid", v.valid(eps_rel)},
           {"tets", v.tets},
           {"min_jacobian_certified", v.certified()},
@@ -83,6 +86,8 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"undecided_tets", v.undecided_tets},
           {"first_bad_tet", v.first_bad_tet},
           {"min_scaled_jacobian", v.min_scaled_jacobian},
+          {"tets_scaled_jacobian_below_0.01", v.tets_sj_below_1e2},
+          {"tets_scaled_jacobian_below_0.001", v.tets_sj_below_1e3},
           {"mean_mips", v.mean_mips},
           {"max_mips", v.max_mips},
           {"distortion",
@@ -154,6 +159,7 @@ struct MeshArgs {
        low_degree_slabs = false, no_pan = false, no_feature_chains = false,
        linear_coarsening = false;
   double split_mips = 0;
+  double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   double padding = 0.25;
   GlobalOptions global;
@@ -253,6 +259,10 @@ void register_mesh(CLI::App& app) {
                   "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
                   "exceeds this (2 = equilateral; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--max-edge-per-thickness", args->max_edge_per_thickness,
+                  "coarsening keeps every coarse edge at most this many times the object's local "
+                  "thickness at its ends (thin parts get flat slab tets otherwise; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
                 "(meshing/curved/README.md, step 7; off: the full shear)");
@@ -293,6 +303,7 @@ void register_mesh(CLI::App& app) {
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);
     options.shell_split_mips = args->split_mips;
+    options.max_edge_per_thickness = args->max_edge_per_thickness;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {

@@ -27,7 +27,7 @@ Meshed mesh_of(const SurfaceMesh& input, int order) {
   o.order = order;
   o.eps_rel = 0.01;
   o.threads = 1;
-  o.feature_edges = cv::detect_feature_edges(input, 30.0);  // the CLI's default angle
+  o.feature_edges = cv::detect_feature_edges(input, 60.0);  // the CLI's default angle
   Meshed m;
   m.mesh = cv::build_curved_mesh(input, o, m.stats);
   m.v = cv::validate_curved_mesh(m.mesh.mesh, m.mesh.map, input);
@@ -47,7 +47,8 @@ TEST(CurvedAdversarial, KnifeEdgedDiscWithSliversOfThreeSingularCorners) {
   // their edge) and the validator counted the rim's feature edges, split at pinch points, as off
   // the boundary edges.
   const SurfaceMesh input = make_adversarial("knife_disc_slivers");
-  const meshing::shell::ExtrusionDirections d = meshing::shell::extrusion_directions(input.V, input.F);
+  const meshing::shell::ExtrusionDirections d =
+      meshing::shell::extrusion_directions(input.V, input.F);
   ASSERT_EQ(d.singular_count, 64);
   const Meshed m = mesh_of(input, 3);
   EXPECT_TRUE(m.v.certified());
@@ -56,4 +57,40 @@ TEST(CurvedAdversarial, KnifeEdgedDiscWithSliversOfThreeSingularCorners) {
   EXPECT_EQ(m.v.feature_edges, 64);
   EXPECT_TRUE(m.v.valid(0.01));
   EXPECT_GT(m.stats.singular_vertices, 0);
+}
+
+TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) {
+  // A flat cylinder (radius 1, height 0.05): its two sharp rims 2.5 ε apart. Without the guard
+  // the coarsening makes cap faces far wider than the cylinder is thick, and the slab tets under
+  // them go flat. Measured (K = 3, 2026-12-01): without it 100 boundary faces, min scaled
+  // Jacobian 2.0e-3, 116 tets below 0.01, max MIPS 1.0e5; with the default (8 × the local
+  // thickness) 228 faces, 2.2e-2, none below 0.01, max MIPS 3.0e3.
+  const SurfaceMesh input = make_adversarial("cylinder_flat");
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.eps_rel = 0.01;
+  o.threads = 1;
+  o.feature_edges = cv::detect_feature_edges(input, 60.0);
+  ASSERT_GT(o.max_edge_per_thickness, 0);  // on by default
+  cv::CurvedMeshStats with_stats, without_stats;
+  const cv::CurvedMesh with = cv::build_curved_mesh(input, o, with_stats);
+  o.max_edge_per_thickness = 0;
+  const cv::CurvedMesh without = cv::build_curved_mesh(input, o, without_stats);
+  const cv::CurvedValidation a = cv::validate_curved_mesh(with.mesh, with.map, input);
+  const cv::CurvedValidation b = cv::validate_curved_mesh(without.mesh, without.map, input);
+  std::printf(
+      "guard: %d faces, min SJ %.3g, %d below 0.01, max MIPS %.3g; without: %d faces, "
+      "min SJ %.3g, %d below 0.01, max MIPS %.3g\n",
+      with.map.boundary.num_cells(), a.min_scaled_jacobian, a.tets_sj_below_1e2, a.max_mips,
+      without.map.boundary.num_cells(), b.min_scaled_jacobian, b.tets_sj_below_1e2, b.max_mips);
+  EXPECT_TRUE(a.valid(0.01));
+  EXPECT_TRUE(b.valid(0.01));
+  EXPECT_GT(a.min_scaled_jacobian, 1e-2);
+  EXPECT_EQ(a.tets_sj_below_1e2, 0);
+  EXPECT_LT(a.max_mips, 1e4);
+  EXPECT_LT(b.min_scaled_jacobian, 5e-3);  // what the guard prevents
+  long refused = -1;
+  for (const auto& [why, n] : with_stats.coarsen_rejections)
+    if (why == "thickness") refused = n;
+  EXPECT_GT(refused, 0);
 }

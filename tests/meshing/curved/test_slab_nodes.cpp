@@ -292,7 +292,8 @@ TEST(SlabNodes, APinchedCornerGivesOneNodeWhicheverLevelNamesIt) {
         Corners c = corners_of(p, tet);
         const Eigen::MatrixXd X = cv::slab_tet_nodes(k, c.P, c.lv, c.on_mid, d, blend, 1u);
         SlabTet t;
-        for (int j = 0; j < 4; ++j) t.corner[j] = tet[std::size_t(j)] == 3 ? 0 : tet[std::size_t(j)];
+        for (int j = 0; j < 4; ++j)
+          t.corner[j] = tet[std::size_t(j)] == 3 ? 0 : tet[std::size_t(j)];
         for (std::size_t n = 0; n < lattice.size(); ++n) {
           const Eigen::Vector3d x = X.row(Eigen::Index(n)).transpose();
           const Key key = key_of(t, lattice[n], k);
@@ -304,8 +305,8 @@ TEST(SlabNodes, APinchedCornerGivesOneNodeWhicheverLevelNamesIt) {
           int others = 0, other = -1;
           for (int j = 0; j < 4; ++j)
             if (lattice[n][j] > 0 && t.corner[j] != 0) ++others, other = t.corner[j];
-          if (others == 1 && other < 3 && lattice[n][0] + lattice[n][1] + lattice[n][2] +
-                                                  lattice[n][3] == k) {
+          if (others == 1 && other < 3 &&
+              lattice[n][0] + lattice[n][1] + lattice[n][2] + lattice[n][3] == k) {
             double l0 = 0;
             for (int j = 0; j < 4; ++j)
               if (t.corner[j] == 0) l0 += double(lattice[n][j]) / k;
