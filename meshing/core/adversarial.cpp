@@ -259,7 +259,8 @@ const std::vector<AdversarialSurface>& adversarial_surfaces() {
       {"sliver_sphere_0001", "40 slivers of about 0.001° (edges split at 1e-5)"},
       {"sliver_sphere_many", "400 slivers of about 0.01° on a level-4 sphere"},
       {"noise_sphere_05", "radial noise of 0.5 edge on every vertex"},
-      {"noise_sphere_2", "radial noise of 2 edges on every vertex: folds, singular clusters"},
+      {"noise_sphere_2", "radial noise of 2 edges on every vertex: faces tilted up to 60°"},
+      {"noise_sphere_20", "radial noise of 20 edges on every vertex: folds, singular clusters"},
       {"noise_sphere_5", "radial noise of 5 edges on 10% of the vertices: spikes and pits"},
       {"noise_sphere_2_l4", "radial noise of 2 edges on a level-4 sphere"},
       {"noise_sphere_big", "radial noise of 1 edge on a level-7 sphere (327,680 faces)"},
@@ -278,6 +279,8 @@ const std::vector<AdversarialSurface>& adversarial_surfaces() {
       {"box_sharp", "a unit box, 8 x 8 quads per side (sharp CAD edges and corners)"},
       {"box_thin_long", "a 1 x 0.02 x 0.02 bar: a needle-like CAD part"},
       {"sphere_coarse", "an icosahedron: 20 faces, every vertex a cone point"},
+      {"kissing_spheres_01", "two unit spheres 0.1 ε apart (two components): curved near contact"},
+      {"kissing_spheres_001", "two unit spheres 0.01 ε apart"},
       {"sphere_fine", "a level-6 icosphere (81,920 faces)"},
   };
   return list;
@@ -298,6 +301,7 @@ SurfaceMesh make_adversarial(const std::string& name) {
   if (name == "sliver_sphere_many") return make_sliver_sphere(4, 400, 1e-4, 7);
   if (name == "noise_sphere_05") return make_radial_noise_sphere(3, 0.5, 1.0, 8);
   if (name == "noise_sphere_2") return make_radial_noise_sphere(3, 2.0, 1.0, 9);
+  if (name == "noise_sphere_20") return make_radial_noise_sphere(3, 20.0, 1.0, 13);
   if (name == "noise_sphere_5") return make_radial_noise_sphere(3, 5.0, 0.1, 10);
   if (name == "noise_sphere_2_l4") return make_radial_noise_sphere(4, 2.0, 1.0, 11);
   if (name == "noise_sphere_big") return make_radial_noise_sphere(7, 1.0, 1.0, 12);
@@ -317,6 +321,17 @@ SurfaceMesh make_adversarial(const std::string& name) {
   if (name == "box_sharp") return make_box({0, 0, 0}, {1, 1, 1}, 8);
   if (name == "box_thin_long") return make_box({0, 0, 0}, {1, 0.02, 0.02}, 4);
   if (name == "sphere_coarse") return make_icosphere(0);
+  if (name == "kissing_spheres_01" || name == "kissing_spheres_001") {
+    // bbox 4 x 2 x 2: ε = 0.04 absolute
+    const double gap = (name == "kissing_spheres_01" ? 0.1 : 0.01) * eps * 4.0;
+    const SurfaceMesh a = make_icosphere(4), b = make_icosphere(4, 1.0, {2.0 + gap, 0, 0});
+    SurfaceMesh m;
+    m.V.resize(a.V.rows() + b.V.rows(), 3);
+    m.V << a.V, b.V;
+    m.F.resize(a.F.rows() + b.F.rows(), 3);
+    m.F << a.F, b.F.array() + int(a.V.rows());
+    return m;
+  }
   if (name == "sphere_fine") return make_icosphere(6);
   std::string known;
   for (const auto& s : adversarial_surfaces()) known += (known.empty() ? "" : ", ") + s.name;

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <unordered_map>
 
 #include "meshing/check/self_intersections.hpp"
@@ -774,6 +775,27 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
+  if (!options.feature_edges.empty() && surface.num_vertices() > input.num_vertices()) {
+    // The bevel's points on an input feature edge stay too: collapsed away, they would take the
+    // coarse boundary off the feature (the validator's features_off_edges; seen on noisy scans
+    // where most edges are features).
+    std::set<std::pair<int, int>> features;
+    for (const auto& e : options.feature_edges)
+      features.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
+    for (int f = 0; f < surface.num_faces(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int v = surface.F(f, c);
+        if (v < input.num_vertices()) continue;
+        const Eigen::Vector3d w = beveled.surface.corner_bary[std::size_t(f)].col(c);
+        const int parent = beveled.surface.face_parent[std::size_t(f)];
+        int ends[2], n = 0;
+        for (int i = 0; i < 3; ++i)
+          if (w[i] != 0 && n < 2) ends[n++] = input.F(parent, i);
+        if (n == 2 && (w.array() != 0).count() == 2 &&
+            features.count({std::min(ends[0], ends[1]), std::max(ends[0], ends[1])}))
+          simplify_options.frozen_input_vertices[std::size_t(v)] = 1;
+      }
+  }
   if (relaxed) {
     simplify_options.curved_order = options.order;
     simplify_options.relaxed_distance = options.curved_linear_factor * eps;

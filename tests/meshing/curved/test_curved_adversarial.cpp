@@ -94,3 +94,17 @@ TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) 
     if (why == "thickness") refused = n;
   EXPECT_GT(refused, 0);
 }
+
+TEST(CurvedAdversarial, NoisyScanWithClustersOfSingularVerticesMeshes) {
+  // Radial noise of 20 edge lengths on every vertex of a level-3 icosphere: 43 singular vertices,
+  // almost every edge a feature (60°). Before: the bevel's points on feature edges were collapsed
+  // away by the coarsening, leaving 2 feature edges off the coarse boundary (exit 3).
+  const SurfaceMesh input = make_adversarial("noise_sphere_20");
+  const meshing::shell::ExtrusionDirections d =
+      meshing::shell::extrusion_directions(input.V, input.F);
+  ASSERT_EQ(d.singular_count, 43);
+  const Meshed m = mesh_of(input, 3);
+  EXPECT_GT(m.v.feature_edges, 800);
+  EXPECT_EQ(m.v.features_off_edges, 0);
+  EXPECT_TRUE(m.v.valid(0.01));
+}
