@@ -71,9 +71,9 @@ if args.dev:
     with open(os.path.join(args.data, "MANIFEST.tsv")) as f:
         for line in f:
             cols = line.rstrip("\n").split("\t")
-            if not cols or not cols[0].endswith(".obj"):
+            if len(cols) < 2 or not cols[1].endswith(".obj"):
                 continue
-            inputs.append((cols[0][:-4], os.path.join(args.data, cols[0]), "dev"))
+            inputs.append((cols[0], os.path.join(args.data, cols[1]), "dev"))
 
 records = []
 jsonl = open(os.path.join(args.work, "runs.jsonl"), "a")

@@ -342,3 +342,21 @@ TEST(Cli, MeshWithDistancePointsWritesAndValidatesThem) {
   EXPECT_NE(out.find("constraint point 0"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
+
+TEST(Cli, GenerateWritesTheAdversarialSurfacesAndRefusesUnknownNames) {
+  const auto dir = test::scratch_dir("cli_generate");
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " generate --list", &out), 0) << out;
+  EXPECT_NE(out.find("knife_disc_slivers"), std::string::npos) << out;
+  EXPECT_NE(out.find("noise_sphere_20"), std::string::npos) << out;
+  const std::string file = (dir / "kd.obj").string();
+  ASSERT_EQ(test::run_command(cli() + " generate knife_disc_slivers -o " + file, &out), 0) << out;
+  const SurfaceMesh m = io::read_surface(file);
+  EXPECT_EQ(m.num_faces(), 1920);
+  EXPECT_EQ(test::run_command(cli() + " check -q " + file, &out), 0) << out;
+  // An unknown name: exit 2, naming the known ones, no file written.
+  const std::string none = (dir / "none.obj").string();
+  EXPECT_EQ(test::run_command(cli() + " generate no_such -o " + none, &out), 2);
+  EXPECT_NE(out.find("known: knife_disc"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(none));
+}
