@@ -38,6 +38,8 @@ ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvef
 ap.add_argument("--work", default="/tmp/robustness")
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/robustness.md"))
 ap.add_argument("--note", default="", help="a hand-written paragraph for the report")
+ap.add_argument("--render-from", metavar="JSONL",
+                help="run nothing: write --out from these raw records (e.g. of a run cut short)")
 args = ap.parse_args()
 command = "/usr/bin/python3 " + " ".join(
     shlex.quote(a) for a in ["benchmarks/run_robustness.py"] + sys.argv[1:])
@@ -54,6 +56,9 @@ def run(cmd, timeout):
 
 
 inputs = []  # (name, path, kind)
+if args.render_from:
+    args.corpus = ["none"]
+    args.dev = False
 if args.corpus != ["none"]:
     listed = subprocess.run([args.exe, "generate", "--list"], capture_output=True, text=True,
                             check=True).stdout.splitlines()
@@ -76,6 +81,9 @@ if args.dev:
             inputs.append((cols[0], os.path.join(args.data, cols[1]), "dev"))
 
 records = []
+if args.render_from:
+    with open(args.render_from) as f:
+        records = [json.loads(l) for l in f if l.strip()]
 jsonl = open(os.path.join(args.work, "runs.jsonl"), "a")
 for name, path, kind in inputs:
     code, _, _ = run([args.exe, "check", path, "-q"], args.timeout)
@@ -115,7 +123,8 @@ def g(x, fmt="{:.3g}"):
     return fmt.format(x) if isinstance(x, float) else str(x)
 
 
-lines = [f"# Robustness: the curved mesher on the adversarial corpus{' and the dev meshes' if args.dev else ''}",
+has_dev = any(r["kind"] == "dev" for r in records)
+lines = [f"# Robustness: the curved mesher on the adversarial corpus{' and the dev meshes' if has_dev else ''}",
          "",
          f"Generated {datetime.datetime.now():%Y-%m-%d %H:%M} by `{command}`; HEAD "
          + subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
@@ -149,6 +158,12 @@ if qual:
             and r["max_mips"] <= 1e4]
     lines.append(f"Quality goal (min SJ >= 1e-3, <= 1% of tets below 0.01, max MIPS <= 1e4) met "
                  f"on {len(good)} of {len(qual)} valid runs.")
+# bichon (reference-notes/bichon-measured.md, P4, eps 1e-2): mean curved MIPS on four dev meshes.
+BICHON_MEAN_MIPS = {"knight_decimated": 47.9, "spot": 56.0, "bunny": 52.4, "fandisk": 40.5}
+rows = [r for r in records if r["name"] in BICHON_MEAN_MIPS and r["order"] == 4 and r.get("valid")]
+if rows:
+    lines += ["", "Mean curved MIPS at K = 4 against bichon's (P4): " + "; ".join(
+        f"{r['name']} {r['mean_mips']:.1f} vs {BICHON_MEAN_MIPS[r['name']]}" for r in rows) + "."]
 if args.note:
     lines += ["", "## Notes", "", args.note]
 os.makedirs(os.path.dirname(args.out), exist_ok=True)
