@@ -14,6 +14,51 @@
 
 namespace curvefem {
 
+namespace {
+
+SurfaceMesh from_lists(const std::vector<Eigen::Vector3d>& V,
+                       const std::vector<Eigen::Vector3i>& F) {
+  SurfaceMesh m;
+  m.V.resize(Eigen::Index(V.size()), 3);
+  for (std::size_t i = 0; i < V.size(); ++i) m.V.row(Eigen::Index(i)) = V[i];
+  m.F.resize(Eigen::Index(F.size()), 3);
+  for (std::size_t i = 0; i < F.size(); ++i) m.F.row(Eigen::Index(i)) = F[i];
+  return m;
+}
+
+double mean_edge(const SurfaceMesh& m) {
+  double sum = 0;
+  for (int f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) sum += (m.V.row(m.F(f, k)) - m.V.row(m.F(f, (k + 1) % 3))).norm();
+  return sum / (3.0 * double(m.F.rows()));
+}
+
+/// Vertices pairwise more than two edges apart, chosen greedily in a seeded random order.
+std::vector<int> spread_vertices(const SurfaceMesh& m, int count, unsigned seed) {
+  std::vector<std::set<int>> ring(std::size_t(m.V.rows()));
+  for (int f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ring[std::size_t(m.F(f, k))].insert(m.F(f, (k + 1) % 3));
+  std::vector<int> order(std::size_t(m.V.rows()));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  std::mt19937 rng(seed);
+  std::shuffle(order.begin(), order.end(), rng);
+  std::vector<char> blocked(order.size(), 0);
+  std::vector<int> out;
+  for (int v : order) {
+    if (int(out.size()) >= count) break;
+    if (blocked[std::size_t(v)]) continue;
+    out.push_back(v);
+    blocked[std::size_t(v)] = 1;
+    for (int a : ring[std::size_t(v)]) {
+      blocked[std::size_t(a)] = 1;
+      for (int b : ring[std::size_t(a)]) blocked[std::size_t(b)] = 1;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 SurfaceMesh make_knife_disc(int n, int rings, double rim_half_angle_deg, double c, int slivers) {
   if (n < 8 || rings < 2) throw InputError("knife disc: n >= 8 and rings >= 2");
   const double s = std::tan(rim_half_angle_deg * std::numbers::pi / 180.0);
@@ -70,58 +115,8 @@ SurfaceMesh make_knife_disc(int n, int rings, double rim_half_angle_deg, double 
       F.push_back({at(A, i), at(B, i + 1), at(A, i + 1)});
     }
   }
-  SurfaceMesh m;
-  m.V.resize(Eigen::Index(V.size()), 3);
-  for (std::size_t i = 0; i < V.size(); ++i) m.V.row(Eigen::Index(i)) = V[i];
-  m.F.resize(Eigen::Index(F.size()), 3);
-  for (std::size_t i = 0; i < F.size(); ++i) m.F.row(Eigen::Index(i)) = F[i];
-  return m;
+  return from_lists(V, F);
 }
-
-namespace {
-
-SurfaceMesh from_lists(const std::vector<Eigen::Vector3d>& V,
-                       const std::vector<Eigen::Vector3i>& F) {
-  SurfaceMesh m;
-  m.V.resize(Eigen::Index(V.size()), 3);
-  for (std::size_t i = 0; i < V.size(); ++i) m.V.row(Eigen::Index(i)) = V[i];
-  m.F.resize(Eigen::Index(F.size()), 3);
-  for (std::size_t i = 0; i < F.size(); ++i) m.F.row(Eigen::Index(i)) = F[i];
-  return m;
-}
-
-double mean_edge(const SurfaceMesh& m) {
-  double sum = 0;
-  for (int f = 0; f < m.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) sum += (m.V.row(m.F(f, k)) - m.V.row(m.F(f, (k + 1) % 3))).norm();
-  return sum / (3.0 * double(m.F.rows()));
-}
-
-/// Vertices pairwise more than two edges apart, chosen greedily in a seeded random order.
-std::vector<int> spread_vertices(const SurfaceMesh& m, int count, unsigned seed) {
-  std::vector<std::set<int>> ring(std::size_t(m.V.rows()));
-  for (int f = 0; f < m.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ring[std::size_t(m.F(f, k))].insert(m.F(f, (k + 1) % 3));
-  std::vector<int> order(std::size_t(m.V.rows()));
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = int(i);
-  std::mt19937 rng(seed);
-  std::shuffle(order.begin(), order.end(), rng);
-  std::vector<char> blocked(order.size(), 0);
-  std::vector<int> out;
-  for (int v : order) {
-    if (int(out.size()) >= count) break;
-    if (blocked[std::size_t(v)]) continue;
-    out.push_back(v);
-    blocked[std::size_t(v)] = 1;
-    for (int a : ring[std::size_t(v)]) {
-      blocked[std::size_t(a)] = 1;
-      for (int b : ring[std::size_t(a)]) blocked[std::size_t(b)] = 1;
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 SurfaceMesh make_needle_sphere(int level, int needles, double height, double lean_deg,
                                unsigned seed) {
