@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
+#include <string>
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/timer.hpp"
@@ -64,33 +66,34 @@ double amips(const Eigen::Matrix3d& J, Eigen::Matrix3d* grad) {
   return e;
 }
 
-// One star cell during a vertex visit: the Jacobians at the samples with the vertex at its
-// current position, and the vertex's local index.
+// One star cell during a visit: the Jacobians at the samples with the moved item at its current
+// position, and per sample the row g with dJ = Δ g (a corner moves its star's nodes by their
+// barycentric weight, g = ∇λ_jᵀ W⁻¹ at every sample; a single node moves alone, g = ∇N_n(ξ)ᵀ W⁻¹).
 struct StarCell {
-  int cell, local;
+  int cell;
   std::vector<Eigen::Matrix3d> J0;  // against the regular tet
+  std::vector<Eigen::RowVector3d> g;
 };
 
 struct StarEnergy {
-  double sum = 0, max = 0;
+  double sum = 0, max = 0;  // over the cells' mean energies
+  double point_max = 0;     // over the samples
 };
 
-StarEnergy star_energy(const Reference& ref, const std::vector<StarCell>& star,
-                       const Eigen::Vector3d& delta, Eigen::Vector3d* gradient) {
+StarEnergy star_energy(const std::vector<StarCell>& star, const Eigen::Vector3d& delta,
+                       Eigen::Vector3d* gradient) {
   StarEnergy out;
   if (gradient) gradient->setZero();
   for (const StarCell& s : star) {
-    // J(Δ) = J0 + Δ (∇λ)ᵀ W⁻¹.
-    const Eigen::RowVector3d g = ref.grad_lambda[s.local].transpose() * ref.Winv;
-    const Eigen::Matrix3d dJ = delta * g;
     double e = 0;
     Eigen::Vector3d grad_cell = Eigen::Vector3d::Zero();
-    for (const Eigen::Matrix3d& J0 : s.J0) {
+    for (std::size_t i = 0; i < s.J0.size(); ++i) {
       Eigen::Matrix3d dE;
-      const double v = amips(J0 + dJ, gradient ? &dE : nullptr);
-      if (v == k_inf) return {k_inf, k_inf};
+      const double v = amips(s.J0[i] + delta * s.g[i], gradient ? &dE : nullptr);
+      if (v == k_inf) return {k_inf, k_inf, k_inf};
       e += v;
-      if (gradient) grad_cell += dE * g.transpose();
+      out.point_max = std::max(out.point_max, v);
+      if (gradient) grad_cell += dE * s.g[i].transpose();
     }
     const double inv = 1.0 / double(s.J0.size());
     e *= inv;
@@ -107,12 +110,14 @@ Eigen::MatrixXd cell_nodes(const LagrangeMesh& mesh, int c) {
   return X;
 }
 
-// Energy over the order-k lattice.
-double energy_of(const Reference& ref, const Eigen::MatrixXd& X) {
+// Energy over the order-k lattice (the mean; optionally the worst sample).
+double energy_of(const Reference& ref, const Eigen::MatrixXd& X, double* point_max = nullptr) {
   double e = 0;
+  if (point_max) *point_max = 0;
   for (const Eigen::MatrixXd& G : ref.grads) {
     const Eigen::Matrix3d J = X.transpose() * G;
     const double v = amips(J * ref.Winv, nullptr);
+    if (point_max) *point_max = std::max(*point_max, v);
     if (v == k_inf) return k_inf;
     e += v;
   }
@@ -135,9 +140,10 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     throw InputError("optimize_vertices: needs a tetrahedral mesh");
   const Reference ref(mesh.order);
   const int nc = mesh.num_cells(), k = ref.k;
+  const auto& lattice = *ref.lattice;
 
-  // Boundary corners: corners of faces used by one cell only.
-  std::map<std::array<int, 3>, int> face_count;
+  // Boundary faces: faces used by one cell only; every node on them is fixed.
+  std::map<std::array<int, 3>, std::pair<int, int>> face_count;  // corners → (count, cell·4+skip)
   auto corner = [&](int c, int j) { return mesh.cells(c, ref.corner_row[j]); };
   for (int c = 0; c < nc; ++c)
     for (int skip = 0; skip < 4; ++skip) {
@@ -146,26 +152,35 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       for (int j = 0; j < 4; ++j)
         if (j != skip) f[m++] = corner(c, j);
       std::sort(f.begin(), f.end());
-      ++face_count[f];
+      auto& entry = face_count[f];
+      ++entry.first;
+      entry.second = 4 * c + skip;
     }
   std::vector<char> fixed(mesh.num_nodes(), 0), is_corner(mesh.num_nodes(), 0);
-  for (const auto& [f, count] : face_count)
-    if (count == 1)
-      for (int v : f) fixed[v] = 1;
+  for (const auto& [f, entry] : face_count)
+    if (entry.first == 1) {
+      const int c = entry.second / 4, skip = entry.second % 4;
+      for (int n = 0; n < ref.nn; ++n)
+        if (lattice[n][skip] == 0) fixed[mesh.cells(c, n)] = 1;
+    }
   if (frozen) {
     CF_VERIFY(int(frozen->size()) == mesh.num_nodes(), "optimize_vertices: frozen has wrong size");
     for (int v = 0; v < mesh.num_nodes(); ++v)
       if ((*frozen)[std::size_t(v)]) fixed[v] = 1;
   }
+  // Stars: a corner's cells with its vertex index, a high-order node's cells with its row.
   std::vector<std::vector<std::pair<int, int>>> star(mesh.num_nodes());
   for (int c = 0; c < nc; ++c)
     for (int j = 0; j < 4; ++j) {
       is_corner[corner(c, j)] = 1;
       star[corner(c, j)].emplace_back(c, j);
     }
+  for (int c = 0; c < nc; ++c)
+    for (int n = 0; n < ref.nn; ++n)
+      if (!is_corner[mesh.cells(c, n)]) star[mesh.cells(c, n)].emplace_back(c, n);
 
-  std::vector<double> energy(nc);
-  for (int c = 0; c < nc; ++c) energy[c] = energy_of(ref, cell_nodes(mesh, c));
+  std::vector<double> energy(nc), point_energy(nc);
+  for (int c = 0; c < nc; ++c) energy[c] = energy_of(ref, cell_nodes(mesh, c), &point_energy[c]);
   auto summarize = [&](double& mean, double& max) {
     mean = max = 0;
     for (double e : energy) {
@@ -175,157 +190,225 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
   };
   summarize(stats.mean_energy_before, stats.max_energy_before);
 
-  std::vector<int> active;
-  for (int v = 0; v < mesh.num_nodes(); ++v)
-    if (is_corner[v] && !fixed[v]) active.push_back(v);
-  stats.movable_vertices = int(active.size());
+  // Curved cells: a node off the linear interpolant of the corners. Single-node moves are made
+  // only where a star holds one, so straight parts of the mesh stay straight.
+  std::vector<char> curved_cell(nc, 0);
+  if (k > 1)
+    for (int c = 0; c < nc; ++c) {
+      const Eigen::MatrixXd X = cell_nodes(mesh, c);
+      const double size = (X.row(ref.corner_row[1]) - X.row(ref.corner_row[0])).norm();
+      for (int n = 0; n < ref.nn && !curved_cell[c]; ++n) {
+        Eigen::RowVector3d x = Eigen::RowVector3d::Zero();
+        for (int j = 0; j < 4; ++j) x += double(lattice[n][j]) / k * X.row(ref.corner_row[j]);
+        if ((x - X.row(n)).norm() > 1e-9 * size) curved_cell[c] = 1;
+      }
+    }
 
-  for (int sweep = 0; sweep < options.sweeps && !active.empty(); ++sweep) {
-    ++stats.sweeps;
-    // Worst stars first.
-    std::vector<std::pair<double, int>> order;
-    for (int v : active) {
-      double worst = 0;
-      for (const auto& [c, j] : star[v]) worst = std::max(worst, energy[c]);
-      order.emplace_back(-worst, v);
-    }
-    std::sort(order.begin(), order.end());
-    // Vertices that share no tet have disjoint stars (a node moved by v lies only in tets
-    // holding v), so a colour class of the vertex graph is visited in parallel with the same
-    // result as serially, for any thread count.
-    std::vector<int> colour(mesh.num_nodes(), -1);
-    std::vector<std::vector<int>> classes;
-    for (const auto& [neg, v] : order) {
-      std::vector<char> used(classes.size() + 1, 0);
-      for (const auto& [c, j] : star[v])
-        for (int i = 0; i < 4; ++i) {
-          const int w = corner(c, i);
-          if (w != v && colour[w] >= 0) used[colour[w]] = 1;
-        }
-      int col = 0;
-      while (used[col]) ++col;
-      colour[v] = col;
-      if (col == int(classes.size())) classes.emplace_back();
-      classes[col].push_back(v);
-    }
-    std::vector<char> moved_vertex(mesh.num_nodes(), 0);
-    std::atomic<long long> visits{0}, moves{0}, rejected{0};
-    auto visit_vertex = [&](int v) {
-      ++visits;
-      std::vector<StarCell> cells;
-      double length = 0;
-      int edges = 0;
-      for (const auto& [c, j] : star[v]) {
-        StarCell s{c, j, {}};
-        const Eigen::MatrixXd X = cell_nodes(mesh, c);
-        for (const Eigen::MatrixXd& G : ref.grads) s.J0.push_back((X.transpose() * G) * ref.Winv);
-        cells.push_back(std::move(s));
-        for (int i = 0; i < 4; ++i)
-          if (i != j) {
-            length += (mesh.nodes.row(corner(c, i)) - mesh.nodes.row(v)).norm();
+  // One visit of a corner (moving its star's nodes by their barycentric weight) or of a single
+  // high-order node; returns whether it moved.
+  auto visit = [&](int v, bool corner_move, std::atomic<long long>& rejected) {
+    std::vector<StarCell> cells;
+    double length = 0;
+    int edges = 0;
+    for (const auto& [c, local] : star[v]) {
+      StarCell s{c, {}, {}};
+      const Eigen::MatrixXd X = cell_nodes(mesh, c);
+      for (const Eigen::MatrixXd& G : ref.grads) {
+        s.J0.push_back((X.transpose() * G) * ref.Winv);
+        s.g.push_back(corner_move
+                          ? Eigen::RowVector3d(ref.grad_lambda[local].transpose() * ref.Winv)
+                          : Eigen::RowVector3d(G.row(local) * ref.Winv));
+      }
+      cells.push_back(std::move(s));
+      // The step scale: a corner's edges, or a node's lattice spacing.
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          if (!corner_move || a == local || b == local) {
+            length += (X.row(ref.corner_row[a]) - X.row(ref.corner_row[b])).norm();
             ++edges;
           }
+    }
+    length /= std::max(edges, 1);
+    if (!corner_move) length /= k;
+    const StarEnergy start = star_energy(cells, Eigen::Vector3d::Zero(), nullptr);
+    if (start.sum == k_inf) return false;  // an uncertifiable star: leave it alone
+    Eigen::Vector3d delta = Eigen::Vector3d::Zero();
+    StarEnergy current = start;
+    for (int it = 0; it < options.iterations; ++it) {
+      Eigen::Vector3d g;
+      star_energy(cells, delta, &g);
+      if (!(g.norm() > 0)) break;
+      // Newton direction from a finite-difference Hessian of the analytic gradient, else
+      // steepest descent.
+      const double h = 1e-6 * length;
+      Eigen::Matrix3d H;
+      for (int i = 0; i < 3; ++i) {
+        Eigen::Vector3d gi;
+        star_energy(cells, delta + h * Eigen::Vector3d::Unit(i), &gi);
+        H.col(i) = (gi - g) / h;
       }
-      length /= std::max(edges, 1);
-      const StarEnergy start = star_energy(ref, cells, Eigen::Vector3d::Zero(), nullptr);
-      if (start.sum == k_inf) return;  // an uncertifiable star: leave it alone
-      Eigen::Vector3d delta = Eigen::Vector3d::Zero();
-      StarEnergy current = start;
-      for (int it = 0; it < options.iterations; ++it) {
-        Eigen::Vector3d g;
-        star_energy(ref, cells, delta, &g);
-        if (!(g.norm() > 0)) break;
-        // Newton direction from a finite-difference Hessian of the analytic gradient, else
-        // steepest descent.
-        const double h = 1e-6 * length;
-        Eigen::Matrix3d H;
-        for (int i = 0; i < 3; ++i) {
-          Eigen::Vector3d gi;
-          star_energy(ref, cells, delta + h * Eigen::Vector3d::Unit(i), &gi);
-          H.col(i) = (gi - g) / h;
+      H = 0.5 * (H + H.transpose()).eval();
+      Eigen::Vector3d dir;
+      Eigen::LLT<Eigen::Matrix3d> llt(H);
+      if (llt.info() == Eigen::Success && H.allFinite())
+        dir = -llt.solve(g);
+      else
+        dir = -g;
+      if (!dir.allFinite() || dir.dot(g) >= 0) dir = -g;
+      const double cap = 0.5 * length;  // never jump across the star
+      if (dir.norm() > cap) dir *= cap / dir.norm();
+      bool stepped = false;
+      for (double t = 1.0; t > 1e-4; t *= 0.5) {
+        const StarEnergy trial = star_energy(cells, delta + t * dir, nullptr);
+        if (trial.sum < current.sum && trial.max <= start.max &&
+            (corner_move || trial.point_max <= start.point_max)) {
+          delta += t * dir;
+          stepped = current.sum - trial.sum > options.tolerance * current.sum;
+          current = trial;
+          break;
         }
-        H = 0.5 * (H + H.transpose()).eval();
-        Eigen::Vector3d dir;
-        Eigen::LLT<Eigen::Matrix3d> llt(H);
-        if (llt.info() == Eigen::Success && H.allFinite())
-          dir = -llt.solve(g);
-        else
-          dir = -g;
-        if (!dir.allFinite() || dir.dot(g) >= 0) dir = -g;
-        const double cap = 0.5 * length;  // never jump across the star
-        if (dir.norm() > cap) dir *= cap / dir.norm();
-        bool stepped = false;
-        for (double t = 1.0; t > 1e-4; t *= 0.5) {
-          const StarEnergy trial = star_energy(ref, cells, delta + t * dir, nullptr);
-          if (trial.sum < current.sum && trial.max <= start.max) {
-            delta += t * dir;
-            stepped = current.sum - trial.sum > options.tolerance * current.sum;
-            current = trial;
-            break;
-          }
-        }
-        if (!stepped) break;
       }
-      // Moves that gain less than the tolerance are not worth a certificate (the certificate of
-      // the star costs far more than the search), and they keep the sweeps going.
-      if (!(start.sum - current.sum > options.tolerance * start.sum) || delta.isZero(0)) return;
+      if (!stepped) break;
+    }
+    // Moves that gain less than the tolerance are not worth a certificate (the certificate of
+    // the star costs far more than the search), and they keep the sweeps going.
+    if (!(start.sum - current.sum > options.tolerance * start.sum) || delta.isZero(0)) return false;
 
-      std::vector<std::pair<int, double>> moved;  // node, barycentric weight of v
+    std::vector<std::pair<int, double>> moved;  // node, weight (of k) of the move
+    if (corner_move) {
       for (const auto& [c, j] : star[v])
         for (int n = 0; n < ref.nn; ++n)
-          if ((*ref.lattice)[n][j] > 0) moved.emplace_back(mesh.cells(c, n), (*ref.lattice)[n][j]);
+          if (lattice[n][j] > 0) moved.emplace_back(mesh.cells(c, n), lattice[n][j]);
       std::sort(moved.begin(), moved.end());
       moved.erase(std::unique(moved.begin(), moved.end(),
                               [](const auto& a, const auto& b) { return a.first == b.first; }),
                   moved.end());
-      // Apply, certify every star cell, restore the saved rows exactly on failure (halving the
-      // move a few times while it still improves the search energy).
-      std::vector<Eigen::RowVector3d> saved;
-      for (const auto& [node, a] : moved) saved.push_back(mesh.nodes.row(node));
-      auto restore = [&] {
-        for (std::size_t i = 0; i < moved.size(); ++i) mesh.nodes.row(moved[i].first) = saved[i];
-      };
-      bool accepted = false;
-      for (int attempt = 0; attempt < 4; ++attempt) {
-        for (std::size_t i = 0; i < moved.size(); ++i)
-          mesh.nodes.row(moved[i].first) = saved[i] + (moved[i].second / k) * delta.transpose();
-        accepted = true;
-        for (const auto& [c, j] : star[v])
-          if (certify_tet_jacobian(k, cell_nodes(mesh, c)).verdict != JacobianVerdict::positive) {
-            accepted = false;
-            break;
-          }
-        if (accepted) break;
-        ++rejected;
-        restore();
-        delta *= 0.5;
-        const StarEnergy half = star_energy(ref, cells, delta, nullptr);
-        if (!(start.sum - half.sum > options.tolerance * start.sum && half.max <= start.max)) break;
-      }
-      if (!accepted) return;
-      ++moves;
-      moved_vertex[v] = 1;
-      for (const auto& [c, j] : star[v]) energy[c] = energy_of(ref, cell_nodes(mesh, c));
-    };
-    std::size_t done = 0;
-    for (const auto& cls : classes) {
-      tbb::parallel_for(std::size_t(0), cls.size(), [&](std::size_t i) { visit_vertex(cls[i]); });
-      done += cls.size();
-      if (progress)
-        progress("optimize: sweep " + std::to_string(sweep + 1), double(done) / order.size());
+    } else {
+      moved.emplace_back(v, k);
     }
-    stats.visits += visits;
-    stats.moves += moves;
-    stats.rejected_by_certificate += rejected;
-    std::vector<char> next(mesh.num_nodes(), 0);
+    // Apply, certify every star cell, restore the saved rows exactly on failure (halving the
+    // move a few times while it still improves the search energy).
+    std::vector<Eigen::RowVector3d> saved;
+    for (const auto& [node, a] : moved) saved.push_back(mesh.nodes.row(node));
+    auto restore = [&] {
+      for (std::size_t i = 0; i < moved.size(); ++i) mesh.nodes.row(moved[i].first) = saved[i];
+    };
+    bool accepted = false;
+    for (int attempt = 0; attempt < 4; ++attempt) {
+      for (std::size_t i = 0; i < moved.size(); ++i)
+        mesh.nodes.row(moved[i].first) = saved[i] + (moved[i].second / k) * delta.transpose();
+      accepted = true;
+      for (const auto& [c, local] : star[v])
+        if (certify_tet_jacobian(k, cell_nodes(mesh, c)).verdict != JacobianVerdict::positive) {
+          accepted = false;
+          break;
+        }
+      if (accepted) break;
+      ++rejected;
+      restore();
+      delta *= 0.5;
+      const StarEnergy half = star_energy(cells, delta, nullptr);
+      if (!(start.sum - half.sum > options.tolerance * start.sum && half.max <= start.max &&
+            (corner_move || half.point_max <= start.point_max)))
+        break;
+    }
+    if (!accepted) return false;
+    for (const auto& [c, local] : star[v])
+      energy[c] = energy_of(ref, cell_nodes(mesh, c), &point_energy[c]);
+    return true;
+  };
+
+  // Sweeps over the active items, worst stars first; the next sweep's items are those of the
+  // cells a move changed. Items whose stars share no cell touch disjoint nodes and energies, so
+  // a colour class is visited in parallel with the same result as serially, for any thread count.
+  struct Sweeps {
+    int sweeps = 0;
+    long long visits = 0, moves = 0, rejected = 0;
+  };
+  auto run = [&](std::vector<int> active, bool corner_move, int max_sweeps,
+                 const std::function<bool(int)>& eligible, const std::string& label) {
+    Sweeps out;
+    for (int sweep = 0; sweep < max_sweeps && !active.empty(); ++sweep) {
+      ++out.sweeps;
+      std::vector<std::pair<double, int>> order;
+      for (int v : active) {
+        double worst = 0;
+        for (const auto& [c, local] : star[v]) worst = std::max(worst, energy[c]);
+        order.emplace_back(-worst, v);
+      }
+      std::sort(order.begin(), order.end());
+      std::vector<std::vector<int>> cell_colours(nc), classes;
+      for (const auto& [neg, v] : order) {
+        std::vector<char> used(classes.size() + 1, 0);
+        for (const auto& [c, local] : star[v])
+          for (int col : cell_colours[c]) used[col] = 1;
+        int col = 0;
+        while (used[col]) ++col;
+        for (const auto& [c, local] : star[v]) cell_colours[c].push_back(col);
+        if (col == int(classes.size())) classes.emplace_back();
+        classes[col].push_back(v);
+      }
+      std::vector<char> moved_item(mesh.num_nodes(), 0);
+      std::atomic<long long> moves{0}, rejected{0};
+      std::size_t done = 0;
+      for (const auto& cls : classes) {
+        tbb::parallel_for(std::size_t(0), cls.size(), [&](std::size_t i) {
+          if (visit(cls[i], corner_move, rejected)) {
+            moved_item[cls[i]] = 1;
+            ++moves;
+          }
+        });
+        done += cls.size();
+        if (progress)
+          progress("optimize: " + label + " sweep " + std::to_string(sweep + 1),
+                   double(done) / order.size());
+      }
+      out.visits += (long long)order.size();
+      out.moves += moves;
+      out.rejected += rejected;
+      std::vector<char> next(mesh.num_nodes(), 0);
+      for (int v = 0; v < mesh.num_nodes(); ++v)
+        if (moved_item[v])
+          for (const auto& [c, local] : star[v])
+            for (int n = 0; n < ref.nn; ++n) next[mesh.cells(c, n)] = 1;
+      active.clear();
+      for (int v = 0; v < mesh.num_nodes(); ++v)
+        if (next[v] && eligible(v)) active.push_back(v);
+    }
+    return out;
+  };
+
+  auto corner_eligible = [&](int v) { return is_corner[v] && !fixed[v]; };
+  std::vector<int> corners;
+  for (int v = 0; v < mesh.num_nodes(); ++v)
+    if (corner_eligible(v)) corners.push_back(v);
+  stats.movable_vertices = int(corners.size());
+  const Sweeps a = run(corners, true, options.sweeps, corner_eligible, "vertex");
+  stats.sweeps = a.sweeps;
+  stats.visits = a.visits;
+  stats.moves = a.moves;
+  stats.rejected_by_certificate = a.rejected;
+
+  if (k > 1 && options.node_sweeps > 0) {
+    auto node_eligible = [&](int v) {
+      if (is_corner[v] || fixed[v]) return false;
+      bool curved = false;
+      double worst = 0;
+      for (const auto& [c, local] : star[v]) {
+        curved = curved || curved_cell[c];
+        worst = std::max(worst, point_energy[c]);
+      }
+      return curved && worst > options.node_energy;
+    };
+    std::vector<int> nodes;
     for (int v = 0; v < mesh.num_nodes(); ++v)
-      if (moved_vertex[v])
-        for (const auto& [c, j] : star[v])
-          for (int i = 0; i < 4; ++i)
-            if (!fixed[corner(c, i)]) next[corner(c, i)] = 1;
-    active.clear();
-    for (int v = 0; v < mesh.num_nodes(); ++v)
-      if (next[v]) active.push_back(v);
+      if (node_eligible(v)) nodes.push_back(v);
+    stats.movable_nodes = int(nodes.size());
+    const Sweeps b = run(nodes, false, options.node_sweeps, node_eligible, "node");
+    stats.node_sweeps = b.sweeps;
+    stats.node_visits = b.visits;
+    stats.node_moves = b.moves;
+    stats.rejected_by_certificate += b.rejected;
   }
   summarize(stats.mean_energy_after, stats.max_energy_after);
   stats.seconds = watch.seconds();

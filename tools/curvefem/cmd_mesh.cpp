@@ -35,6 +35,11 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
       {"visits", s.visits},
       {"moves", s.moves},
       {"rejected_by_certificate", s.rejected_by_certificate},
+      {"nodes",
+       {{"sweeps", s.node_sweeps},
+        {"movable", s.movable_nodes},
+        {"visits", s.node_visits},
+        {"moves", s.node_moves}}},
       {"energy_before", {{"mean", s.mean_energy_before}, {"max", s.max_energy_before}}},
       {"energy_after", {{"mean", s.mean_energy_after}, {"max", s.max_energy_after}}},
       {"energy", "conformal AMIPS against the regular tet, mean over the order-k lattice"},
@@ -161,6 +166,8 @@ struct MeshArgs {
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
+  int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
+  double optimize_node_energy = meshing::curved::OptimizeOptions{}.node_energy;
   double padding = 0.25;
   GlobalOptions global;
 };
@@ -235,6 +242,15 @@ void register_mesh(CLI::App& app) {
   sub->add_option("--optimize-sweeps", args->optimize_sweeps,
                   "vertex-smoothing sweeps of the inner surface and interior (0: off)")
       ->check(CLI::Range(0, 100));
+  sub->add_option("--optimize-node-sweeps", args->optimize_node_sweeps,
+                  "sweeps moving single high-order nodes of distorted curved cells, after the "
+                  "vertex smoothing (default 0: off; better scaled Jacobians, but the FEM error "
+                  "on the moved maps can grow, see meshing/curved/optimize.hpp)")
+      ->check(CLI::Range(0, 100));
+  sub->add_option("--optimize-node-energy", args->optimize_node_energy,
+                  "with --optimize-node-sweeps: move only nodes of stars with a sample whose "
+                  "conformal AMIPS energy (1 for a regular tet) exceeds E (default 10)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
   sub->add_option("--constraints", args->constraints,
@@ -293,6 +309,8 @@ void register_mesh(CLI::App& app) {
     options.threads = args->global.threads;
     options.deterministic = !args->nondeterministic;
     options.optimize.sweeps = args->optimize_sweeps;
+    options.optimize.node_sweeps = args->optimize_node_sweeps;
+    options.optimize.node_energy = args->optimize_node_energy;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.low_degree_slabs = args->low_degree_slabs;
