@@ -78,6 +78,7 @@ struct StarCell {
 struct StarEnergy {
   double sum = 0, max = 0;  // over the cells' mean energies
   double point_max = 0;     // over the samples
+  double variation = 0;     // Σ over the cells of mean |J − J̄|² / |J̄|² (0 for affine maps)
 };
 
 StarEnergy star_energy(const std::vector<StarCell>& star, const Eigen::Vector3d& delta,
@@ -87,10 +88,17 @@ StarEnergy star_energy(const std::vector<StarCell>& star, const Eigen::Vector3d&
   for (const StarCell& s : star) {
     double e = 0;
     Eigen::Vector3d grad_cell = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d mean = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < s.J0.size(); ++i) mean += s.J0[i] + delta * s.g[i];
+    mean /= double(s.J0.size());
+    double var = 0;
+    for (std::size_t i = 0; i < s.J0.size(); ++i)
+      var += (s.J0[i] + delta * s.g[i] - mean).squaredNorm();
+    out.variation += var / (double(s.J0.size()) * mean.squaredNorm());
     for (std::size_t i = 0; i < s.J0.size(); ++i) {
       Eigen::Matrix3d dE;
       const double v = amips(s.J0[i] + delta * s.g[i], gradient ? &dE : nullptr);
-      if (v == k_inf) return {k_inf, k_inf, k_inf};
+      if (v == k_inf) return {k_inf, k_inf, k_inf, k_inf};
       e += v;
       out.point_max = std::max(out.point_max, v);
       if (gradient) grad_cell += dE * s.g[i].transpose();
@@ -261,7 +269,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       for (double t = 1.0; t > 1e-4; t *= 0.5) {
         const StarEnergy trial = star_energy(cells, delta + t * dir, nullptr);
         if (trial.sum < current.sum && trial.max <= start.max &&
-            (corner_move || trial.point_max <= start.point_max)) {
+            (corner_move ||
+             (trial.point_max <= start.point_max && trial.variation <= start.variation))) {
           delta += t * dir;
           stepped = current.sum - trial.sum > options.tolerance * current.sum;
           current = trial;
@@ -309,7 +318,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       delta *= 0.5;
       const StarEnergy half = star_energy(cells, delta, nullptr);
       if (!(start.sum - half.sum > options.tolerance * start.sum && half.max <= start.max &&
-            (corner_move || half.point_max <= start.point_max)))
+            (corner_move ||
+             (half.point_max <= start.point_max && half.variation <= start.variation))))
         break;
     }
     if (!accepted) return false;

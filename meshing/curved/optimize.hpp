@@ -33,13 +33,13 @@ struct OptimizeOptions {
   double tolerance = 1e-3;  // a visit stops when the star energy drops by less (relative)
   bool flips = true;        // 2-3 / 3-2 / 4-4 flips of the straight interior first (tet_flips)
   // Then single high-order nodes (edge, face and cell nodes off the boundary) of stars holding a
-  // curved cell with a sample whose energy exceeds node_energy; 0 sweeps: off, the default.
-  // Measured (K = 4, 4 sweeps, threshold 10): knight min scaled Jacobian 5.3e-4 -> 1.6e-2 and
-  // mean curved MIPS 105 -> 72, bunny 9.8e-4 -> 1.4e-3 and 111 -> 73; but the FEM error on the
-  // moved maps rose (geometry-order matrix, feature cylinder, k = p = 3 elasticity L2 4.0e-3 ->
-  // 2.0e-2; on every cell, threshold 0: torus k = 2, p = 3 7.2e-5 -> 5.6e-4): the energy sees
-  // the Jacobian at the lattice only, not the map's higher derivatives. Off until it does.
-  int node_sweeps = 0;
+  // curved cell with a sample whose energy exceeds node_energy; 0 sweeps: off. A node move must
+  // lower the star's energy, raise no sample's, and not raise the star's Jacobian variation
+  // Σ mean|J − J̄|²/|J̄|² (a discrete |D²F|): without that last guard the FEM error on the moved
+  // maps rose (geometry-order matrix, feature cylinder, k = p = 3 elasticity L2 4.0e-3 -> 2.0e-2)
+  // while the energy fell; with it the matrix's errors move by < 1.5%. Measured at K = 4:
+  // bunny min scaled Jacobian 9.8e-4 -> 1.2e-3, fandisk 3.0e-3 -> 1.0e-2 (meshing/curved/README).
+  int node_sweeps = 4;
   double node_energy = 10;
 };
 

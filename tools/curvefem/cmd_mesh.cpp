@@ -244,8 +244,7 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::Range(0, 100));
   sub->add_option("--optimize-node-sweeps", args->optimize_node_sweeps,
                   "sweeps moving single high-order nodes of distorted curved cells, after the "
-                  "vertex smoothing (default 0: off; better scaled Jacobians, but the FEM error "
-                  "on the moved maps can grow, see meshing/curved/optimize.hpp)")
+                  "vertex smoothing (default 4; 0: off)")
       ->check(CLI::Range(0, 100));
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
                   "with --optimize-node-sweeps: move only nodes of stars with a sample whose "

@@ -217,7 +217,8 @@ TEST(Optimize, CurvedSphereMeshImprovesAndKeepsItsGuarantees) {
   EXPECT_LT(b.max_mips, 0.2 * a.max_mips);
   EXPECT_LT(stats.optimize.max_energy_after, 0.6 * stats.optimize.max_energy_before);
   EXPECT_LT(stats.optimize.mean_energy_after, stats.optimize.mean_energy_before);
-  EXPECT_EQ(stats.optimize.node_moves, 0);  // off by default
+  // No sample of this sphere exceeds the default node threshold: the node phase is idle.
+  EXPECT_EQ(stats.optimize.node_moves, 0);
 
   // The node phase on every curved star: still certified, same boundary, lower energies.
   o.optimize.node_sweeps = 4;
@@ -234,7 +235,8 @@ TEST(Optimize, CurvedSphereMeshImprovesAndKeepsItsGuarantees) {
       c.mean_mips, stats.optimize.mean_energy_after, node_stats.optimize.mean_energy_after);
   EXPECT_LT(node_stats.optimize.mean_energy_after, stats.optimize.mean_energy_after);
   EXPECT_LE(node_stats.optimize.max_energy_after, stats.optimize.max_energy_after);
-  // Measured: min scaled Jacobian 0.180 -> 0.195, max curved MIPS 61.2 -> 58.9.
+  // Measured: min scaled Jacobian 0.180 -> 0.180, max curved MIPS 61.23 -> 61.19 (0.195 and 58.9
+  // without the variation guard).
   EXPECT_GE(c.min_scaled_jacobian, b.min_scaled_jacobian);
   EXPECT_LE(c.max_mips, b.max_mips);
 }
