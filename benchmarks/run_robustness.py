@@ -27,7 +27,7 @@ import time
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
 ap.add_argument("--corpus", nargs="+", default=["all"])
-ap.add_argument("--skip", nargs="*", default=[], help="corpus names to leave out")
+ap.add_argument("--skip", nargs="*", default=[], help="corpus or dev names to leave out")
 ap.add_argument("--dev", action="store_true", help="also the dev meshes of --data")
 ap.add_argument("--data", default="/work/shared/data/dev")
 ap.add_argument("--orders", nargs="+", type=int, default=[3, 4])
@@ -76,7 +76,7 @@ if args.dev:
     with open(os.path.join(args.data, "MANIFEST.tsv")) as f:
         for line in f:
             cols = line.rstrip("\n").split("\t")
-            if len(cols) < 2 or not cols[1].endswith(".obj"):
+            if len(cols) < 2 or not cols[1].endswith(".obj") or cols[0] in args.skip:
                 continue
             inputs.append((cols[0], os.path.join(args.data, cols[1]), "dev"))
 

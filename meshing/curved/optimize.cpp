@@ -269,8 +269,9 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       for (double t = 1.0; t > 1e-4; t *= 0.5) {
         const StarEnergy trial = star_energy(cells, delta + t * dir, nullptr);
         if (trial.sum < current.sum && trial.max <= start.max &&
-            (corner_move ||
-             (trial.point_max <= start.point_max && trial.variation <= start.variation))) {
+            (corner_move || (trial.point_max <= start.point_max &&
+                             (trial.variation <= start.variation ||
+                              start.point_max > options.node_free_energy)))) {
           delta += t * dir;
           stepped = current.sum - trial.sum > options.tolerance * current.sum;
           current = trial;
@@ -319,7 +320,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       const StarEnergy half = star_energy(cells, delta, nullptr);
       if (!(start.sum - half.sum > options.tolerance * start.sum && half.max <= start.max &&
             (corner_move ||
-             (half.point_max <= start.point_max && half.variation <= start.variation))))
+             (half.point_max <= start.point_max &&
+              (half.variation <= start.variation || start.point_max > options.node_free_energy)))))
         break;
     }
     if (!accepted) return false;
@@ -332,12 +334,16 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
   // cells a move changed. Items whose stars share no cell touch disjoint nodes and energies, so
   // a colour class is visited in parallel with the same result as serially, for any thread count.
   struct Sweeps {
-    int sweeps = 0;
+    int movable = 0, sweeps = 0;
     long long visits = 0, moves = 0, rejected = 0;
   };
-  auto run = [&](std::vector<int> active, bool corner_move, int max_sweeps,
-                 const std::function<bool(int)>& eligible, const std::string& label) {
+  auto run = [&](bool corner_move, int max_sweeps, const std::function<bool(int)>& eligible,
+                 const std::string& label) {
     Sweeps out;
+    std::vector<int> active;
+    for (int v = 0; v < mesh.num_nodes(); ++v)
+      if (eligible(v)) active.push_back(v);
+    out.movable = int(active.size());
     for (int sweep = 0; sweep < max_sweeps && !active.empty(); ++sweep) {
       ++out.sweeps;
       std::vector<std::pair<double, int>> order;
@@ -388,12 +394,9 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     return out;
   };
 
-  auto corner_eligible = [&](int v) { return is_corner[v] && !fixed[v]; };
-  std::vector<int> corners;
-  for (int v = 0; v < mesh.num_nodes(); ++v)
-    if (corner_eligible(v)) corners.push_back(v);
-  stats.movable_vertices = int(corners.size());
-  const Sweeps a = run(corners, true, options.sweeps, corner_eligible, "vertex");
+  const Sweeps a = run(
+      true, options.sweeps, [&](int v) { return is_corner[v] && !fixed[v]; }, "vertex");
+  stats.movable_vertices = a.movable;
   stats.sweeps = a.sweeps;
   stats.visits = a.visits;
   stats.moves = a.moves;
@@ -410,11 +413,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       }
       return curved && worst > options.node_energy;
     };
-    std::vector<int> nodes;
-    for (int v = 0; v < mesh.num_nodes(); ++v)
-      if (node_eligible(v)) nodes.push_back(v);
-    stats.movable_nodes = int(nodes.size());
-    const Sweeps b = run(nodes, false, options.node_sweeps, node_eligible, "node");
+    const Sweeps b = run(false, options.node_sweeps, node_eligible, "node");
+    stats.movable_nodes = b.movable;
     stats.node_sweeps = b.sweeps;
     stats.node_visits = b.visits;
     stats.node_moves = b.moves;

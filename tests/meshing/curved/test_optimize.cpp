@@ -172,6 +172,17 @@ TEST(Optimize, ABentInteriorEdgeNodeIsStraightenedAndStraightMeshesAreNotBent) {
       if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12)
         EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
 
+    // Without the variation guard (node_free_energy 0: every star counts as distorted) the
+    // same bend is removed too.
+    LagrangeMesh free = octahedron(Eigen::Vector3d::Zero(), k);
+    free.nodes.row(bent) += push.transpose();
+    cv::OptimizeOptions f = o;
+    f.node_free_energy = 0;
+    const cv::OptimizeStats sf = cv::optimize_vertices(free, f);
+    EXPECT_GT(sf.node_moves, 0);
+    EXPECT_LE(sf.max_energy_after, s0.max_energy_before);
+    EXPECT_TRUE(all_certified(free));
+
     // Off: nothing moves.
     LagrangeMesh off = octahedron(Eigen::Vector3d::Zero(), k);
     off.nodes.row(bent) += push.transpose();
