@@ -81,20 +81,23 @@ struct StarEnergy {
   double variation = 0;     // Σ over the cells of mean |J − J̄|² / |J̄|² (0 for affine maps)
 };
 
+// `variation`: also the Jacobian variation (only node moves are judged by it).
 StarEnergy star_energy(const std::vector<StarCell>& star, const Eigen::Vector3d& delta,
-                       Eigen::Vector3d* gradient) {
+                       Eigen::Vector3d* gradient, bool variation = false) {
   StarEnergy out;
   if (gradient) gradient->setZero();
   for (const StarCell& s : star) {
     double e = 0;
     Eigen::Vector3d grad_cell = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d mean = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < s.J0.size(); ++i) mean += s.J0[i] + delta * s.g[i];
-    mean /= double(s.J0.size());
-    double var = 0;
-    for (std::size_t i = 0; i < s.J0.size(); ++i)
-      var += (s.J0[i] + delta * s.g[i] - mean).squaredNorm();
-    out.variation += var / (double(s.J0.size()) * mean.squaredNorm());
+    if (variation) {
+      Eigen::Matrix3d mean = Eigen::Matrix3d::Zero();
+      for (std::size_t i = 0; i < s.J0.size(); ++i) mean += s.J0[i] + delta * s.g[i];
+      mean /= double(s.J0.size());
+      double var = 0;
+      for (std::size_t i = 0; i < s.J0.size(); ++i)
+        var += (s.J0[i] + delta * s.g[i] - mean).squaredNorm();
+      out.variation += var / (double(s.J0.size()) * mean.squaredNorm());
+    }
     for (std::size_t i = 0; i < s.J0.size(); ++i) {
       Eigen::Matrix3d dE;
       const double v = amips(s.J0[i] + delta * s.g[i], gradient ? &dE : nullptr);
@@ -238,7 +241,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     }
     length /= std::max(edges, 1);
     if (!corner_move) length /= k;
-    const StarEnergy start = star_energy(cells, Eigen::Vector3d::Zero(), nullptr);
+    const StarEnergy start = star_energy(cells, Eigen::Vector3d::Zero(), nullptr, !corner_move);
     if (start.sum == k_inf) return false;  // an uncertifiable star: leave it alone
     Eigen::Vector3d delta = Eigen::Vector3d::Zero();
     StarEnergy current = start;
@@ -267,7 +270,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       if (dir.norm() > cap) dir *= cap / dir.norm();
       bool stepped = false;
       for (double t = 1.0; t > 1e-4; t *= 0.5) {
-        const StarEnergy trial = star_energy(cells, delta + t * dir, nullptr);
+        const StarEnergy trial = star_energy(cells, delta + t * dir, nullptr, !corner_move);
         if (trial.sum < current.sum && trial.max <= start.max &&
             (corner_move || (trial.point_max <= start.point_max &&
                              (trial.variation <= start.variation ||
@@ -317,7 +320,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       ++rejected;
       restore();
       delta *= 0.5;
-      const StarEnergy half = star_energy(cells, delta, nullptr);
+      const StarEnergy half = star_energy(cells, delta, nullptr, !corner_move);
       if (!(start.sum - half.sum > options.tolerance * start.sum && half.max <= start.max &&
             (corner_move ||
              (half.point_max <= start.point_max &&

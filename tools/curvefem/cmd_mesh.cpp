@@ -247,7 +247,7 @@ void register_mesh(CLI::App& app) {
                   "vertex smoothing (default 4; 0: off)")
       ->check(CLI::Range(0, 100));
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
-                  "with --optimize-node-sweeps: move only nodes of stars with a sample whose "
+                  "node phase: move only nodes of stars with a sample whose "
                   "conformal AMIPS energy (1 for a regular tet) exceeds E (default 10)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--nondeterministic", args->nondeterministic,
