@@ -651,12 +651,36 @@ struct CurvedBoundMissed {
   // The input vertices of the faces across every needed face with a corner the thickening left
   // above the shell's base (where full curving became uncertain, missed or not).
   std::vector<int> above_base;
+  std::vector<int> own;  // the input vertices of the faces that missed
   int faces = 0;
+};
+
+// What the attempts of the curved-aware coarsening share: the input's (beveled) shell and
+// distance points, built once, and the coarse shell of the last attempt with the points each of
+// its prisms owns, which the next attempt repairs locally (CurvedMeshOptions::curved_repair)
+// instead of coarsening the input again.
+struct CoarseState {
+  bool built = false;   // beveled, points: the input's shell and distance points
+  bool coarse = false;  // shell, owned, coarsen_stats: a coarse shell to repair
+  bool repair = false;  // the next attempt repairs the coarse shell
+  sh::BeveledShell beveled;
+  sh::ShellStats shell_stats;
+  std::vector<Eigen::Vector3d> points, point_bary;
+  std::vector<int> point_faces, point_input_face;
+  sh::Shell shell;
+  std::vector<std::vector<int>> owned;
+  CurvedMeshStats coarsen_stats;  // the stats after the coarsening that made `shell`
+  // The input vertices a repair keeps under the linear bound: those of the faces that missed in
+  // any attempt so far (and, once widened, around the slabs pulled above the shell's base). A
+  // repair keeps every other face where it is, so the two edge steps of margin that a new
+  // coarsening needs (its faces move) are not asked of it.
+  std::vector<char> repair_strict;
+  int repairs = 0, repair_splits = 0, repair_failures = 0;
 };
 
 CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& options,
                          const std::vector<char>& strict, bool relaxed, CurvedMeshStats& stats,
-                         const ProgressFn& progress) {
+                         const ProgressFn& progress, CoarseState* state = nullptr) {
   if (options.order < 1 || options.order > k_max_order)
     throw InputError("mesh: order " + std::to_string(options.order) + " is not in 1..4");
   if (!(options.eps_rel > 0)) throw InputError("mesh: eps must be positive");
@@ -673,31 +697,36 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.frozen_vertices = int(std::count(frozen.begin(), frozen.end(), 1));
 
   // 1. Shell.
+  CoarseState local_state;
+  CoarseState& st = state ? *state : local_state;
   Stopwatch watch;
-  sh::ShellOptions shell_options;
-  shell_options.max_thickness_rel = options.thickness_rel;
-  shell_options.max_thickness_per_edge = options.thickness_per_edge;
-  shell_options.threads = options.threads;
-  sh::ShellStats shell_stats;
-  // Topological beveling where the input's own shell is not a section (meshing/shell/bevel.hpp):
-  // from here on the shell works on `surface`, the input refined without moving it, whose
-  // vertices 0..#V-1 are the input's; the map and the returned shell refer to the input again.
-  sh::BeveledShell beveled =
-      sh::build_beveled_shell(input, shell_options, shell_stats, {}, progress);
-  sh::Shell shell = std::move(beveled.shell);
+  const bool built_now = !st.built;
+  if (built_now) {
+    sh::ShellOptions shell_options;
+    shell_options.max_thickness_rel = options.thickness_rel;
+    shell_options.max_thickness_per_edge = options.thickness_per_edge;
+    shell_options.threads = options.threads;
+    // Topological beveling where the input's own shell is not a section (meshing/shell/
+    // bevel.hpp): from here on the shell works on `surface`, the input refined without moving
+    // it, whose vertices 0..#V-1 are the input's; the map and the returned shell refer to the
+    // input again.
+    st.beveled = sh::build_beveled_shell(input, shell_options, st.shell_stats, {}, progress);
+  }
+  const sh::BeveledShell& beveled = st.beveled;
   const SurfaceMesh& surface = beveled.surface.mesh;
   stats.beveled_faces = beveled.stats.beveled_faces;
-  stats.singular_vertices = shell_stats.singular_vertices;
-  stats.shell_faces = int(shell.F.rows());
-  stats.stage_seconds.emplace_back("shell", watch.seconds());
+  stats.singular_vertices = st.shell_stats.singular_vertices;
+  stats.shell_faces = int(beveled.shell.F.rows());
+  if (built_now) stats.stage_seconds.emplace_back("shell", watch.seconds());
 
   // Distance points besides the input vertices, on the shell's middle surface (the input): their
   // position, the shell face whose prism holds them, and the input face / barycentric
   // coordinates they stand for.
-  std::vector<Eigen::Vector3d> points;
-  std::vector<int> point_faces, point_input_face;
-  std::vector<Eigen::Vector3d> point_bary;
-  {
+  std::vector<Eigen::Vector3d>& points = st.points;
+  std::vector<int>&point_faces = st.point_faces, &point_input_face = st.point_input_face;
+  std::vector<Eigen::Vector3d>& point_bary = st.point_bary;
+  if (built_now) {
+    const sh::Shell& shell = beveled.shell;
     auto bary_in = [](const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                       const Eigen::Vector3d& c) {
       const Eigen::Vector3d v0 = b - a, v1 = c - a, v2 = p - a;
@@ -756,6 +785,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       }
     }
   }
+  st.built = true;
   stats.distance_points = int(points.size());
 
   // 2. Coarsen under the distance bound.
@@ -823,40 +853,91 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     }
   }
   sh::SimplifyStats simplify_stats;
-  if (progress) progress("coarsen", 0.0);
-  shell = sh::simplify_shell(shell, surface, simplify_options, simplify_stats);
-  if (progress) progress("coarsen", 1.0);
-  stats.coarse_faces = int(shell.F.rows());
-  stats.coarsen_collapses = simplify_stats.collapses;
-  stats.coarsen_flips = simplify_stats.flips;
-  stats.coarsen_rotations = simplify_stats.rotations;
-  stats.coarsen_zooms = simplify_stats.zooms;
-  stats.coarsen_pans = simplify_stats.pans;
-  stats.coarsen_splits = simplify_stats.splits;
-  stats.coarsen_chain_collapses = simplify_stats.chain_collapses;
-  stats.snapped_vertices = simplify_stats.snapped_vertices;
-  stats.chain_max_distance_rel = simplify_stats.chain_max_distance / unit;
-  for (const auto& [name, pass] : simplify_stats.passes) {
-    auto it = std::find_if(stats.coarsen_seconds.begin(), stats.coarsen_seconds.end(),
-                           [&](const auto& e) { return e.first == name; });
-    if (it == stats.coarsen_seconds.end())
-      stats.coarsen_seconds.emplace_back(name, pass.seconds);
-    else
-      it->second += pass.seconds;
+  sh::Shell shell;
+  bool repaired = false;
+  if (st.repair && st.coarse && relaxed) {
+    // The local repair of the last attempt's coarse shell: the edges of the faces owning strict
+    // points beyond ε of the linear surface are split at input vertices until no such point is
+    // left (SimplifyOptions::repair); the rest of the coarse shell is kept.
+    if (progress) progress("repair", 0.0);
+    sh::SimplifyOptions repair_options = simplify_options;
+    repair_options.repair = true;
+    repair_options.owned_points = st.owned;
+    repair_options.collapse_chains = false;
+    repair_options.feature_edges = options.feature_edges;  // never split (SimplifyOptions::repair)
+    if (!st.repair_strict.empty()) {
+      repair_options.strict_input_vertices = st.repair_strict;
+      repair_options.strict_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
+    }
+    shell = sh::simplify_shell(st.shell, surface, repair_options, simplify_stats);
+    ++st.repairs;
+    if (simplify_stats.violating_points == 0) {
+      repaired = true;
+      st.repair_splits += simplify_stats.splits;
+      log::info("mesh: coarse shell repaired by ", simplify_stats.splits, " splits in ",
+                simplify_stats.repair_passes, " passes: ", st.shell.F.rows(), " -> ",
+                shell.F.rows(), " faces");
+    } else {
+      ++st.repair_failures;
+      log::info("mesh: the repair left ", simplify_stats.violating_points,
+                " input vertices beyond eps of the linear surface: coarsening again");
+      simplify_stats = sh::SimplifyStats();
+    }
   }
-  stats.coarse_median_thickness_rel = simplify_stats.median_half_thickness / unit;
-  {
-    const auto& why = simplify_stats.collapse_rejections;
-    stats.coarsen_rejections = {{"shape", why.shape},           {"distance", why.distance},
-                                {"positivity", why.positivity}, {"intersection", why.intersection},
-                                {"section", why.section},       {"coverage", why.coverage},
-                                {"curved", why.curved},         {"thickness", why.thickness}};
+  if (repaired) {
+    // The coarsening's own figures stay those of the run that made the shell.
+    std::vector<std::pair<std::string, double>> seconds = std::move(stats.stage_seconds);
+    stats = st.coarsen_stats;
+    stats.stage_seconds = std::move(seconds);
+    stats.coarse_faces = int(shell.F.rows());
+    stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
+    stats.stage_seconds.emplace_back("repair", watch.seconds());
+  } else {
+    if (progress) progress("coarsen", 0.0);
+    shell = sh::simplify_shell(beveled.shell, surface, simplify_options, simplify_stats);
+    if (progress) progress("coarsen", 1.0);
+    stats.coarse_faces = int(shell.F.rows());
+    stats.coarsen_collapses = simplify_stats.collapses;
+    stats.coarsen_flips = simplify_stats.flips;
+    stats.coarsen_rotations = simplify_stats.rotations;
+    stats.coarsen_zooms = simplify_stats.zooms;
+    stats.coarsen_pans = simplify_stats.pans;
+    stats.coarsen_splits = simplify_stats.splits;
+    stats.coarsen_chain_collapses = simplify_stats.chain_collapses;
+    stats.snapped_vertices = simplify_stats.snapped_vertices;
+    stats.chain_max_distance_rel = simplify_stats.chain_max_distance / unit;
+    for (const auto& [name, pass] : simplify_stats.passes) {
+      auto it = std::find_if(stats.coarsen_seconds.begin(), stats.coarsen_seconds.end(),
+                             [&](const auto& e) { return e.first == name; });
+      if (it == stats.coarsen_seconds.end())
+        stats.coarsen_seconds.emplace_back(name, pass.seconds);
+      else
+        it->second += pass.seconds;
+    }
+    stats.coarse_median_thickness_rel = simplify_stats.median_half_thickness / unit;
+    {
+      const auto& why = simplify_stats.collapse_rejections;
+      stats.coarsen_rejections = {
+          {"shape", why.shape},           {"distance", why.distance},
+          {"positivity", why.positivity}, {"intersection", why.intersection},
+          {"section", why.section},       {"coverage", why.coverage},
+          {"curved", why.curved},         {"thickness", why.thickness}};
+    }
+    stats.coarse_min_thickness_rel = simplify_stats.min_half_thickness / unit;
+    stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
+    stats.stage_seconds.emplace_back("coarsen", watch.seconds());
+    log::info("mesh: shell ", stats.shell_faces, " prisms coarsened to ", stats.coarse_faces,
+              " (linear distance ", stats.linear_max_distance_rel, " of bbox)");
+    st.coarsen_stats = stats;
   }
-  stats.coarse_min_thickness_rel = simplify_stats.min_half_thickness / unit;
-  stats.linear_max_distance_rel = simplify_stats.max_distance / unit;
-  stats.stage_seconds.emplace_back("coarsen", watch.seconds());
-  log::info("mesh: shell ", stats.shell_faces, " prisms coarsened to ", stats.coarse_faces,
-            " (linear distance ", stats.linear_max_distance_rel, " of bbox)");
+  stats.curved_repairs = st.repairs;
+  stats.repair_splits = st.repair_splits;
+  stats.repair_failures = st.repair_failures;
+  if (state) {
+    st.shell = shell;
+    st.owned = std::move(simplify_stats.owned_points);
+    st.coarse = true;
+  }
 
   watch = Stopwatch();
   const sh::ShellVerification shell_check = sh::verify_shell(shell, surface);
@@ -1050,6 +1131,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
           if (o.vertex < surface.num_vertices()) {
             if (near[f]) missed.vertices.push_back(o.vertex);
             if (above[f]) missed.above_base.push_back(o.vertex);
+            if (bad[f]) missed.own.push_back(o.vertex);
           }
       throw missed;
     }
@@ -1265,12 +1347,14 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   int last_misses = INT_MAX;
   bool give_up = false, widened = false;
   std::vector<int> above_base;  // from every discarded attempt
+  CoarseState state;
   for (int attempt = 1;; ++attempt) {
     const bool relaxed = !give_up && attempt <= options.curved_attempts;
+    state.repair = options.curved_repair && relaxed && attempt > 1;
     CurvedMeshStats s;
     Stopwatch watch;
     try {
-      CurvedMesh out = build_attempt(input, options, strict, relaxed, s, progress);
+      CurvedMesh out = build_attempt(input, options, strict, relaxed, s, progress, &state);
       s.curved_coarsening = relaxed;
       s.curved_attempts = attempt;
       s.strict_vertices = int(std::count(strict.begin(), strict.end(), 1));
@@ -1288,6 +1372,14 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
         }
       };
       keep_linear(missed.vertices);
+      auto keep_repaired = [&](const std::vector<int>& vertices) {
+        auto& r = state.repair_strict;
+        for (int x : vertices) {
+          if (std::size_t(x) >= r.size()) r.resize(std::size_t(x) + 1, 0);
+          r[std::size_t(x)] = 1;
+        }
+      };
+      keep_repaired(missed.own);
       above_base.insert(above_base.end(), missed.above_base.begin(), missed.above_base.end());
       // Misses that do not drop mean the thickening keeps pulling the inner surface above the
       // shell's base somewhere else (thin parts): once, every needed face where it did so in any
@@ -1297,6 +1389,7 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
       give_up = no_fewer && widened;
       if (widen) {
         keep_linear(above_base);
+        keep_repaired(above_base);
         widened = true;
       }
       last_misses = missed.faces;

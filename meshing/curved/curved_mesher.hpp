@@ -108,7 +108,13 @@ struct CurvedMeshOptions {
   // the thickening pulled above the shell's base in any attempt so far (thin parts, where the
   // misses move). After curved_attempts attempts, or a second such attempt, the linear bound
   // holds everywhere (the behaviour with curved_coarsening = false).
+  // curved_repair: an attempt after a miss does not coarsen the input again; it repairs the last
+  // attempt's coarse shell locally, splitting the edges of the faces that own an input vertex
+  // now kept under the linear bound until every such vertex is within ε of the linear surface
+  // (SimplifyOptions::repair), and curves, fills and checks again. Where the splits cannot
+  // reach the bound (the invariants refuse them) the attempt coarsens the input as before.
   bool curved_coarsening = true;
+  bool curved_repair = true;
   double curved_linear_factor = 3.0;
   double curved_margin = 0.95;
   int curved_attempts = 4;
@@ -177,6 +183,10 @@ struct CurvedMeshStats {
   // set was widened to the slabs pulled above the shell's base.
   bool curved_coarsening = false, curved_widened = false;
   int curved_attempts = 0, strict_vertices = 0;
+  // curved_repair: attempts that repaired the previous coarse shell (curved_repairs), the
+  // splits they made in all (repair_splits), and repairs that could not reach the bound and
+  // coarsened the input again instead (repair_failures).
+  int curved_repairs = 0, repair_splits = 0, repair_failures = 0;
   OptimizeStats optimize;
   std::vector<std::pair<std::string, double>> stage_seconds;
 };

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <set>
@@ -83,6 +84,20 @@ class ShellMesh : public TriMesh {
         (strict && std::size_t(x) < strict->size() && (*strict)[std::size_t(x)]))
       return max_distance;
     return relaxed_distance;
+  }
+  // Repair mode (SimplifyOptions::repair): a point at distance d beyond max_distance whose bound
+  // is max_distance (every point without the curved-aware bound, else a strict input vertex),
+  // which the repair splits toward the bound. Never true otherwise (a point beyond its bound is
+  // refused by every operation).
+  bool repair = false;
+  // Repair mode: coarse edges that may be feature edges, as sorted pairs of input vertices (the
+  // input's feature edges and the ends of every coarse feature edge a chain collapse made).
+  std::set<std::pair<int, int>> feature_pairs;
+  bool violating(int x, double d) const {
+    if (!repair || !(d > max_distance)) return false;
+    if (curved_order < 2) return true;
+    return strict && is_input_vertex(x) && std::size_t(x) < strict->size() &&
+           (*strict)[std::size_t(x)];
   }
   double max_mips = 0;
   double max_edge_per_thickness = 0;
@@ -193,8 +208,10 @@ class ShellMesh : public TriMesh {
   // kind of change (a neighbour becoming needed) can touch it. A fiber missing the input
   // (rounding near a pinch) or a singular corner refuses.
   bool needed(Id f) const {
-    for (const Eigen::Vector3d& q : place[f])
-      if (q[2] > max_distance) return true;
+    for (std::size_t j = 0; j < place[f].size(); ++j) {
+      const double d = place[f][j][2];
+      if (d > max_distance && !violating(owned[f][j], d)) return true;
+    }
     return false;
   }
   // The rotated corners of f.
@@ -250,6 +267,7 @@ class ShellMesh : public TriMesh {
   bool patch_within(Id f, const std::vector<Eigen::Vector3d>& node, double bound) const {
     for (std::size_t j = 0; j < owned[f].size(); ++j) {
       const Eigen::Vector3d& q = place[f][j];
+      if (violating(owned[f][j], q[2])) continue;  // being repaired toward the linear bound
       const Eigen::VectorXd phi =
           lagrange_shape_values(CellKind::triangle, curved_order, Eigen::Vector3d(q[0], q[1], 0));
       Eigen::Vector3d p = Eigen::Vector3d::Zero();
@@ -350,17 +368,25 @@ class ShellMesh : public TriMesh {
   bool rehome_owned(const OperationRecord& r) {
     const std::vector<Id>& from = r.old_cells.empty() ? r.new_cells : r.old_cells;
     std::vector<int> points;
-    for (Id f : from) points.insert(points.end(), owned[f].begin(), owned[f].end());
+    double worst = 0;  // repair mode: the farthest violating point of the old cells
+    for (Id f : from) {
+      points.insert(points.end(), owned[f].begin(), owned[f].end());
+      for (std::size_t j = 0; j < place[f].size(); ++j)
+        if (violating(owned[f][j], place[f][j][2])) worst = std::max(worst, place[f][j][2]);
+    }
     std::vector<std::vector<int>> next(r.new_cells.size());
     std::vector<std::vector<Eigen::Vector3d>> where(r.new_cells.size());
-    for (int x : points) {
+    for (std::size_t j = 0; j < points.size(); ++j) {
+      const int x = points[j];
       if (!on_chain.empty() && is_input_vertex(x) && on_chain[std::size_t(x)]) continue;
       const Eigen::Vector3d p = distance_point(x);
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
         const auto q = owned_place(r.new_cells[i], p);
         if (!q) continue;
-        if ((*q)[2] > bound_of(x)) return false;
+        // Repair mode: a violating point may stay beyond the bound, no farther than the
+        // farthest one was.
+        if ((*q)[2] > bound_of(x) && !(violating(x, (*q)[2]) && (*q)[2] <= worst)) return false;
         next[i].push_back(x);
         where[i].push_back(*q);
         placed = true;
@@ -644,9 +670,10 @@ class ShellMesh : public TriMesh {
   // old ones (a split is a shape repair here) and the invariants hold.
   bool split_edge_before(const Tuple& t) override {
     return occupied && !singular[t.vid] && !singular[other_vertex(t)] &&
-           !get_edge(chain, t).feature;
+           !get_edge(chain, t).feature && !(repair && repair_feature_edge(t));
   }
   bool split_edge_after(const OperationRecord& r) override {
+    if (repair) return repair_split_after(r);
     const Id a = r.v0, b = r.v1, v = r.new_vertex;
     const Eigen::Vector3d ma = mid[a], mb = mid[b], centre = 0.5 * (ma + mb);
     int best = -1;
@@ -685,6 +712,119 @@ class ShellMesh : public TriMesh {
     input_vertex.set(v, best);
     occupied[std::size_t(best)].store(1, std::memory_order_relaxed);
     return true;
+  }
+  bool repair_feature_edge(const Tuple& t) const {
+    const int a = input_vertex[t.vid], b = input_vertex[other_vertex(t)];
+    return a >= 0 && b >= 0 && feature_pairs.count({std::min(a, b), std::max(a, b)}) > 0;
+  }
+  // A repair split (SimplifyOptions::repair) is not a shape repair: check() applies the shape
+  // guard (max_mips) instead of asking for a better triangle. The long, tilted pillars of a
+  // coarse shell can leave a new prism inverted, so it tries the unoccupied input vertices its
+  // two prisms own within a third of the edge length of the midpoint (nearest first, at most 8,
+  // none snapped onto a feature chain), then their violating points, and, for each, the pillar
+  // directions: the ends' mean, the
+  // input's vertex normal there, the new middle triangles' mean normal; for each, halves of the
+  // ends' shorter length times 1, 1/2, ... 1/8. The first whose new prisms all pass the exact
+  // positivity test (I1, which the invariants check again) and keeps the triangle shape, the
+  // thickness guard and the owned points' bounds is taken.
+  bool repair_split_after(const OperationRecord& r) {
+    const Id a = r.v0, b = r.v1, v = r.new_vertex;
+    const Eigen::Vector3d ma = mid[a], mb = mid[b], centre = 0.5 * (ma + mb);
+    const double radius = (mb - ma).norm() / 3;
+    std::vector<std::pair<double, int>> candidates;
+    for (Id f : r.old_cells)
+      for (int x : owned[f]) {
+        if (!is_input_vertex(x) || occupied[std::size_t(x)].load(std::memory_order_relaxed) ||
+            reference->snap_of(x))
+          continue;
+        const double d = (input->V().row(x).transpose() - centre).norm();
+        if (d < radius) candidates.emplace_back(d, x);
+      }
+    std::sort(candidates.begin(), candidates.end());
+    if (candidates.size() > 8) candidates.resize(8);
+    // Then the violating points themselves (on them, their distance becomes 0), nearest first.
+    std::vector<std::pair<double, int>> far;
+    for (Id f : r.old_cells)
+      for (std::size_t j = 0; j < owned[f].size(); ++j) {
+        const int x = owned[f][j];
+        if (!violating(x, place[f][j][2]) ||
+            occupied[std::size_t(x)].load(std::memory_order_relaxed) || reference->snap_of(x))
+          continue;
+        const double d = (input->V().row(x).transpose() - centre).norm();
+        if (!(d < radius)) far.emplace_back(d, x);
+      }
+    std::sort(far.begin(), far.end());
+    candidates.insert(candidates.end(), far.begin(), far.end());
+    // Then any other input vertex the two prisms own, nearest the midpoint first, up to 24 in all.
+    std::vector<std::pair<double, int>> rest;
+    for (Id f : r.old_cells)
+      for (std::size_t j = 0; j < owned[f].size(); ++j) {
+        const int x = owned[f][j];
+        if (!is_input_vertex(x) || violating(x, place[f][j][2]) ||
+            occupied[std::size_t(x)].load(std::memory_order_relaxed) || reference->snap_of(x))
+          continue;
+        const double d = (input->V().row(x).transpose() - centre).norm();
+        if (!(d < radius)) rest.emplace_back(d, x);
+      }
+    std::sort(rest.begin(), rest.end());
+    for (std::size_t i = 0; i < rest.size() && candidates.size() < 24; ++i)
+      candidates.push_back(rest[i]);
+    const Eigen::Vector3d da = top[a] - base[a], db = top[b] - base[b];
+    if (!(da.norm() > 0) || !(db.norm() > 0)) return false;
+    const double lt = std::min((top[a] - ma).norm(), (top[b] - mb).norm());
+    const double lb = std::min((ma - base[a]).norm(), (mb - base[b]).norm());
+    for (const auto& [dist, x] : candidates) {
+      const Eigen::Vector3d p = input->V().row(x).transpose();
+      auto positive = [&](const Eigen::Vector3d& dir, double scale) {
+        for (Id f : r.new_cells) {
+          const Cell& c = cell(f);
+          std::array<Eigen::Vector3d, 3> pb, pm, pt;
+          std::array<bool, 3> ps;
+          for (int j = 0; j < 3; ++j) {
+            const bool here = c[j] == v;
+            pm[j] = here ? p : Eigen::Vector3d(mid[c[j]]);
+            pb[j] = here ? Eigen::Vector3d(p - scale * lb * dir) : Eigen::Vector3d(base[c[j]]);
+            pt[j] = here ? Eigen::Vector3d(p + scale * lt * dir) : Eigen::Vector3d(top[c[j]]);
+            ps[j] = !here && singular[c[j]];
+          }
+          if (!shell_face_positive(pb, pm, pt, ps)) return false;
+        }
+        return true;
+      };
+      std::vector<Eigen::Vector3d> dirs{da.normalized() + db.normalized()};
+      Eigen::Vector3d n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
+      for (int g : (*vf)[std::size_t(x)]) {
+        const auto tri = input->face_triangle(g);
+        n += (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+      }
+      for (Id f : r.new_cells) {
+        const Cell& c = cell(f);
+        std::array<Eigen::Vector3d, 3> q;
+        for (int j = 0; j < 3; ++j) q[j] = c[j] == v ? p : Eigen::Vector3d(mid[c[j]]);
+        t += (q[1] - q[0]).cross(q[2] - q[0]).normalized();
+      }
+      dirs.push_back(n);
+      dirs.push_back(t);
+      for (Eigen::Vector3d dir : dirs) {
+        if (!(dir.norm() > 0) || !std::isfinite(dir.squaredNorm())) continue;
+        dir.normalize();
+        for (double scale = 1; scale >= 1.0 / 8; scale /= 2) {
+          if (!positive(dir, scale)) continue;
+          mid.set(v, p);
+          top.set(v, p + scale * lt * dir);
+          base.set(v, p - scale * lb * dir);
+          singular.set(v, 0);
+          input_vertex.set(v, x);
+          // The guards the invariants apply first, so that a refused choice tries the next one.
+          if (max_mips > 0 && !shape_ok(r)) break;
+          if (max_edge_per_thickness > 0 && !thickness_ok(r)) break;
+          if (!rehome_owned(r)) continue;
+          occupied[std::size_t(x)].store(1, std::memory_order_relaxed);
+          return true;
+        }
+      }
+    }
+    return false;
   }
 
   // Smoothing is one of two moves of vertex r.v0's pillar, chosen by `smoothing_mode`.
@@ -905,7 +1045,37 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.on_chain.assign(std::size_t(ni), 0);
   }
   stats.faces_before = nf;
-  if (m.max_distance > 0) {  // every input vertex starts in a prism of its middle vertex
+  if (options.repair) {
+    if (!(m.max_distance > 0))
+      throw MeshingError("simplify: repair mode needs the distance bound (max_distance)");
+    if (int(options.owned_points.size()) != nf)
+      throw MeshingError("simplify: repair mode needs owned_points for each of the " +
+                         std::to_string(nf) + " shell faces (got " +
+                         std::to_string(options.owned_points.size()) + ")");
+    if (options.collapse_chains)
+      throw MeshingError("simplify: repair mode does not collapse feature chains");
+    m.repair = true;
+    for (const auto& e : options.feature_edges)
+      m.feature_pairs.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
+    for (const SnappedVertex& q : shell.reference)
+      m.feature_pairs.insert({std::min(q.a, q.b), std::max(q.a, q.b)});
+  }
+  if (m.max_distance > 0 && options.repair) {  // the points where the earlier run left them
+    m.extra_points = &options.extra_points;
+    const int np = input.num_vertices() + int(options.extra_points.size());
+    for (int f = 0; f < nf; ++f) {
+      std::vector<Eigen::Vector3d> where;
+      for (int x : options.owned_points[std::size_t(f)]) {
+        if (x < 0 || x >= np)
+          throw MeshingError("simplify: owned point " + std::to_string(x) + " of shell face " +
+                             std::to_string(f) + " is not an input vertex or extra point");
+        const auto q = m.owned_place(Id(f), m.distance_point(x));
+        where.push_back(q ? *q : Eigen::Vector3d(0, 0, HUGE_VAL));
+      }
+      m.owned.set(Id(f), options.owned_points[std::size_t(f)]);
+      m.place.set(Id(f), where);
+    }
+  } else if (m.max_distance > 0) {  // every input vertex starts in a prism of its middle vertex
     std::vector<char> seen(input.num_vertices(), 0);
     std::vector<std::vector<int>> own(nf);
     for (int f = 0; f < nf; ++f)
@@ -1042,19 +1212,30 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     };
     return run("flip", pass, edge_work("flip", m.get_edges(), false));
   };
-  // Splits: the longest edge of every middle triangle worse than split_mips, worst first, no
-  // renewal. New vertices get flags slots first (the invariants flag the changed vertices).
-  auto split_pass = [&] {
+  // Splits of the longest edge of every face with a positive score (the middle triangle's MIPS
+  // above split_mips; in repair mode the worst distance beyond the bound of a violating point),
+  // worst first, no renewal. New vertices get flags slots first (the invariants flag the changed
+  // vertices).
+  auto split_pass = [&](const std::function<double(Id)>& score, int rank) {
     std::vector<std::pair<double, TriMesh::Tuple>> bad;
     for (const auto& t : m.get_faces()) {
-      const double q = m.mips(t.fid);
-      if (!(q > options.split_mips)) continue;
+      const double q = score(t.fid);
+      if (!(q > 0)) continue;
       TriMesh::Tuple e = t, longest = t;
+      std::array<TriMesh::Tuple, 3> edges{t, t, t};
       for (int k = 0; k < 3; ++k) {
+        edges[std::size_t(k)] = e;
         if (length2(e) > length2(longest)) longest = e;
         e = m.switch_vertex(m.switch_edge(e));
       }
-      bad.emplace_back(q, longest);
+      if (rank == 0) {
+        bad.emplace_back(q, longest);
+        continue;
+      }
+      // The rank-th longest edge (a repair's second and third tries).
+      std::stable_sort(edges.begin(), edges.end(),
+                       [&](const auto& x, const auto& y) { return length2(x) > length2(y); });
+      bad.emplace_back(q, edges[std::size_t(rank)]);
     }
     if (bad.empty()) return 0;
     std::stable_sort(bad.begin(), bad.end(),
@@ -1121,7 +1302,28 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     return int(st.succeeded);
   };
 
-  for (int round = 0; round < options.rounds; ++round) {
+  // Repair: the worst excess of a violating point over the bound, per face.
+  auto excess = [&m](Id f) {
+    double worst = 0;
+    for (std::size_t j = 0; j < m.place[f].size(); ++j)
+      if (m.violating(m.owned[f][j], m.place[f][j][2]))
+        worst = std::max(worst, m.place[f][j][2] - m.max_distance);
+    return worst;
+  };
+  for (int pass = 0; options.repair && pass < options.repair_passes; ++pass) {
+    bool any = false;
+    for (const auto& t : m.get_faces()) any = any || excess(t.fid) > 0;
+    if (!any) break;
+    ++stats.repair_passes;
+    // The longest edge of every face with a violating point; where that was refused, the
+    // second longest, then the shortest.
+    int sp = 0;
+    for (int rank = 0; rank < 3; ++rank) sp += split_pass(excess, rank);
+    if (options.flips) stats.flips += flip_pass();
+    stats.splits += sp;
+    if (sp == 0) break;
+  }
+  for (int round = 0; !options.repair && round < options.rounds; ++round) {
     int changed = 0;
     int collapsed = collapse_pass();
     stats.collapses += collapsed;
@@ -1132,7 +1334,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     }
     changed += collapsed;
     if (options.split_mips > 0 && m.max_distance > 0) {
-      const int sp = split_pass();
+      const int sp =
+          split_pass([&](Id f) { return m.mips(f) > options.split_mips ? m.mips(f) : 0.0; }, 0);
       stats.splits += sp;
       changed += sp;
     }
@@ -1211,12 +1414,17 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     stats.median_half_thickness = thick[thick.size() / 2];
     stats.max_half_thickness = thick.back();
   }
-  if (m.max_distance > 0)
-    for (std::size_t f = 0; f < faces.size(); ++f)
+  if (m.max_distance > 0) {
+    stats.owned_points.resize(faces.size());
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      stats.owned_points[f] = m.owned[Id(f)];
       for (int x : m.owned[Id(f)]) {
         const auto d = m.owned_distance(Id(f), m.distance_point(x));
         stats.max_distance = std::max(stats.max_distance, d ? *d : HUGE_VAL);
+        stats.violating_points += m.violating(x, d ? *d : HUGE_VAL);
       }
+    }
+  }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

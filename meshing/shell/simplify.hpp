@@ -100,6 +100,28 @@ struct SimplifyOptions {
       curved_slab_ok;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
+  // Repair mode (needs max_distance; the curved mesher's local repair of faces that missed ε
+  // once curved): `shell` is the output of an earlier simplify_shell with the same input and extra
+  // points, `owned_points` what that run returned in SimplifyStats::owned_points, and points
+  // may now lie farther than max_distance from their linear middle triangle where their bound is
+  // max_distance (*violating* points): strict_input_vertices the earlier run let beyond it, or,
+  // without curved_order, any point under a max_distance smaller than the earlier run's (a
+  // coarse-to-fine refinement of the same coarse shell). No collapses or smoothing: up to
+  // repair_passes passes, each splitting the longest edge of every face owning a violating point
+  // (then the second longest and the shortest where that was refused) followed by a flip pass
+  // (with `flips`). The new vertex goes on an unoccupied input vertex the two prisms own: the
+  // nearest to the edge's midpoint within a third of the edge first, then the violating points
+  // themselves; never a vertex snapped onto a feature chain, and never on an edge in
+  // feature_edges or a coarse feature edge of the shell's chains. Pillar directions tried: the
+  // ends' mean, the input's vertex normal, the new middle triangles' mean normal, with halves
+  // of 1 … 1/8 of the ends' shorter ones. A split is kept when I1–I3 and the coverage hold for
+  // the new prisms, the shape and thickness guards hold, every owned point stays within its
+  // bound or, if violating, no farther than the farthest violating point of the two old prisms
+  // was, and the curved-aware checks hold on the non-violating points.
+  // SimplifyStats::violating_points says how many are left (0: repaired).
+  bool repair = false;
+  std::vector<std::vector<int>> owned_points;
+  int repair_passes = 16;
 };
 
 struct SimplifyStats {
@@ -121,6 +143,11 @@ struct SimplifyStats {
   // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
   double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;
   double max_distance = 0;  // max |x - mid(u, v)| over owned points at the end (if bounded)
+  // With max_distance: per output face, the points its prism owns (input vertex x, or extra
+  // point x - #input V), the input of a later repair (SimplifyOptions::owned_points).
+  std::vector<std::vector<int>> owned_points;
+  int violating_points = 0;  // repair mode: strict points still beyond max_distance at the end
+  int repair_passes = 0;     // repair mode: split passes run
   double seconds = 0;
 };
 

@@ -162,7 +162,7 @@ struct MeshArgs {
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
        low_degree_slabs = false, no_pan = false, no_feature_chains = false,
-       linear_coarsening = false;
+       linear_coarsening = false, no_curved_repair = false;
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
@@ -270,6 +270,9 @@ void register_mesh(CLI::App& app) {
                 "bound the distance on the linear middle surface during coarsening (by default, "
                 "at order >= 2, an input vertex may lie up to 3 eps from it when the face's fully "
                 "curved patch is within eps of it)");
+  sub->add_flag("--no-curved-repair", args->no_curved_repair,
+                "when the curved surface misses eps after the curved-aware coarsening, coarsen "
+                "the input again instead of splitting the coarse faces that missed (the default)");
   sub->add_option("--split-mips", args->split_mips,
                   "coarsening also splits the longest edge of middle triangles whose 2-D MIPS "
                   "exceeds this (2 = equilateral; 0: off)")
@@ -316,6 +319,7 @@ void register_mesh(CLI::App& app) {
     options.shell_pan = !args->no_pan;
     options.feature_chains = !args->no_feature_chains;
     options.curved_coarsening = !args->linear_coarsening;
+    options.curved_repair = !args->no_curved_repair;
     options.eps_samples = args->eps_samples;
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);
@@ -394,6 +398,9 @@ void register_mesh(CLI::App& app) {
           {"curved_attempts", stats.curved_attempts},
           {"strict_vertices", stats.strict_vertices},
           {"curved_widened", stats.curved_widened},
+          {"curved_repairs", stats.curved_repairs},
+          {"repair_splits", stats.repair_splits},
+          {"repair_failures", stats.repair_failures},
           {"snapped_vertices", stats.snapped_vertices},
           {"chain_max_distance_rel", stats.chain_max_distance_rel},
           {"median_half_thickness_rel", stats.coarse_median_thickness_rel},

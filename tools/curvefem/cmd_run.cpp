@@ -459,10 +459,10 @@ void build_surface_pipeline(const CaseSpec& spec, int threads, TerminalProgress&
     p.report["faces_sheared"] = stats.faces_sheared;
     p.report["fiber_misses"] = stats.fiber_misses;
     p.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
-    p.report["curved_coarsening"] = {{"curved_aware", stats.curved_coarsening},
-                                     {"attempts", stats.curved_attempts},
-                                     {"strict_vertices", stats.strict_vertices},
-                                     {"widened", stats.curved_widened}};
+    p.report["curved_coarsening"] = {
+        {"curved_aware", stats.curved_coarsening},  {"attempts", stats.curved_attempts},
+        {"strict_vertices", stats.strict_vertices}, {"widened", stats.curved_widened},
+        {"repairs", stats.curved_repairs},          {"repair_splits", stats.repair_splits}};
     p.report["optimize"] = json::parse(optimize_json(stats.optimize).dump());
     p.report["stage_s"] = stages;
     if (spec.validate) {

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <string>
 
@@ -298,4 +300,110 @@ TEST(ShellSimplify, SplitsRepairBadlyShapedMiddleTriangles) {
   EXPECT_LT(worst_mips(coarse), worst_mips(plain));
   expect_on_distinct_input_vertices(coarse, sphere);
   expect_valid(coarse, sphere, "with splits");
+}
+
+namespace {
+// Distance from p to the triangle (a, b, c): the closest point by the Voronoi regions of the
+// triangle's vertices, edges and face (written here, independent of the shell code).
+double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                               const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return (p - a).norm();
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return (p - b).norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return (p - c).norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  const double den = 1 / (va + vb + vc);
+  return (p - (a + ab * (vb * den) + ac * (vc * den))).norm();
+}
+double max_input_distance(const sh::Shell& coarse, const SurfaceMesh& input) {
+  double worst = 0;
+  for (int x = 0; x < input.num_vertices(); ++x) {
+    double best = HUGE_VAL;
+    for (int f = 0; f < coarse.F.rows(); ++f)
+      best = std::min(best, point_triangle_distance(
+                                input.V.row(x).transpose(), coarse.mid.row(coarse.F(f, 0)),
+                                coarse.mid.row(coarse.F(f, 1)), coarse.mid.row(coarse.F(f, 2))));
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+}  // namespace
+
+TEST(ShellSimplify, RepairSplitsACoarseShellTowardATighterBound) {
+  // Repair mode (the curved mesher's local repair after a miss, and a coarse-to-fine refinement
+  // of one coarse shell): a sphere shell coarsened under a loose bound D is split toward D / 3
+  // without coarsening the input again. Every input vertex must end within D / 3 of the coarse
+  // middle surface (closest points computed here), the shell must verify, only splits may
+  // happen (2 faces each), and every input vertex must stay owned by exactly one prism.
+  const SurfaceMesh sphere = curvefem::make_icosphere(4);  // 5120 faces
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  const double unit = curvefem::bbox_longest_edge(sphere.V);
+  sh::SimplifyOptions loose;
+  loose.max_distance = 0.03 * unit;
+  loose.max_mips = 10;
+  sh::SimplifyStats ls;
+  const sh::Shell coarse = sh::simplify_shell(shell, sphere, loose, ls);
+  ASSERT_EQ(int(ls.owned_points.size()), coarse.F.rows());
+  const double tight_bound = loose.max_distance / 3;
+  ASSERT_GT(max_input_distance(coarse, sphere), tight_bound) << "nothing to repair";
+
+  sh::SimplifyOptions tight = loose;
+  tight.max_distance = tight_bound;
+  tight.repair = true;
+  tight.owned_points = ls.owned_points;
+  for (int threads : {1, 2}) {
+    tight.threads = threads;
+    sh::SimplifyStats ts;
+    const sh::Shell refined = sh::simplify_shell(coarse, sphere, tight, ts);
+    const std::string what = std::to_string(threads) + " threads";
+    EXPECT_EQ(ts.violating_points, 0) << what;
+    EXPECT_GT(ts.splits, 0) << what;
+    EXPECT_EQ(ts.collapses + ts.rotations + ts.zooms + ts.pans, 0) << what;  // flips may run
+    EXPECT_EQ(refined.F.rows(), coarse.F.rows() + 2 * ts.splits) << what;
+    EXPECT_LE(ts.max_distance, tight_bound) << what;
+    EXPECT_LE(max_input_distance(refined, sphere), tight_bound) << what;
+    expect_on_distinct_input_vertices(refined, sphere);
+    expect_valid(refined, sphere, what);
+    std::vector<int> seen(std::size_t(sphere.num_vertices()), 0);
+    for (const auto& own : ts.owned_points)
+      for (int x : own) ++seen[std::size_t(x)];
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), sphere.num_vertices()) << what;
+    if (threads == 1) {
+      // Against coarsening the input under the tight bound from scratch.
+      sh::SimplifyOptions fresh = loose;
+      fresh.max_distance = tight_bound;
+      sh::SimplifyStats fs;
+      const sh::Shell direct = sh::simplify_shell(shell, sphere, fresh, fs);
+      std::printf(
+          "repair: %d -> %d faces by %d splits in %d passes (%.2f s); from scratch %d faces "
+          "(%.2f s)\n",
+          int(coarse.F.rows()), int(refined.F.rows()), ts.splits, ts.repair_passes, ts.seconds,
+          int(direct.F.rows()), fs.seconds);
+      // Measured: 218 -> 586 faces by 184 splits in one pass (with flips) in 0.35 s; 426 faces
+      // from scratch in 1.6 s.
+      EXPECT_LT(refined.F.rows(), 1.5 * direct.F.rows());
+    }
+  }
+  // A repair that does not need to do anything changes nothing.
+  sh::SimplifyOptions same = loose;
+  same.repair = true;
+  same.owned_points = ls.owned_points;
+  sh::SimplifyStats ss;
+  const sh::Shell kept = sh::simplify_shell(coarse, sphere, same, ss);
+  EXPECT_EQ(ss.splits, 0);
+  EXPECT_EQ(ss.repair_passes, 0);
+  EXPECT_EQ(kept.F, coarse.F);
+  EXPECT_EQ(kept.mid, coarse.mid);
 }
