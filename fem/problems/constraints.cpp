@@ -27,6 +27,56 @@ void for_each_boundary_dof(const FunctionSpace& space, const std::vector<char>& 
   }
 }
 
+namespace {
+
+/// The solver options of the reduced system: the near-nullspace coordinates of the full system
+/// (one row per node, blocks of 3) restricted to the free unknowns. When every node is either
+/// free or fixed in all its components, the free nodes' coordinates (blocks stay aligned);
+/// otherwise (components fixed separately) block size 1 and the six rigid-body modes restricted
+/// to the free rows as explicit vectors.
+LinearSolverOptions reduced_options(const LinearSolverOptions& options,
+                                    const std::vector<int>& reduced, int m) {
+  LinearSolverOptions out = options;
+  const Eigen::MatrixXd& xyz = options.near_nullspace_coordinates;
+  const int n = static_cast<int>(reduced.size());
+  if (xyz.size() == 0) {
+    if (options.block_size > 1 && m % options.block_size != 0) out.block_size = 1;
+    return out;
+  }
+  CF_VERIFY(options.block_size == 3 && xyz.cols() == 3 && 3 * xyz.rows() == n,
+            "near-nullspace coordinates do not match the system (#unknowns/3 x 3)");
+  const int nodes = static_cast<int>(xyz.rows());
+  bool aligned = true;
+  for (int d = 0; d < nodes && aligned; ++d) {
+    const int free = (reduced[3 * d] >= 0) + (reduced[3 * d + 1] >= 0) + (reduced[3 * d + 2] >= 0);
+    aligned = free == 0 || free == 3;
+  }
+  if (aligned) {
+    out.near_nullspace_coordinates.resize(m / 3, 3);
+    for (int d = 0; d < nodes; ++d)
+      if (reduced[3 * d] >= 0) out.near_nullspace_coordinates.row(reduced[3 * d] / 3) = xyz.row(d);
+    return out;
+  }
+  out.block_size = 1;
+  out.near_nullspace_coordinates.resize(0, 3);
+  out.near_nullspace_vectors = Eigen::MatrixXd::Zero(m, 6);
+  const Eigen::RowVector3d center = xyz.colwise().mean();
+  for (int d = 0; d < nodes; ++d) {
+    const Eigen::RowVector3d y = xyz.row(d) - center;
+    // Translations e_i and rotations e_a × y: (e_a × y)_i = ε_iab y_b.
+    const double rot[3][3] = {{0, y[2], -y[1]}, {-y[2], 0, y[0]}, {y[1], -y[0], 0}};  // [i][a]
+    for (int i = 0; i < 3; ++i) {
+      const int r = reduced[3 * d + i];
+      if (r < 0) continue;
+      out.near_nullspace_vectors(r, i) = 1.0;
+      for (int a = 0; a < 3; ++a) out.near_nullspace_vectors(r, 3 + a) = rot[i][a];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,
                                   const Constraints& c, const LinearSolverOptions& options,
                                   LinearSolveInfo* info) {
@@ -53,7 +103,7 @@ Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& 
     }
   SparseMatrix Kff(m, m);
   Kff.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::VectorXd uf = solve_spd(Kff, rhs, options, info);
+  const Eigen::VectorXd uf = solve_spd(Kff, rhs, reduced_options(options, reduced, m), info);
   Eigen::VectorXd u(n);
   for (int i = 0; i < n; ++i) u[i] = reduced[i] >= 0 ? uf[reduced[i]] : c.values[i];
   return u;

@@ -23,7 +23,9 @@ struct Constraints {
 void for_each_boundary_dof(const FunctionSpace& space, const std::vector<char>& faces,
                            const PointFilter& where, const std::function<void(int dof)>& visit);
 
-/// Full solution vector (fixed entries = prescribed values).
+/// Full solution vector (fixed entries = prescribed values). options.near_nullspace_coordinates,
+/// if set, are those of the full system (#unknowns/3 x 3); the reduced system gets the free
+/// nodes' (or, where components are fixed separately, the rigid-body modes as vectors).
 Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,
                                   const Constraints& constraints,
                                   const LinearSolverOptions& options, LinearSolveInfo* info);

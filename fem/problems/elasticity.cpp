@@ -221,6 +221,24 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   result.free_unknowns = static_cast<int>(F.size()) - constraints.num_fixed();
   LinearSolverOptions options = solver;
   options.block_size = 3;
+  options.near_nullspace_coordinates = space.dof_points;
+  if (problem.dirichlet.empty()) {
+    ScopedTimer t(result.timings, "solve");
+    const NullSpaceModes modes = null_space_modes(mesh, space, 3);
+    result.null_space_dim = modes.size();
+    result.u =
+        solve_modulo_null_space(K, F, modes, space, options, &result.solve, &result.compatibility);
+    const LoadCompatibility& c = result.compatibility;
+    if (!c.compatible())
+      log::warn(
+          "linear elasticity with tractions only: the load is not in equilibrium: total "
+          "force (",
+          c.resultant.head<3>().transpose(), "), total moment about (", c.center.transpose(), ") (",
+          c.resultant.tail<3>().transpose(), "), relative ", c.relative, " > ",
+          k_compatibility_tolerance, " (force scale ", c.force_scale, ", moment scale ",
+          c.moment_scale, "); its rigid part is removed before the solve");
+    return result;
+  }
   {
     ScopedTimer t(result.timings, "solve");
     result.u = solve_constrained(K, F, constraints, options, &result.solve);
@@ -345,8 +363,13 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
   const Eigen::VectorXd f_ext = external_load(mesh, space, problem, setup);
   const Constraints full = dirichlet_constraints(space, problem);
   result.free_unknowns = static_cast<int>(f_ext.size()) - full.num_fixed();
+  if (problem.dirichlet.empty())
+    throw InputError(
+        "Neo-Hookean without a Dirichlet condition: rigid motions are not removed in the "
+        "nonlinear solve (linear elasticity handles tractions only)");
   LinearSolverOptions options = solver;
   options.block_size = 3;
+  options.near_nullspace_coordinates = space.dof_points;
   Eigen::VectorXd u = Eigen::VectorXd::Zero(f_ext.size());
   Stopwatch watch;
   for (int step = 1; step <= newton.load_steps; ++step) {

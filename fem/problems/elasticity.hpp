@@ -3,6 +3,10 @@
 // Unknowns: displacement u, 3 per DOF (DOF-major: u[3d + i]). Materials: Young's modulus E and
 // Poisson ratio ν (λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν))).
 // Linear: σ = λ tr(ε) I + 2μ ε, −∇·σ = f, Dirichlet (per component) strong, traction weak.
+// Without any Dirichlet condition (tractions only), linear elasticity is solved up to the six
+// rigid motions (fem/problems/null_space.hpp): the load's rigid part is removed (a warning with
+// the total force and moment when they are not zero), and u has no mean translation or rotation.
+// The linear solves give GAMG the rigid-body modes of the DOF points as its near-nullspace.
 // Neo-Hookean (compressible): Ψ = μ/2 (tr C − 3) − μ ln J + λ/2 (ln J)², first Piola stress
 // P = μ (F − F^{-T}) + λ ln J F^{-T}; Newton with backtracking line search on the energy and load
 // stepping (body force, tractions and prescribed displacements scaled by s = k/steps).
@@ -15,6 +19,7 @@
 #include <vector>
 
 #include "fem/problems/boundary_conditions.hpp"
+#include "fem/problems/null_space.hpp"
 #include "fem/solvers/linear_solver.hpp"
 #include "fem/space/function_space.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
@@ -55,7 +60,10 @@ struct ElasticitySolution {
   int dofs = 0, free_unknowns = 0;
   int nitsche_faces = 0;  ///< boundary faces with Dirichlet data imposed weakly (linear only)
   LinearSolveInfo solve;  ///< last linear solve
-  std::vector<NewtonStep> newton;  ///< Neo-Hookean only
+  /// Linear elasticity without Dirichlet conditions: 6 (rigid motions removed), else 0.
+  int null_space_dim = 0;
+  LoadCompatibility compatibility;  ///< when null_space_dim > 0: total force and moment
+  std::vector<NewtonStep> newton;   ///< Neo-Hookean only
   Timings timings;
 };
 

@@ -48,6 +48,7 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   };
   assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, &values, &system.F);
 
+  system.rhs_integral = system.F.sum();
   // Neumann data: evaluated at every face point in parallel (the flux may be expensive, e.g. a
   // point location through φ⁻¹), then summed serially in point order.
   const int face_degree = default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
@@ -65,6 +66,7 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
       for (int a = 0; a < n; ++a) system.F[space.cell_dofs(points.cell[k], a)] += g * phi[a];
     }
   }
+  system.flux_integral = system.F.sum() - system.rhs_integral;
   system.K = pattern.matrix(values);
   return system;
 }
@@ -136,8 +138,23 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
     });
   }
   result.free_dofs = space.num_dofs - constraints.num_fixed();
-  if (result.free_dofs == space.num_dofs && problem.dirichlet.empty())
-    log::warn("Poisson problem without Dirichlet condition: the solution is not unique");
+  result.rhs_integral = system.rhs_integral;
+  result.flux_integral = system.flux_integral;
+  if (problem.dirichlet.empty()) {
+    ScopedTimer t(result.timings, "solve");
+    const NullSpaceModes modes = null_space_modes(mesh, space, 1);
+    result.null_space_dim = modes.size();
+    result.u = solve_modulo_null_space(system.K, system.F, modes, space, solver, &result.solve,
+                                       &result.compatibility);
+    const LoadCompatibility& c = result.compatibility;
+    if (!c.compatible())
+      log::warn("pure Neumann Poisson: the data are not compatible: integral of f ",
+                system.rhs_integral, " + integral of the flux g ", system.flux_integral, " = ",
+                c.resultant[0], " (relative ", c.relative, " > ", k_compatibility_tolerance,
+                "); solved with f minus its mean ", c.resultant[0] / modes.gram(0, 0));
+    log::info("pure Neumann Poisson: solution up to a constant, reported with mean zero");
+    return result;
+  }
   {
     ScopedTimer t(result.timings, "solve");
     result.u = solve_constrained(system.K, system.F, constraints, solver, &result.solve);

@@ -1,11 +1,15 @@
 // Poisson problem −∇·(κ ∇u) = f on a curved tetrahedral mesh with strong Dirichlet and weak
 // Neumann data, continuous Lagrange elements of degree p on geometry of order k.
+// Without any Dirichlet condition (pure Neumann) u is determined up to a constant: the solution
+// returned has mean zero, the data's compatibility ∫f + ∫g = 0 is checked (a warning with the
+// numbers otherwise) and their mean removed before the solve (fem/problems/null_space.hpp).
 #pragma once
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "fem/problems/boundary_conditions.hpp"
+#include "fem/problems/null_space.hpp"
 #include "fem/solvers/linear_solver.hpp"
 #include "fem/space/function_space.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
@@ -31,12 +35,18 @@ struct PoissonSolution {
   int nitsche_faces = 0;  ///< boundary faces with Dirichlet data imposed weakly (partial faces)
   LinearSolveInfo solve;
   Timings timings;
+  /// Pure Neumann: 1 (constants removed, ∫u_h = 0), else 0.
+  int null_space_dim = 0;
+  LoadCompatibility compatibility;                 ///< pure Neumann: resultant = (∫f + ∫g)
+  double rhs_integral = 0.0, flux_integral = 0.0;  ///< ∫f and ∫g as assembled (Σ of F's parts)
 };
 
 /// Assembled stiffness K and load F (before Dirichlet elimination).
 struct AssembledSystem {
   SparseMatrix K;
   Eigen::VectorXd F;
+  double rhs_integral = 0.0;   ///< Σ of F's volume part = ∫f (by quadrature)
+  double flux_integral = 0.0;  ///< Σ of F's Neumann part = ∫g
 };
 
 AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,

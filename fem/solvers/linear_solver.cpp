@@ -1,33 +1,89 @@
 #include "fem/solvers/linear_solver.hpp"
 
+#include <Eigen/QR>
+
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 
 namespace curvefem::fem {
+namespace {
+
+/// Orthonormal basis of the columns of V (#rows x m, full column rank).
+Eigen::MatrixXd orthonormal_basis(const Eigen::MatrixXd& V) {
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(V);
+  Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(V.rows(), V.cols());
+  const Eigen::VectorXd diag = qr.matrixQR().diagonal().cwiseAbs();
+  if (diag.minCoeff() <= 1e-10 * diag.maxCoeff())
+    throw InputError("linear system: the null-space vectors are linearly dependent");
+  return Q;
+}
+
+/// Direct solve of the semi-definite A: pins the m unknowns a column-pivoted QR of N^T picks
+/// (N = null space, #rows x m), solves the SPD remainder, pinned unknowns = 0.
+Eigen::VectorXd solve_pinned(const SparseMatrix& A, const Eigen::VectorXd& b,
+                             const Eigen::MatrixXd& N, LinearSolveInfo& info) {
+  const Eigen::Index n = A.rows(), m = N.cols();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(N.transpose());
+  std::vector<int> reduced(static_cast<std::size_t>(n), 0);
+  for (Eigen::Index k = 0; k < m; ++k) reduced[std::size_t(qr.colsPermutation().indices()[k])] = -1;
+  int r = 0;
+  for (auto& i : reduced)
+    if (i == 0) i = r++;
+  std::vector<Eigen::Triplet<double, int>> entries;
+  entries.reserve(static_cast<std::size_t>(A.nonZeros()));
+  for (int col = 0; col < n; ++col)
+    for (SparseMatrix::InnerIterator it(A, col); it; ++it)
+      if (reduced[std::size_t(it.row())] >= 0 && reduced[std::size_t(col)] >= 0)
+        entries.emplace_back(reduced[std::size_t(it.row())], reduced[std::size_t(col)], it.value());
+  SparseMatrix Ar(r, r);
+  Ar.setFromTriplets(entries.begin(), entries.end());
+  Eigen::VectorXd br(r);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (reduced[std::size_t(i)] >= 0) br[reduced[std::size_t(i)]] = b[i];
+  const Eigen::VectorXd xr = solve_cholmod(Ar, br, info);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (reduced[std::size_t(i)] >= 0) x[i] = xr[reduced[std::size_t(i)]];
+  return x;
+}
+
+}  // namespace
 
 Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
                           const LinearSolverOptions& options, LinearSolveInfo* info) {
   if (A.rows() != A.cols() || A.rows() != b.size())
     throw InputError("linear system: matrix " + std::to_string(A.rows()) + "x" +
                      std::to_string(A.cols()) + ", right-hand side " + std::to_string(b.size()));
+  const bool singular = options.null_space.cols() > 0;
+  if (singular && (options.null_space.rows() != A.rows() || options.null_space.cols() >= A.rows()))
+    throw InputError("linear system: null space " + std::to_string(options.null_space.rows()) +
+                     "x" + std::to_string(options.null_space.cols()) + " for " +
+                     std::to_string(A.rows()) + " unknowns");
   LinearSolveInfo local;
   LinearSolveInfo& out = info ? *info : local;
   out = {};
   if (A.rows() == 0) return Eigen::VectorXd();
   std::string type = options.type;
   if (type == "auto") type = A.rows() <= options.auto_direct_max_dofs ? "direct" : "cg";
+  if (type != "direct" && type != "cg")
+    throw InputError("unknown solver type '" + options.type + "' (direct, cg or auto)");
+  Eigen::MatrixXd Q;
+  Eigen::VectorXd rhs = b;
+  if (singular) {
+    Q = orthonormal_basis(options.null_space);
+    rhs -= Q * (Q.transpose() * b);  // onto range A
+    out.null_space_dim = static_cast<int>(Q.cols());
+  }
   Eigen::VectorXd x;
   if (type == "direct")
-    x = solve_cholmod(A, b, out);
-  else if (type == "cg")
-    x = solve_petsc_cg(A, b, options, out);
+    x = singular ? solve_pinned(A, rhs, options.null_space, out) : solve_cholmod(A, rhs, out);
   else
-    throw InputError("unknown solver type '" + options.type + "' (direct, cg or auto)");
-  const double bn = b.norm();
-  out.relative_residual = (b - A * x).norm() / (bn > 0 ? bn : 1.0);
-  log::info("linear solve (", out.method, "): ", A.rows(), " unknowns, ", out.iterations,
-            " iterations, relative residual ", out.relative_residual, ", setup ", out.setup_s,
-            " s, solve ", out.solve_s, " s");
+    x = solve_petsc_cg(A, rhs, options, Q, out);
+  const double bn = rhs.norm();
+  out.relative_residual = (rhs - A * x).norm() / (bn > 0 ? bn : 1.0);
+  log::info("linear solve (", out.method, singular ? ", singular" : "", "): ", A.rows(),
+            " unknowns, ", out.iterations, " iterations, relative residual ", out.relative_residual,
+            ", setup ", out.setup_s, " s, solve ", out.solve_s, " s");
   return x;
 }
 

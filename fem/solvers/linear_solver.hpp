@@ -4,6 +4,15 @@
 // type "cg":     PETSc KSP CG preconditioned by algebraic multigrid (GAMG), relative tolerance
 //                `rtol` on the preconditioned residual, at most `max_iterations`.
 // type "auto":   direct up to `auto_direct_max_dofs` unknowns, cg above.
+// Near-nullspace (cg): GAMG builds its coarse spaces from the near-nullspace of A. The default is
+// the constant vector per block; elasticity needs the six rigid-body modes, given either as the
+// nodes' coordinates (block_size 3, MatNullSpaceCreateRigidBody) or as explicit vectors.
+// Singular A (pure Neumann problems): `null_space` spans ker A (#rows x m). b is first projected
+// onto range A (b - Q Q^T b, Q an orthonormal basis of the null space; a no-op for compatible
+// data); direct pins the m unknowns that a column-pivoted QR of null_space^T picks (u = 0 there: an
+// exact regularization, the pinned system is SPD and its solution solves A x = b); cg solves the
+// singular consistent system with the null space removed from the Krylov space (MatSetNullSpace).
+// Either way x is one solution: the caller picks the one it wants by removing its null-space part.
 // A failed factorization (not SPD) or non-convergence throws SolverError carrying the residual
 // history. Engines' headers stay in the .cpp files.
 #pragma once
@@ -21,6 +30,16 @@ struct LinearSolverOptions {
   int max_iterations = 5000;
   int auto_direct_max_dofs = 200000;
   int block_size = 1;  ///< unknowns per node (3 for elasticity): helps AMG
+  /// cg, block_size 3: coordinates of the node of each block of 3 consecutive rows (#rows/3 x 3,
+  /// row r = the node of unknowns 3r, 3r+1, 3r+2): GAMG's near-nullspace = the rigid-body modes.
+  Eigen::MatrixXd near_nullspace_coordinates;
+  /// cg, when the rows are not in blocks (components fixed separately): the near-nullspace as
+  /// explicit vectors (#rows x m, any scaling; orthonormalized here). Ignored with coordinates.
+  Eigen::MatrixXd near_nullspace_vectors;
+  /// false: GAMG's default near-nullspace (constants per block), to measure what the modes buy.
+  bool use_near_nullspace = true;
+  /// Basis of ker A (#rows x m) for a singular positive semi-definite A; empty: A is SPD.
+  Eigen::MatrixXd null_space;
 };
 
 struct LinearSolveInfo {
@@ -29,18 +48,24 @@ struct LinearSolveInfo {
   double relative_residual = 0.0;  ///< ‖b − A x‖ / ‖b‖, measured after the solve
   double setup_s = 0.0, solve_s = 0.0;
   std::vector<double> residual_history;  ///< cg: preconditioned residual norms per iteration
+  /// cg: "rigid-body modes" (from coordinates), "vectors" (explicit) or "default" (GAMG's own)
+  std::string near_nullspace;
+  int null_space_dim = 0;  ///< dimension of the kernel handled (0: A was SPD)
 };
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-/// A must be symmetric (both triangles stored). Throws InputError for size mismatch.
+/// A must be symmetric (both triangles stored), positive definite, or semi-definite with the
+/// kernel given in options.null_space. Throws InputError for size mismatch.
 Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
                           const LinearSolverOptions& options, LinearSolveInfo* info = nullptr);
 
 // Engines (linear_solver_cholmod.cpp, linear_solver_petsc.cpp).
 Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
                               LinearSolveInfo& info);
+/// null_space: an orthonormal basis of ker A (#rows x m) or empty.
 Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
-                               const LinearSolverOptions& options, LinearSolveInfo& info);
+                               const LinearSolverOptions& options,
+                               const Eigen::MatrixXd& null_space, LinearSolveInfo& info);
 
 }  // namespace curvefem::fem

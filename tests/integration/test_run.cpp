@@ -370,3 +370,71 @@ TEST(Run, NeumannValueOnAGivenMeshUsesTheMeshsNormal) {
   ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
   EXPECT_LT(report(dir / "out")["l2_error"].get<double>(), 1e-10);
 }
+
+// Pure Neumann (issue 24): u = x² − yz + z + 7 in P2 with the flux ∇u · n on every side. The
+// solution is known up to a constant: report.json says the errors are modulo the mean of
+// u_h − u, and they vanish; the offset is minus the mean of u (7 + 1/3 − 1/4 + 1/2 = 7.5833...).
+// Both solvers. Before, the direct solve failed (CHOLMOD, exit 3).
+TEST(Run, PureNeumannPoissonIsSolvedUpToAConstant) {
+  const auto dir = test::scratch_dir("run_pure_neumann");
+  for (const std::string solver : {"direct", "cg"}) {
+    const auto file = write_case(dir, R"({
+      "geometry": {"builtin": {"shape": "cube", "divisions": 2}},
+      "physics": {"type": "poisson"},
+      "discretization": {"degree": 2},
+      "rhs": "-2",
+      "boundary_conditions": [{"type": "neumann", "select": {"all": true},
+                               "value": "2*x*nx - z*ny + (1 - y)*nz"}],
+      "solver": {"type": ")" + solver + R"(", "rtol": 1e-12},
+      "exact": "x*x - y*z + z + 7"})");
+    std::string log;
+    ASSERT_EQ(run_case(file, dir / solver, &log), 0) << log;
+    const auto j = report(dir / solver);
+    EXPECT_LT(j["l2_error"].get<double>(), 1e-9) << solver;
+    EXPECT_LT(j["h1_semi_error"].get<double>(), 1e-9) << solver;
+    EXPECT_NE(j["errors_modulo"].get<std::string>().find("constant"), std::string::npos);
+    EXPECT_NEAR(j["error_offset"][0].get<double>(), -(7 + 1.0 / 3 - 0.25 + 0.5), 1e-9);
+    const auto& ns = j["physics_details"]["null_space"];
+    EXPECT_EQ(ns["dimension"], 1);
+    EXPECT_EQ(ns["compatible"], true);
+    EXPECT_NEAR(ns["rhs_integral"].get<double>(), -2.0, 1e-12);  // ∫f over the unit cube
+    EXPECT_NEAR(ns["flux_integral"].get<double>(), 2.0, 1e-12);
+    EXPECT_EQ(j["solver"]["null_space_dim"], 1);
+  }
+}
+
+// Traction-only linear elasticity: u = (x², yz, xy) plus the rigid motion (1 + z, 2, −x), in P2,
+// with its constant body force and the traction σ(u) n on every side (E = 1, ν = 0.3). The
+// errors are modulo a rigid motion and vanish; the load is balanced.
+TEST(Run, TractionOnlyElasticityIsSolvedUpToARigidMotion) {
+  const auto dir = test::scratch_dir("run_traction_only");
+  const std::string l = "(0.3/0.52)", m = "(1/2.6)";  // λ, μ
+  const std::string tr = "(" + l + "*(2*x+z))";       // λ tr ε
+  const std::string fx = "-(2*(" + l + "+" + m + ")+2*" + m + ")", fz = "-(" + l + "+" + m + ")";
+  const std::string tx = "(" + tr + "+4*" + m + "*x)*nx+" + m + "*y*nz";
+  const std::string ty = "(" + tr + "+2*" + m + "*z)*ny+" + m + "*(x+y)*nz";
+  const std::string tz = m + "*y*nx+" + m + "*(x+y)*ny+" + tr + "*nz";
+  const auto file = write_case(dir, R"({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 2}},
+    "physics": {"type": "linear_elasticity", "E": 1, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "rhs": [")" + fx + R"(", 0, ")" + fz +
+                                        R"("],
+    "boundary_conditions": [{"type": "neumann", "select": {"all": true},
+                             "value": [")" +
+                                        tx + R"(", ")" + ty + R"(", ")" + tz + R"("]}],
+    "solver": {"type": "cg", "rtol": 1e-12},
+    "exact": ["x*x + 1 + z", "y*z + 2", "x*y - x"]})");
+  std::string log;
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  const auto j = report(dir / "out");
+  EXPECT_LT(j["l2_error"].get<double>(), 1e-8);
+  EXPECT_LT(j["h1_semi_error"].get<double>(), 1e-8);
+  EXPECT_NE(j["errors_modulo"].get<std::string>().find("rigid motion"), std::string::npos);
+  const auto& ns = j["physics_details"]["null_space"];
+  EXPECT_EQ(ns["dimension"], 6);
+  EXPECT_EQ(ns["compatible"], true);
+  EXPECT_LT(ns["relative_imbalance"].get<double>(), 1e-12);
+  EXPECT_EQ(j["solver"]["near_nullspace"], "rigid-body modes");
+  EXPECT_EQ(j["solver"]["null_space_dim"], 6);
+}

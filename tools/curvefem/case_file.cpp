@@ -553,13 +553,17 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
 
   if (const json* s = r.get(j, "solver")) {
-    r.only_keys(*s, "/solver", {"type", "rtol", "max_iterations"});
+    r.only_keys(*s, "/solver", {"type", "rtol", "max_iterations", "near_nullspace"});
     if (const json* v = r.get(*s, "type")) c.solver = r.string(*v, "/solver/type");
     if (c.solver != "auto" && c.solver != "direct" && c.solver != "cg")
       fail("/solver/type", "'" + c.solver + "': expected auto, direct or cg", r.file);
     if (const json* v = r.get(*s, "rtol")) c.solver_rtol = r.number(*v, "/solver/rtol");
     if (const json* v = r.get(*s, "max_iterations"))
       c.solver_max_iterations = r.integer(*v, "/solver/max_iterations", 1, 1000000);
+    if (const json* v = r.get(*s, "near_nullspace")) {
+      if (!v->is_boolean()) fail("/solver/near_nullspace", "expected true/false", r.file);
+      c.solver_near_nullspace = v->get<bool>();
+    }
   }
   std::string out = "out";
   if (const json* o = r.get(j, "output")) {
@@ -665,8 +669,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
             c.exact_gradient.begin() + 3 * i, c.exact_gradient.begin() + 3 * i + 3)));
     }
   }
-  res["solver"] = {
-      {"type", c.solver}, {"rtol", c.solver_rtol}, {"max_iterations", c.solver_max_iterations}};
+  res["solver"] = {{"type", c.solver},
+                   {"rtol", c.solver_rtol},
+                   {"max_iterations", c.solver_max_iterations},
+                   {"near_nullspace", c.solver_near_nullspace}};
   res["output"] = {{"dir", c.output_dir.string()}};
   c.resolved = res;
   return c;

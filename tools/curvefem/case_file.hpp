@@ -89,8 +89,9 @@ struct CaseSpec {
   std::string solver = "auto";
   double solver_rtol = 1e-10;
   int solver_max_iterations = 5000;
-  std::filesystem::path output_dir;  ///< resolved
-  nlohmann::json resolved;           ///< the case with defaults, as run
+  bool solver_near_nullspace = true;  ///< cg: rigid-body modes for GAMG (elasticity)
+  std::filesystem::path output_dir;   ///< resolved
+  nlohmann::json resolved;            ///< the case with defaults, as run
   int components() const { return physics == "poisson" ? 1 : 3; }
 };
 

@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <tuple>
@@ -24,6 +26,7 @@
 #include "fem/problems/elasticity.hpp"
 #include "fem/problems/error_norms.hpp"
 #include "fem/problems/interpolation.hpp"
+#include "fem/problems/null_space.hpp"
 #include "fem/problems/poisson.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
 #include "fem/space/function_space.hpp"
@@ -657,7 +660,9 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   solver.type = spec.solver;
   solver.rtol = spec.solver_rtol;
   solver.max_iterations = spec.solver_max_iterations;
+  solver.use_near_nullspace = spec.solver_near_nullspace;
   const int c = spec.components();
+  int null_space_dim = 0;  // pure Neumann / traction-only: the solution is determined up to it
   Eigen::VectorXd u;
   json physics_report;
   std::function<fem::ElasticMaterial(int)> cell_material;  // elasticity, solve_on both
@@ -694,6 +699,20 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     for (const auto& [stage, s] : sol.timings.stages()) timings.add(stage, s);
     physics_report["free_dofs"] = sol.free_dofs;
     physics_report["nitsche_faces"] = sol.nitsche_faces;
+    null_space_dim = sol.null_space_dim;
+    if (null_space_dim > 0) {
+      const fem::LoadCompatibility& cc = sol.compatibility;
+      physics_report["null_space"] = {
+          {"removed", "constants"},
+          {"dimension", null_space_dim},
+          {"solution", "mean zero (no Dirichlet condition: u is determined up to a constant)"},
+          {"rhs_integral", sol.rhs_integral},
+          {"flux_integral", sol.flux_integral},
+          {"resultant", cc.resultant[0]},
+          {"relative_imbalance", cc.relative},
+          {"compatible", cc.compatible()},
+          {"tolerance", fem::k_compatibility_tolerance}};
+    }
   } else {
     fem::ElasticityProblem problem;
     problem.material = {spec.E, spec.nu};
@@ -759,12 +778,28 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     u = sol.u;
     solve_info = sol.solve;
     for (const auto& [stage, s] : sol.timings.stages()) timings.add(stage, s);
-    {
+    null_space_dim = sol.null_space_dim;
+    auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
+    if (null_space_dim > 0) {
+      // Tractions only: no supports; the load's own balance is what counts.
+      const fem::LoadCompatibility& cc = sol.compatibility;
+      physics_report["null_space"] = {
+          {"removed", "rigid motions"},
+          {"dimension", null_space_dim},
+          {"solution",
+           "no mean translation or rotation (no Dirichlet condition: u is "
+           "determined up to a rigid motion)"},
+          {"total_force", vec(cc.resultant.head<3>())},
+          {"total_moment", vec(cc.resultant.tail<3>())},
+          {"moment_center", vec(cc.center)},
+          {"relative_imbalance", cc.relative},
+          {"compatible", cc.compatible()},
+          {"tolerance", fem::k_compatibility_tolerance}};
+    } else {
       // Equilibrium, recomputed from u: the supports' force against the applied load.
       ScopedTimer t(timings, "force_balance");
       const fem::ForceBalance fb =
           fem::force_balance(mesh, space, problem, u, spec.physics != "linear_elasticity");
-      auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
       physics_report["force_balance"] = {{"applied", vec(fb.applied)},
                                          {"reaction", vec(fb.reaction)},
                                          {"supported_unknowns", fb.supported_unknowns},
@@ -781,24 +816,50 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
   progress.end_stage();
 
   json report;
+  // The exact solution as compared: without Dirichlet data u_h is determined up to the null
+  // space, so the errors are those of u_h − (u + r) with the mode r that takes out the null-space
+  // part of u_h − u (its mean for Poisson); `exact` and `error` in the VTU files use u + r too.
+  std::function<void(const Eigen::Vector3d&, double*)> exact_value;
   if (!spec.exact.empty()) {
     ScopedTimer t(timings, "errors");
     const auto exact = spec.exact;
-    const fem::ErrorNorms e = fem::compute_errors(
-        mesh, space, u, c,
-        [exact](const Eigen::Vector3d& x, double* v) {
-          for (std::size_t i = 0; i < exact.size(); ++i) v[i] = exact[i](x);
-        },
-        [exact, grad = spec.exact_gradient](const Eigen::Vector3d& x, double* g) {
-          for (std::size_t i = 0; i < exact.size(); ++i) {
-            if (!grad.empty()) {
-              for (int d = 0; d < 3; ++d) g[3 * i + d] = grad[3 * i + std::size_t(d)](x);
-              continue;
-            }
-            const Eigen::Vector3d gi = exact[i].gradient(x);
-            for (int d = 0; d < 3; ++d) g[3 * i + d] = gi[d];
-          }
-        });
+    const fem::ExactValue value = [exact](const Eigen::Vector3d& x, double* v) {
+      for (std::size_t i = 0; i < exact.size(); ++i) v[i] = exact[i](x);
+    };
+    const fem::ExactGradient gradient = [exact, grad = spec.exact_gradient](
+                                            const Eigen::Vector3d& x, double* g) {
+      for (std::size_t i = 0; i < exact.size(); ++i) {
+        if (!grad.empty()) {
+          for (int d = 0; d < 3; ++d) g[3 * i + d] = grad[3 * i + std::size_t(d)](x);
+          continue;
+        }
+        const Eigen::Vector3d gi = exact[i].gradient(x);
+        for (int d = 0; d < 3; ++d) g[3 * i + d] = gi[d];
+      }
+    };
+    exact_value = value;
+    fem::ErrorNorms e;
+    if (null_space_dim > 0) {
+      auto modes =
+          std::make_shared<const fem::NullSpaceModes>(fem::null_space_modes(mesh, space, c));
+      Eigen::VectorXd theta;
+      e = fem::compute_errors_modulo_null_space(mesh, space, *modes, u, value, gradient, &theta);
+      exact_value = [value, modes, theta](const Eigen::Vector3d& x, double* v) {
+        double r[3];
+        value(x, v);
+        modes->evaluate(theta, x, r);
+        for (int i = 0; i < modes->components; ++i) v[i] += r[i];
+      };
+      report["errors_modulo"] =
+          c == 1 ? "constant: errors of u_h - (u + m), m = the mean of u_h - u (pure Neumann: u is "
+                   "determined up to a constant)"
+                 : "rigid motion: errors of u_h - (u + r), r = the rigid motion with the mean "
+                   "translation and rotation of u_h - u (tractions only: u is determined up to a "
+                   "rigid motion)";
+      report["error_offset"] = std::vector<double>(theta.data(), theta.data() + theta.size());
+    } else {
+      e = fem::compute_errors(mesh, space, u, c, value, gradient);
+    }
     report["l2_error"] = e.l2;
     report["h1_semi_error"] = e.h1_semi;
     report["h1_error"] = std::sqrt(e.l2 * e.l2 + e.h1_semi * e.h1_semi);
@@ -828,11 +889,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
     surface_fields.point_data.push_back(field(c == 1 ? "u" : "displacement", values));
     surface_fields.point_data.push_back(field("phi_offset", images - input.V));
     if (!spec.exact.empty()) {
-      const auto exact = spec.exact;
-      const mapping::SurfaceErrors e =
-          mapping::surface_errors(input, values, [exact](const Eigen::Vector3d& x, double* v) {
-            for (std::size_t i = 0; i < exact.size(); ++i) v[i] = exact[i](x);
-          });
+      const mapping::SurfaceErrors e = mapping::surface_errors(input, values, exact_value);
       surface_fields.point_data.push_back(field("exact", e.exact));
       surface_fields.point_data.push_back(field("error", e.error));
       report["surface_l2_error"] = e.l2;
@@ -873,12 +930,14 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
       fields.point_data.push_back(uf);
       if (!spec.exact.empty()) {
         Field ef{"exact", c, {}}, err{"error", c, {}};
-        for (int r = 0; r < out_space.num_dofs; ++r)
+        for (int r = 0; r < out_space.num_dofs; ++r) {
+          double ex[3];
+          exact_value(out_space.dof_points.row(r).transpose(), ex);
           for (int i = 0; i < c; ++i) {
-            const double ex = spec.exact[i](out_space.dof_points.row(r).transpose());
-            ef.values.push_back(ex);
-            err.values.push_back(values(r, i) - ex);
+            ef.values.push_back(ex[i]);
+            err.values.push_back(values(r, i) - ex[i]);
           }
+        }
         fields.point_data.push_back(ef);
         fields.point_data.push_back(err);
       }
@@ -940,7 +999,9 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalP
                         {"iterations", solve_info.iterations},
                         {"relative_residual", solve_info.relative_residual},
                         {"setup_s", solve_info.setup_s},
-                        {"solve_s", solve_info.solve_s}};
+                        {"solve_s", solve_info.solve_s},
+                        {"near_nullspace", solve_info.near_nullspace},
+                        {"null_space_dim", solve_info.null_space_dim}};
     timings.add("total", total.seconds());
     report["time_s"] = timings_json(timings);
     report["peak_rss_mb"] = peak_rss_mb();

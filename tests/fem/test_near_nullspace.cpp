@@ -1,0 +1,138 @@
+// GAMG's near-nullspace for elasticity (rigid-body modes from the DOF points) and singular
+// systems in solve_spd (fem/solvers/linear_solver.hpp).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+
+#include "fem/problems/elasticity.hpp"
+#include "meshing/core/primitives.hpp"
+
+using namespace curvefem;
+
+namespace {
+
+/// Faces whose corners all satisfy coordinate `axis` == value.
+std::vector<char> faces_at(const LagrangeMesh& mesh, const fem::FunctionSpace& space, int axis,
+                           double value) {
+  std::vector<char> out(space.boundary_faces.size(), 0);
+  for (std::size_t f = 0; f < out.size(); ++f) {
+    const auto [cell, j] = space.boundary_faces[f];
+    bool all = true;
+    for (int i = 0; i < 4; ++i)
+      if (i != j) all = all && std::abs(mesh.nodes(mesh.cells(cell, i), axis) - value) < 1e-12;
+    out[f] = all;
+  }
+  return out;
+}
+
+/// Beam 4 × 1 × 1 (n × n/4 × n/4 cells of the cube, scaled), clamped at x = 0, pulled down at
+/// x = 4.
+struct Cantilever {
+  LagrangeMesh mesh;
+  fem::FunctionSpace space;
+  fem::ElasticityProblem problem;
+  Cantilever(int n, int p) {
+    mesh = make_cube_tets(n);
+    for (int i = 0; i < mesh.num_nodes(); ++i) mesh.nodes(i, 0) *= 4;
+    space = fem::build_function_space(mesh, p);
+    problem.material = {100.0, 0.3};
+    problem.dirichlet.push_back({faces_at(mesh, space, 0, 0.0),
+                                 {true, true, true},
+                                 [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); },
+                                 {}});
+    problem.traction.push_back(
+        {faces_at(mesh, space, 0, 4.0),
+         [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return Eigen::Vector3d(0, 0, -1); },
+         {}});
+  }
+};
+
+fem::LinearSolverOptions cg(bool near_nullspace) {
+  fem::LinearSolverOptions o;
+  o.type = "cg";
+  o.rtol = 1e-10;
+  o.use_near_nullspace = near_nullspace;
+  return o;
+}
+
+}  // namespace
+
+TEST(NearNullspace, RigidBodyModesLowerGamgIterationsOnACantilever) {
+  for (int p = 1; p <= 2; ++p) {
+    const Cantilever beam(p == 1 ? 6 : 3, p);
+    const auto with = fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, cg(true));
+    const auto without =
+        fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, cg(false));
+    const auto direct = fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, {});
+    std::printf("p=%d unknowns %d: CG+GAMG iterations %d with rigid-body modes, %d without\n", p,
+                with.free_unknowns, with.solve.iterations, without.solve.iterations);
+    EXPECT_EQ(with.solve.near_nullspace, "rigid-body modes");
+    EXPECT_EQ(without.solve.near_nullspace, "default");
+    EXPECT_LT(with.solve.iterations, without.solve.iterations) << "p=" << p;
+    EXPECT_LT((with.u - direct.u).norm(), 1e-7 * direct.u.norm()) << "p=" << p;
+    EXPECT_LT((without.u - direct.u).norm(), 1e-7 * direct.u.norm()) << "p=" << p;
+  }
+}
+
+TEST(NearNullspace, ComponentsFixedSeparatelyGiveTheModesAsVectors) {
+  // x = 0: u_x = u_y = 0 everywhere, u_z = 0 only where y < 0.5; pulled at x = 1. The reduced
+  // system is not in blocks of 3 (before, MatSetBlockSize(3) failed on its size).
+  const LagrangeMesh mesh = make_cube_tets(3);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  fem::ElasticityProblem problem;
+  const auto zero = [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); };
+  problem.dirichlet.push_back({faces_at(mesh, space, 0, 0.0), {true, true, false}, zero, {}});
+  problem.dirichlet.push_back(
+      {faces_at(mesh, space, 0, 0.0), {false, false, true}, zero, [](const Eigen::Vector3d& x) {
+         return x[1] < 0.5;
+       }});
+  problem.traction.push_back({faces_at(mesh, space, 0, 1.0),
+                              [](const Eigen::Vector3d& x, const Eigen::Vector3d&) {
+                                return Eigen::Vector3d(1 + x[1], 0, -1);
+                              },
+                              {}});
+  const auto direct = fem::solve_linear_elasticity(mesh, space, problem, {});
+  ASSERT_NE(direct.free_unknowns % 3, 0);  // no block structure left
+  const auto with = fem::solve_linear_elasticity(mesh, space, problem, cg(true));
+  const auto without = fem::solve_linear_elasticity(mesh, space, problem, cg(false));
+  std::printf(
+      "components fixed separately, %d unknowns: %d iterations with the modes, %d without\n",
+      direct.free_unknowns, with.solve.iterations, without.solve.iterations);
+  EXPECT_EQ(with.solve.near_nullspace, "vectors");
+  EXPECT_LT((with.u - direct.u).norm(), 1e-7 * direct.u.norm());
+  EXPECT_LT((without.u - direct.u).norm(), 1e-7 * direct.u.norm());
+  EXPECT_LE(with.solve.iterations, without.solve.iterations);
+}
+
+TEST(NearNullspace, SingularSystemDirectAndCgAgreeUpToTheKernel) {
+  // The 1-D Laplacian with free ends: kernel = constants; b with Σ b = 0.
+  const int n = 50;
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (int i = 0; i + 1 < n; ++i) {
+    t.emplace_back(i, i, 1.0);
+    t.emplace_back(i + 1, i + 1, 1.0);
+    t.emplace_back(i, i + 1, -1.0);
+    t.emplace_back(i + 1, i, -1.0);
+  }
+  fem::SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) b[i] = std::sin(0.3 * i);
+  b.array() -= b.mean();
+  fem::LinearSolverOptions direct;
+  direct.type = "direct";
+  direct.null_space = Eigen::VectorXd::Ones(n);
+  fem::LinearSolverOptions iterative = direct;
+  iterative.type = "cg";
+  iterative.rtol = 1e-12;
+  fem::LinearSolveInfo di, ci;
+  Eigen::VectorXd x = fem::solve_spd(A, b, direct, &di);
+  Eigen::VectorXd y = fem::solve_spd(A, b, iterative, &ci);
+  EXPECT_EQ(di.null_space_dim, 1);
+  EXPECT_LT(di.relative_residual, 1e-12);
+  EXPECT_LT(ci.relative_residual, 1e-9);
+  x.array() -= x.mean();
+  y.array() -= y.mean();
+  EXPECT_LT((x - y).norm(), 1e-8 * x.norm());
+}
