@@ -673,7 +673,7 @@ struct CoarseState {
   // The input vertices a repair keeps under the linear bound: those of the faces that missed in
   // any attempt so far (and, once widened, around the slabs pulled above the shell's base). A
   // repair keeps every other face where it is, so the two edge steps of margin that a new
-  // coarsening needs (its faces move) are not asked of it.
+  // coarsening needs (its faces move) are tried only if the repair with these is refused.
   std::vector<char> repair_strict;
   int repairs = 0, repair_splits = 0, repair_failures = 0;
 };
@@ -865,14 +865,24 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     repair_options.owned_points = st.owned;
     repair_options.collapse_chains = false;
     repair_options.feature_edges = options.feature_edges;  // never split (SimplifyOptions::repair)
-    if (!st.repair_strict.empty()) {
-      repair_options.strict_input_vertices = st.repair_strict;
-      repair_options.strict_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
-    }
-    shell = sh::simplify_shell(st.shell, surface, repair_options, simplify_stats);
+    // First with only the missed faces' input vertices strict; where that is refused (a split's
+    // new faces would need full curving that their slabs cannot certify, etc.), with every
+    // strict vertex (the two edge steps around the misses), whose new faces need none.
+    std::vector<const std::vector<char>*> sets;
+    if (!st.repair_strict.empty()) sets.push_back(&st.repair_strict);
+    sets.push_back(&strict);
     ++st.repairs;
-    if (simplify_stats.violating_points == 0) {
-      repaired = true;
+    for (const std::vector<char>* set : sets) {
+      repair_options.strict_input_vertices = *set;
+      repair_options.strict_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
+      simplify_stats = sh::SimplifyStats();
+      shell = sh::simplify_shell(st.shell, surface, repair_options, simplify_stats);
+      if (simplify_stats.violating_points == 0) {
+        repaired = true;
+        break;
+      }
+    }
+    if (repaired) {
       st.repair_splits += simplify_stats.splits;
       log::info("mesh: coarse shell repaired by ", simplify_stats.splits, " splits in ",
                 simplify_stats.repair_passes, " passes: ", st.shell.F.rows(), " -> ",
