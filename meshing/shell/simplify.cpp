@@ -731,42 +731,27 @@ class ShellMesh : public TriMesh {
     const Id a = r.v0, b = r.v1, v = r.new_vertex;
     const Eigen::Vector3d ma = mid[a], mb = mid[b], centre = 0.5 * (ma + mb);
     const double radius = (mb - ma).norm() / 3;
-    std::vector<std::pair<double, int>> candidates;
+    // One pass over the owned points, each ranked by its distance to the midpoint into: near the
+    // midpoint (at most 8); the violating points farther away (on them, their distance becomes
+    // 0); any other input vertex farther away (up to 24 candidates in all). Only unoccupied input
+    // vertices not snapped onto a feature chain.
+    std::vector<std::pair<double, int>> near, far, rest;
     for (Id f : r.old_cells)
-      for (int x : owned[f]) {
+      for (std::size_t j = 0; j < owned[f].size(); ++j) {
+        const int x = owned[f][j];
         if (!is_input_vertex(x) || occupied[std::size_t(x)].load(std::memory_order_relaxed) ||
             reference->snap_of(x))
           continue;
         const double d = (input->V().row(x).transpose() - centre).norm();
-        if (d < radius) candidates.emplace_back(d, x);
+        auto& list = d < radius ? near : violating(x, place[f][j][2]) ? far : rest;
+        list.emplace_back(d, x);
       }
-    std::sort(candidates.begin(), candidates.end());
-    if (candidates.size() > 8) candidates.resize(8);
-    // Then the violating points themselves (on them, their distance becomes 0), nearest first.
-    std::vector<std::pair<double, int>> far;
-    for (Id f : r.old_cells)
-      for (std::size_t j = 0; j < owned[f].size(); ++j) {
-        const int x = owned[f][j];
-        if (!violating(x, place[f][j][2]) ||
-            occupied[std::size_t(x)].load(std::memory_order_relaxed) || reference->snap_of(x))
-          continue;
-        const double d = (input->V().row(x).transpose() - centre).norm();
-        if (!(d < radius)) far.emplace_back(d, x);
-      }
+    std::sort(near.begin(), near.end());
     std::sort(far.begin(), far.end());
-    candidates.insert(candidates.end(), far.begin(), far.end());
-    // Then any other input vertex the two prisms own, nearest the midpoint first, up to 24 in all.
-    std::vector<std::pair<double, int>> rest;
-    for (Id f : r.old_cells)
-      for (std::size_t j = 0; j < owned[f].size(); ++j) {
-        const int x = owned[f][j];
-        if (!is_input_vertex(x) || violating(x, place[f][j][2]) ||
-            occupied[std::size_t(x)].load(std::memory_order_relaxed) || reference->snap_of(x))
-          continue;
-        const double d = (input->V().row(x).transpose() - centre).norm();
-        if (!(d < radius)) rest.emplace_back(d, x);
-      }
     std::sort(rest.begin(), rest.end());
+    if (near.size() > 8) near.resize(8);
+    std::vector<std::pair<double, int>> candidates = std::move(near);
+    candidates.insert(candidates.end(), far.begin(), far.end());
     for (std::size_t i = 0; i < rest.size() && candidates.size() < 24; ++i)
       candidates.push_back(rest[i]);
     const Eigen::Vector3d da = top[a] - base[a], db = top[b] - base[b];
