@@ -10,10 +10,11 @@
 #include <numeric>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "meshing/core/error.hpp"
-#include "meshing/shell/projection.hpp"
+#include "meshing/core/fiber_projection.hpp"
 
 namespace curvefem::mapping {
 namespace {
@@ -333,7 +334,7 @@ struct BoundaryInverse::Impl {
   const SurfaceMesh* input = nullptr;
   LagrangeMesh identity_triangles;  // dense pipeline: the input faces as order-1 triangles
   std::unique_ptr<TriangleLocator> locator;
-  std::unique_ptr<meshing::shell::ShellProjection> projection;  // curved pipeline only
+  std::unique_ptr<FiberProjection> projection;  // curved pipeline only
   mutable std::mutex mutex;
   mutable std::unordered_map<BitsKey, std::optional<InputPoint>, BitsHash> cache;
 };
@@ -343,17 +344,16 @@ BoundaryInverse::~BoundaryInverse() = default;
 BoundaryInverse::BoundaryInverse(BoundaryInverse&&) noexcept = default;
 BoundaryInverse& BoundaryInverse::operator=(BoundaryInverse&&) noexcept = default;
 
-BoundaryInverse BoundaryInverse::through_shell(const BoundaryMap& map,
-                                               const meshing::shell::Shell& shell,
-                                               const SurfaceMesh& input) {
-  CF_VERIFY(map.boundary.num_cells() == shell.F.rows(),
-            "boundary inverse: " + std::to_string(map.boundary.num_cells()) +
-                " boundary triangles but " + std::to_string(shell.F.rows()) + " shell faces");
-  BoundaryInverse b;
-  b.m_impl->input = &input;
-  b.m_impl->locator = std::make_unique<TriangleLocator>(map.boundary);
-  b.m_impl->projection = std::make_unique<meshing::shell::ShellProjection>(shell, input);
-  return b;
+BoundaryInverse::BoundaryInverse(const BoundaryMap& map, ShellFibers fibers,
+                                 const SurfaceMesh& input)
+    : BoundaryInverse() {
+  if (map.boundary.num_cells() != fibers.num_prisms())
+    throw InputError("boundary inverse: " + std::to_string(map.boundary.num_cells()) +
+                     " boundary triangles but " + std::to_string(fibers.num_prisms()) +
+                     " shell prisms");
+  m_impl->input = &input;
+  m_impl->locator = std::make_unique<TriangleLocator>(map.boundary);
+  m_impl->projection = std::make_unique<FiberProjection>(std::move(fibers), input);
 }
 
 BoundaryInverse BoundaryInverse::identity(const SurfaceMesh& input) {
@@ -371,7 +371,7 @@ BoundaryInverse BoundaryInverse::identity(const SurfaceMesh& input) {
 std::optional<InputPoint> BoundaryInverse::from_boundary(int face, double u, double v) const {
   const Impl& m = *m_impl;
   if (m.projection) {
-    const auto p = m.projection->project(meshing::shell::PrismPoint{face, u, v, 0.0});
+    const auto p = m.projection->project(face, u, v);
     if (!p) return std::nullopt;
     return InputPoint{p->face, p->bary, p->position};
   }

@@ -9,13 +9,15 @@
 //      triangle; the candidate with the smallest residual wins, accepted if the residual is at most
 //      `tolerance_rel` × the longest bounding-box edge of the boundary nodes.
 //   2. pull back: (f, u, v) ↦ input face, barycentric coordinates (input vertex order) and point.
-//      Curved pipeline: boundary triangle f is shell face f rotated to its smallest vertex id, so
-//      this is the shell projection P_T(f, u, v) (meshing/shell/projection.hpp). Dense pipeline
+//      Curved pipeline: boundary triangle f is prism f of the coarse shell (its face rotated to
+//      the smallest vertex id), so this is P_T(f, u, v) at h = 0, evaluated on the shell's saved
+//      fibers (meshing/core/fiber_projection.hpp; they come from the shell through
+//      meshing/shell/fibers_of.hpp, or from boundary_map.json through meshing/io). Dense pipeline
 //      (φ = identity): boundary triangle f is input face f with the same vertex order, and the
-//      input point is x itself.
+//      input point is x itself. mapping/ needs neither meshing/shell nor meshing/curved.
 //
-// The object keeps references to the boundary triangles, the shell and the input: they must
-// outlive it. Queries are const and thread-safe (the cache of located points is locked).
+// The object keeps a reference to the input (it must outlive it) and owns copies of the rest.
+// Queries are const and thread-safe (the cache of located points is locked).
 #pragma once
 
 #include <Eigen/Core>
@@ -24,8 +26,8 @@
 
 #include "meshing/core/boundary_map.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/shell_fibers.hpp"
 #include "meshing/core/surface_mesh.hpp"
-#include "meshing/shell/shell.hpp"
 
 namespace curvefem::mapping {
 
@@ -63,9 +65,9 @@ class TriangleLocator {
 
 class BoundaryInverse {
  public:
-  /// Curved pipeline: `map.boundary` triangle f is `shell` face f rotated to its smallest vertex.
-  static BoundaryInverse through_shell(const BoundaryMap& map, const meshing::shell::Shell& shell,
-                                       const SurfaceMesh& input);
+  /// Curved pipeline: `map.boundary` triangle f is prism f of `fibers` (same vertex rotation).
+  /// Throws InputError when the fibers do not fit the map or the input (sizes, ids).
+  BoundaryInverse(const BoundaryMap& map, ShellFibers fibers, const SurfaceMesh& input);
   /// Dense pipeline (φ = identity): boundary triangle f is input face f.
   static BoundaryInverse identity(const SurfaceMesh& input);
 

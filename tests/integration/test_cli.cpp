@@ -266,9 +266,9 @@ TEST(Cli, ShellReportsBeveling) {
 }
 
 // Feature chains (the default): the box's edge vertices go inside coarse feature edges;
-// boundary_map.json carries the feature edges and the shell's reference copy, and `validate`
-// re-checks both (the map roundtrip through the snapped copy, and every feature edge along a
-// boundary edge).
+// boundary_map.json carries the feature edges and the reference copy's snapped vertices (with the
+// shell's fibers), and `validate` re-checks both (the map roundtrip through the snapped copy, and
+// every feature edge along a boundary edge).
 TEST(Cli, MeshAlongFeatureChainsWritesAndValidatesThem) {
   const auto dir = test::scratch_dir("cli_mesh_chains");
   const SurfaceMesh box = make_box({0, 0, 0}, {1, 2, 1}, 4);  // 192 faces
@@ -291,8 +291,8 @@ TEST(Cli, MeshAlongFeatureChainsWritesAndValidatesThem) {
       << out;
   // An edge vertex moved into its boundary triangle fails the check.
   auto map = read_json(dir / "m" / "boundary_map.json");
-  ASSERT_EQ(map["shell"]["reference"].size(), 36u);
-  const int x = map["shell"]["reference"][0][0].get<int>();
+  ASSERT_EQ(map["fibers"]["reference"].size(), 36u);
+  const int x = map["fibers"]["reference"][0][0].get<int>();
   map["vertex_uv"][x] = {0.2, 0.3};
   { std::ofstream(dir / "m" / "boundary_map.json") << map.dump(); }
   EXPECT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 3) << out;

@@ -12,6 +12,7 @@
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/features.hpp"
+#include "meshing/shell/fibers_of.hpp"
 
 using namespace curvefem;
 using namespace curvefem::mapping;
@@ -36,7 +37,7 @@ TEST(MappingCurved, LinearFieldPushedThroughInverseAndPulledBackMatchesOnIcosphe
     // ε = 5% so the shell is coarsened: input vertices land inside coarse faces.
     const cv::CurvedMesh cm = curved(input, k, false, 0.05);
     ASSERT_LT(cm.map.boundary.num_cells(), input.num_faces());
-    const BoundaryInverse inv = BoundaryInverse::through_shell(cm.map, cm.shell, input);
+    const BoundaryInverse inv(cm.map, meshing::shell::fibers_of(cm.shell, input), input);
     // Push: the field g painted on the input is what a boundary point x of the curved mesh sees,
     // g(φ⁻¹(x)). Pull back: the value at input vertex v is read at φ(v). Round trip: g(v).
     double worst = 0, worst_position = 0;
@@ -84,7 +85,7 @@ TEST(MappingCurved, BoxOnTheInputSelectsExactlyTheDofsOfOneCubeSide) {
   // ones whose preimage on the input has x ≥ 0.999 — an answer known without the map.
   const SurfaceMesh input = make_box({0, 0, 0}, {1, 1, 1}, 4);
   const cv::CurvedMesh cm = curved(input, 2, true);
-  const BoundaryInverse inv = BoundaryInverse::through_shell(cm.map, cm.shell, input);
+  const BoundaryInverse inv(cm.map, meshing::shell::fibers_of(cm.shell, input), input);
   const fem::FunctionSpace space = fem::build_function_space(cm.mesh, 2);
   Selection box{.kind = Selection::Kind::box};
   box.lo = {0.999, -1, -1};

@@ -11,9 +11,9 @@
 
 #include "meshing/core/error.hpp"
 #include "meshing/curved/curved_validate.hpp"
+#include "meshing/io/boundary_map_io.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
-#include "tools/curvefem/boundary_map_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
@@ -21,7 +21,7 @@ namespace curvefem::cli {
 
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
                                               double eps_rel);  // cmd_mesh.cpp
-std::pair<double, int> map_roundtrip(const BoundaryMap& map, const meshing::shell::Shell& shell,
+std::pair<double, int> map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
                                      const SurfaceMesh& input);  // cmd_mesh.cpp
 
 namespace {
@@ -71,7 +71,7 @@ void register_validate(CLI::App& app) {
     const io::VtuContent vtu = io::read_vtu(dir / "mesh.vtu");
     if (vtu.mesh.kind != CellKind::tetrahedron)
       throw InputError((dir / "mesh.vtu").string() + ": not a tetrahedral mesh");
-    const SavedBoundaryMap saved = read_boundary_map(dir / "boundary_map.json");
+    const io::SavedBoundaryMap saved = io::read_boundary_map(dir / "boundary_map.json");
     const BoundaryMap& map = saved.map;
     if (map.boundary.order != vtu.mesh.order)
       throw InputError((dir / "boundary_map.json").string() + ": order " +
@@ -80,13 +80,13 @@ void register_validate(CLI::App& app) {
     const auto v = meshing::curved::validate_curved_mesh(vtu.mesh, map, input, args->subdivision);
     double roundtrip = 0;
     int roundtrip_failures = 0;
-    if (saved.has_shell)
-      std::tie(roundtrip, roundtrip_failures) = map_roundtrip(map, saved.shell, input);
+    if (saved.fibers)
+      std::tie(roundtrip, roundtrip_failures) = map_roundtrip(map, *saved.fibers, input);
     const bool ok = v.valid(eps) && roundtrip_failures == 0 && roundtrip <= 1e-6;
     progress.reset();
     if (args->json) {
       auto j = curved_validation_json(v, eps);
-      j["map_roundtrip_checked"] = saved.has_shell;
+      j["map_roundtrip_checked"] = saved.fibers.has_value();
       j["map_roundtrip_max_error_rel"] = roundtrip;
       j["map_roundtrip_failures"] = roundtrip_failures;
       j["valid"] = ok;
@@ -127,11 +127,11 @@ void register_validate(CLI::App& app) {
           "  phi chart (diag.)    %d of %d input faces inside one boundary face have a "
           "non-positive straight (u, v) image\n",
           v.flipped_input_faces, v.input_faces_checked);
-      if (saved.has_shell)
+      if (saved.fibers)
         std::printf("  phi roundtrip        max %.3g, %d failures\n", roundtrip,
                     roundtrip_failures);
       else
-        std::printf("  phi roundtrip        not checked (no shell in boundary_map.json)\n");
+        std::printf("  phi roundtrip        not checked (no shell fibers in boundary_map.json)\n");
       std::printf("  result               %s (%.2f s)\n", ok ? "valid" : "INVALID", v.seconds);
     }
     std::fflush(stdout);

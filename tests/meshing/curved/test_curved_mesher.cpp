@@ -15,6 +15,7 @@
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/features.hpp"
+#include "meshing/shell/fibers_of.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -368,7 +369,7 @@ TEST(CurvedMesher, CraterPinchPointsMapBackThroughTheShell) {
   // The crater's rim vertices 0 and 5 are singular: zero-length pillars in the coarse shell too.
   // `curvefem mesh` reports valid only if the validator passes and every input vertex v comes
   // back from φ(v): located on the curved boundary (Gauss–Newton, so (u, v) only near the pinch
-  // corner) and pulled back through the shell projection (cmd_mesh.cpp, map_roundtrip). Near a
+  // corner) and pulled back along the shell's fibers (cmd_mesh.cpp, map_roundtrip). Near a
   // pinch corner the fiber is ~1e-16 long; the projection must still reach the input.
   const SurfaceMesh s = curvefem::test::crater_mesh();
   const double unit = curvefem::bbox_longest_edge(s.V);
@@ -384,8 +385,8 @@ TEST(CurvedMesher, CraterPinchPointsMapBackThroughTheShell) {
                     r.mesh.shell.input_vertex[std::size_t(v)] == 5);
       }
     EXPECT_EQ(pinches, 2) << order;
-    const auto inverse =
-        curvefem::mapping::BoundaryInverse::through_shell(r.mesh.map, r.mesh.shell, s);
+    const curvefem::mapping::BoundaryInverse inverse(
+        r.mesh.map, curvefem::meshing::shell::fibers_of(r.mesh.shell, s), s);
     int failures = 0;
     double worst = 0;
     for (int v = 0; v < 9; ++v) {

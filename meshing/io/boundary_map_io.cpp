@@ -1,13 +1,15 @@
-#include "tools/curvefem/boundary_map_json.hpp"
+#include "meshing/io/boundary_map_io.hpp"
 
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::io {
 
 namespace {
 nlohmann::ordered_json rows(const Eigen::MatrixXd& M) {
@@ -24,10 +26,10 @@ Eigen::MatrixXd read_rows(const nlohmann::json& j) {
 }  // namespace
 
 void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& map,
-                        const std::string& input, const meshing::shell::Shell* shell) {
+                        const std::string& input, const ShellFibers* fibers) {
   nlohmann::ordered_json j;
   j["format"] = "curvefem-boundary-map";
-  j["version"] = 1;
+  j["version"] = k_boundary_map_version;
   j["input"] = input;
   j["order"] = map.boundary.order;
   j["input_vertices"] = map.num_input_vertices();
@@ -68,21 +70,35 @@ void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& ma
     pts["face"] = std::move(face);
     pts["uv"] = std::move(puv);
   }
-  if (shell) {
-    auto& s = j["shell"];
-    s["base"] = rows(shell->base);
-    s["mid"] = rows(shell->mid);
-    s["top"] = rows(shell->top);
-    auto& F = s["faces"] = nlohmann::ordered_json::array();
-    for (int f = 0; f < shell->F.rows(); ++f)
-      F.push_back({shell->F(f, 0), shell->F(f, 1), shell->F(f, 2)});
-    s["singular"] = std::vector<int>(shell->singular.begin(), shell->singular.end());
-    s["input_vertex"] = shell->input_vertex;
-    s["face_parent"] = shell->face_parent;
-    if (!shell->reference.empty()) {  // [vertex, a, b, s]: vertex snapped to a + s (b - a)
-      auto& r = s["reference"] = nlohmann::ordered_json::array();
-      for (const auto& q : shell->reference) r.push_back({q.vertex, q.a, q.b, q.s});
+  if (fibers) {
+    CF_VERIFY(fibers->num_prisms() == map.boundary.num_cells(),
+              "write_boundary_map: the fibers have " + std::to_string(fibers->num_prisms()) +
+                  " prisms for " + std::to_string(map.boundary.num_cells()) +
+                  " boundary triangles");
+    nlohmann::ordered_json s;
+    s["base"] = rows(fibers->base);
+    s["mid"] = rows(fibers->mid);
+    s["top"] = rows(fibers->top);
+    auto F = nlohmann::ordered_json::array();
+    for (int f = 0; f < fibers->num_prisms(); ++f)
+      F.push_back({fibers->faces(f, 0), fibers->faces(f, 1), fibers->faces(f, 2)});
+    s["faces"] = std::move(F);
+    if (!fibers->reference_vertices.empty()) {  // [input vertex, x, y, z] in the reference copy
+      auto r = nlohmann::ordered_json::array();
+      for (std::size_t i = 0; i < fibers->reference_vertices.size(); ++i) {
+        const Eigen::Index k = Eigen::Index(i);
+        r.push_back({fibers->reference_vertices[i], fibers->reference_positions(k, 0),
+                     fibers->reference_positions(k, 1), fibers->reference_positions(k, 2)});
+      }
+      s["reference"] = std::move(r);
     }
+    auto candidates = nlohmann::ordered_json::array();
+    for (int f = 0; f < fibers->num_prisms(); ++f) {
+      const auto c = fibers->candidates(f);
+      candidates.push_back(std::vector<int>(c.begin(), c.end()));
+    }
+    s["candidates"] = std::move(candidates);
+    j["fibers"] = std::move(s);
   }
   write_text_file_atomic(path, j.dump() + "\n");
 }
@@ -102,6 +118,16 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
     saved.input = j.value("input", std::string());
     if (j.at("format") != "curvefem-boundary-map")
       throw InputError(path.string() + ": not a curvefem boundary map");
+    const int version = j.at("version").get<int>();
+    if (version == 1 && j.contains("shell"))
+      throw InputError(path.string() +
+                       ": boundary map version 1 stores the coarse shell, which φ⁻¹ no longer "
+                       "reads; re-run `curvefem mesh` to write version " +
+                       std::to_string(k_boundary_map_version) + " (with the shell's fibers)");
+    if (version < 1 || version > k_boundary_map_version)
+      throw InputError(path.string() + ": boundary map version " + std::to_string(version) +
+                       " is not supported (this build reads 1 without a shell, and " +
+                       std::to_string(k_boundary_map_version) + ")");
     map.boundary.kind = CellKind::triangle;
     map.boundary.order = j.at("order").get<int>();
     if (map.boundary.order < 1 || map.boundary.order > k_max_order)
@@ -158,30 +184,42 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
         for (int c = 0; c < 2; ++c) map.point_uv(r, c) = puv[i].at(c);
       }
     }
-    if (j.contains("shell")) {
-      const auto& s = j.at("shell");
-      meshing::shell::Shell& sh = saved.shell;
-      sh.base = read_rows(s.at("base"));
-      sh.mid = read_rows(s.at("mid"));
-      sh.top = read_rows(s.at("top"));
+    if (j.contains("fibers")) {
+      const auto& s = j.at("fibers");
+      ShellFibers fibers;
+      fibers.base = read_rows(s.at("base"));
+      fibers.mid = read_rows(s.at("mid"));
+      fibers.top = read_rows(s.at("top"));
       const auto& F = s.at("faces");
-      sh.F.resize(Eigen::Index(F.size()), 3);
+      fibers.faces.resize(Eigen::Index(F.size()), 3);
       for (std::size_t f = 0; f < F.size(); ++f)
-        for (int c = 0; c < 3; ++c) sh.F(Eigen::Index(f), c) = F[f].at(c).get<int>();
-      for (int x : s.at("singular").get<std::vector<int>>()) sh.singular.push_back(char(x));
-      sh.input_vertex = s.at("input_vertex").get<std::vector<int>>();
-      sh.face_parent = s.at("face_parent").get<std::vector<int>>();
-      if (s.contains("reference"))
-        for (const auto& q : s.at("reference"))
-          sh.reference.push_back(
-              {q.at(0).get<int>(), q.at(1).get<int>(), q.at(2).get<int>(), q.at(3).get<double>()});
-      const Eigen::Index nv = sh.mid.rows();
-      if (sh.base.rows() != nv || sh.top.rows() != nv || Eigen::Index(sh.singular.size()) != nv ||
-          Eigen::Index(sh.input_vertex.size()) != nv ||
-          Eigen::Index(sh.face_parent.size()) != sh.F.rows() ||
-          (sh.F.size() && (sh.F.minCoeff() < 0 || sh.F.maxCoeff() >= nv)))
-        throw InputError(path.string() + ": inconsistent shell block");
-      saved.has_shell = true;
+        for (int c = 0; c < 3; ++c) fibers.faces(Eigen::Index(f), c) = F[f].at(c).get<int>();
+      if (s.contains("reference")) {
+        const auto& r = s.at("reference");
+        fibers.reference_positions.resize(Eigen::Index(r.size()), 3);
+        for (std::size_t i = 0; i < r.size(); ++i) {
+          fibers.reference_vertices.push_back(r[i].at(0).get<int>());
+          for (int c = 0; c < 3; ++c)
+            fibers.reference_positions(Eigen::Index(i), c) = r[i].at(c + 1).get<double>();
+        }
+      }
+      const auto& candidates = s.at("candidates");
+      fibers.candidate_offsets.push_back(0);
+      for (const auto& c : candidates) {
+        for (const auto& t : c) fibers.candidate_faces.push_back(t.get<int>());
+        fibers.candidate_offsets.push_back(int(fibers.candidate_faces.size()));
+      }
+      if (fibers.num_prisms() == 0 && candidates.empty()) fibers.candidate_offsets.clear();
+      try {
+        validate_structure(fibers);
+      } catch (const InputError& e) {
+        throw InputError(path.string() + ": " + e.what());
+      }
+      if (fibers.num_prisms() != map.boundary.num_cells())
+        throw InputError(path.string() + ": " + std::to_string(fibers.num_prisms()) +
+                         " shell prisms for " + std::to_string(map.boundary.num_cells()) +
+                         " boundary triangles");
+      saved.fibers = std::move(fibers);
     }
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path.string() + ": malformed boundary map: " + e.what());
@@ -190,4 +228,4 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
   return saved;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::io

@@ -1,0 +1,69 @@
+#pragma once
+// P_T at h = 0 on saved shell fibers (shell_fibers.hpp): the input point where the fiber of a
+// point (f, u, v) of the middle surface crosses the input (thesis §4.4; DESIGN.md §2, "BoundaryMap
+// φ": φ⁻¹ without the shell code).
+//
+// (u, v) are barycentric coordinates in prism f's face rotated to its smallest vertex id (point =
+// (1 − u − v)·c0 + u·c1 + v·c2). The search follows meshing/shell/projection.cpp step by step: the
+// fiber polyline's 6 segments from the middle outwards, the first one crossing a candidate face
+// of the prism gives the answer (the crossing closest to its start; crossings within the
+// tolerance below only if no segment has a plain one); at a pinched corner the fiber
+// is the pinch point, whose input point is taken; a fiber shrunk toward a pinch point by rounding
+// is solved on the fiber scaled up about that point. The shell projection decides crossings with
+// exact predicates; this evaluator uses floating point, and where no crossing is found plainly it
+// accepts one up to 1e-12 of the segment beyond its ends and 1e-10 below 0 in barycentric
+// coordinates (those within 1e-13 first), so on an input edge or vertex it may report a
+// neighbouring face with the same point up to rounding. Agreement with ShellProjection::project is
+// tested in tests/mapping.
+//
+// Positions are input points (Σ bary_k · V[F(t, k)] of the input, not of the reference copy).
+// The object owns its data; queries are const and thread-safe.
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "meshing/core/shell_fibers.hpp"
+#include "meshing/core/surface_mesh.hpp"
+
+namespace curvefem {
+
+/// A point of the dense input surface on a fiber.
+struct FiberCrossing {
+  int face = -1;                  ///< input face
+  Eigen::Vector3d bary{0, 0, 0};  ///< barycentric coordinates in that face (input vertex order)
+  Eigen::Vector3d position{0, 0, 0};
+};
+
+class FiberProjection {
+ public:
+  /// Throws InputError when `fibers` is malformed or names input vertices or faces `input` does
+  /// not have.
+  FiberProjection(ShellFibers fibers, const SurfaceMesh& input);
+
+  /// P_T(f, u, v) at h = 0; nullopt when f is out of range or the fiber misses the input.
+  std::optional<FiberCrossing> project(int face, double u, double v) const;
+  /// The fiber of (face, u, v) from base to top: its 7 corners (index 3 on the middle triangle).
+  std::array<Eigen::Vector3d, 7> fiber(int face, double u, double v) const;
+
+  const ShellFibers& fibers() const { return m_fibers; }
+
+ private:
+  std::array<Eigen::Vector3d, 7> fiber_at(int f, const std::array<double, 3>& w) const;
+  std::array<Eigen::Vector3d, 3> triangle(int t) const;  // reference copy of input face t
+  FiberCrossing input_point(int t, const Eigen::Vector3d& bary) const;
+  bool contains(int t, const Eigen::Vector3d& x) const;
+  std::vector<int> star(int f, const Eigen::Vector3d& x) const;
+  std::optional<FiberCrossing> segment_hit(int f, const Eigen::Vector3d& a,
+                                           const Eigen::Vector3d& b, bool tolerant) const;
+  std::optional<FiberCrossing> at_pinch(int f, const Eigen::Vector3d& x) const;
+  std::optional<FiberCrossing> near_pinch(int f, int s, const std::array<double, 3>& w) const;
+
+  ShellFibers m_fibers;
+  Eigen::MatrixXd m_V;                      // input vertices
+  Eigen::MatrixXd m_reference;              // reference copy of the input vertices
+  Eigen::MatrixXi m_F;                      // input faces
+  std::vector<Eigen::Vector3d> m_lo, m_hi;  // box of each reference face
+};
+
+}  // namespace curvefem
