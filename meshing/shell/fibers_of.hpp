@@ -12,7 +12,9 @@ namespace curvefem::meshing::shell {
 
 /// `input`: the surface the shell was built around (the one ShellProjection(shell, input) projects
 /// onto). Candidate faces of prism f: the input faces whose box (reference copy and input) meets
-/// the box of f's 9 corners, widened by 1e-9 of its diagonal and coordinates.
+/// the box of f's 9 corners, widened by a margin of 1e-9 of its diagonal and coordinates, less
+/// those whose reference triangle a separating axis puts farther than the margin from the hull
+/// of the corners.
 ShellFibers fibers_of(const Shell& shell, const SurfaceMesh& input);
 
 }  // namespace curvefem::meshing::shell
