@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "tests/support/test_support.hpp"
-#include "tools/curvefem/case_file.hpp"
+#include "pipeline/case_file.hpp"
 #include "tools/curvefem/study_file.hpp"
 
 using namespace curvefem;

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "mapping/selection.hpp"
-#include "tools/curvefem/expression.hpp"
+#include "pipeline/expression.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 using Selection = mapping::Selection;
 
@@ -103,4 +103,4 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
 CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& path,
                         const std::string& output_override = {});
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

@@ -1,14 +1,15 @@
-// The pipeline of `curvefem run` as a function, shared by `curvefem run` (one case) and
-// `curvefem study` (many cases, in-process). cmd_run.cpp implements it.
+// The pipeline of `curvefem run` (DESIGN.md §1) as one function composed of the stages of
+// stages.hpp; shared by `curvefem run` (one case), `curvefem study` (many cases, in-process) and
+// the Python module.
 #pragma once
 
 #include <nlohmann/json.hpp>
 
 #include "meshing/core/progress.hpp"
 #include "meshing/core/timer.hpp"
-#include "tools/curvefem/case_file.hpp"
+#include "pipeline/case_file.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 struct RunSettings {
   int threads = 0;        ///< --threads (0 = all cores); also the curved mesher's workers
@@ -23,7 +24,8 @@ struct RunOutcome {
 
 /// Runs `spec` and writes its results to spec.output_dir (atomically, report.json last). Throws
 /// InputError / MeshingError / SolverError / IoError like the command; on a throw nothing new is
-/// left in spec.output_dir. Prints nothing on stdout; progress goes to `progress`.
-RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, TerminalProgress& progress);
+/// left in spec.output_dir. Prints nothing on stdout; progress goes to `progress` (may be empty).
+RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings,
+                    const ProgressFn& progress = {});
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

@@ -1,4 +1,4 @@
-#include "tools/curvefem/case_file.hpp"
+#include "pipeline/case_file.hpp"
 
 #include <fstream>
 #include <map>
@@ -7,7 +7,7 @@
 
 #include "meshing/core/error.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 namespace {
 
 using json = nlohmann::json;
@@ -678,4 +678,4 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   return c;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline
