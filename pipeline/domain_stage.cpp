@@ -243,9 +243,10 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
                                                : " (curvefem check " + spec.surface.string() +
                                                      " gives the full diagnosis)"),
                      {.file = spec.case_file.string()});
-  for (const auto& bc : spec.boundary_conditions)
-    if (!mapping::uses_outer_box(bc.select))  // may select the box only: checked on the mesh
-      check_selection_on_input(bc.select, input, spec.case_file.string());
+  for (const LoadCase& load : spec.loads())
+    for (const auto& bc : load.boundary_conditions)
+      if (!mapping::uses_outer_box(bc.select))  // may select the box only: checked on the mesh
+        check_selection_on_input(bc.select, input, spec.case_file.string());
   return input;
 }
 

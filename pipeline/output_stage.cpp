@@ -29,7 +29,7 @@ Field field_of(const std::string& name, const Eigen::MatrixXd& m) {
 
 }  // namespace
 
-ErrorResult compute_errors(const CaseSpec& spec, const Discretization& disc,
+ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
                            const Solution& solution, const StageContext& ctx) {
   ErrorResult out;
   out.report = json::object();
@@ -94,7 +94,7 @@ ErrorResult compute_errors(const CaseSpec& spec, const Discretization& disc,
   return out;
 }
 
-InputSolution transfer_to_input(const CaseSpec& spec, const Domain& domain,
+InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
                                 const Discretization& disc, const Solution& solution,
                                 const ErrorResult& errors, const StageContext& ctx) {
   CF_VERIFY(domain.on_input(), "transfer_to_input: the domain has no dense input");
@@ -133,12 +133,95 @@ InputSolution transfer_to_input(const CaseSpec& spec, const Domain& domain,
   return out;
 }
 
+LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
+                      const Discretization& disc, const StageContext& ctx) {
+  LoadResult r;
+  r.load = load;
+  const BoundaryData data = bind_boundary(spec, r.load.boundary_conditions, domain, disc);
+  r.solution = solve(spec, disc, data, r.load.rhs, ctx);
+  r.errors = compute_errors(r.load, disc, r.solution, ctx);
+  if (domain.on_input())
+    r.on_input = transfer_to_input(r.load, domain, disc, r.solution, r.errors, ctx);
+  return r;
+}
+
+namespace {
+
+/// The report keys of one load case: errors, surface errors, physics details, solver.
+json load_report(const LoadResult& l) {
+  json report = l.errors.report.is_object() ? l.errors.report : json::object();
+  if (l.on_input)
+    for (const auto& [k, v] : l.on_input->report.items()) report[k] = v;
+  report["physics_details"] = l.solution.physics;
+  const fem::LinearSolveInfo& s = l.solution.solve;
+  report["solver"] = {{"method", s.method},
+                      {"iterations", s.iterations},
+                      {"relative_residual", s.relative_residual},
+                      {"setup_s", s.setup_s},
+                      {"solve_s", s.solve_s},
+                      {"near_nullspace", s.near_nullspace},
+                      {"null_space_dim", s.null_space_dim}};
+  return report;
+}
+
+bool named(const std::vector<LoadResult>& loads) {
+  return !(loads.size() == 1 && loads[0].load.name.empty());
+}
+
+/// A field name with the load case's suffix ("u" → "u_lift"; unnamed: unchanged).
+std::string suffixed(const std::string& field, const LoadCase& load) {
+  return load.name.empty() ? field : field + "_" + load.name;
+}
+
+/// volume.vtu's point fields of one load case, on `out_space` (unsuffixed names).
+std::vector<Field> volume_fields(const CaseSpec& spec, const Discretization& disc,
+                                 const fem::FunctionSpace& out_space, const LoadResult& l) {
+  const int c = l.solution.components;
+  const Eigen::MatrixXd values = fem::interpolate_field(disc.space, l.solution.u, c, out_space);
+  std::vector<Field> fields;
+  Field uf{c == 1 ? "u" : "displacement", c, {}};
+  uf.values.resize(std::size_t(values.size()));
+  for (int r = 0; r < values.rows(); ++r)
+    for (int i = 0; i < c; ++i) uf.values[static_cast<std::size_t>(r) * c + i] = values(r, i);
+  fields.push_back(uf);
+  if (l.errors.exact_value) {
+    Field ef{"exact", c, {}}, err{"error", c, {}};
+    for (int r = 0; r < out_space.num_dofs; ++r) {
+      double ex[3];
+      l.errors.exact_value(out_space.dof_points.row(r).transpose(), ex);
+      for (int i = 0; i < c; ++i) {
+        ef.values.push_back(ex[i]);
+        err.values.push_back(values(r, i) - ex[i]);
+      }
+    }
+    fields.push_back(ef);
+    fields.push_back(err);
+  }
+  if (spec.physics == "linear_elasticity") {
+    const Eigen::VectorXd vm =
+        fem::von_mises_at_dofs(disc.mesh, out_space, {spec.E, spec.nu},
+                               values.transpose().reshaped(), l.solution.cell_material);
+    fields.push_back({"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
+  }
+  return fields;
+}
+
+}  // namespace
+
 json run_report(const CaseSpec& spec, const Domain& domain, const Discretization& disc,
-                const Solution& solution, const ErrorResult& errors,
-                const InputSolution* on_input) {
-  json report = errors.report.is_object() ? errors.report : json::object();
-  if (on_input)
-    for (const auto& [k, v] : on_input->report.items()) report[k] = v;
+                const std::vector<LoadResult>& loads) {
+  CF_VERIFY(!loads.empty(), "run_report: no load case");
+  json report = json::object();
+  if (!named(loads)) {
+    report = load_report(loads[0]);
+  } else {
+    report["load_cases"] = json::array();
+    for (const LoadResult& l : loads) {
+      json r = load_report(l);
+      r["name"] = l.load.name;
+      report["load_cases"].push_back(r);
+    }
+  }
   report["command"] = "run";
   report["case"] = spec.case_file.string();
   report["method"] = spec.method;
@@ -155,92 +238,93 @@ json run_report(const CaseSpec& spec, const Domain& domain, const Discretization
   report["degree"] = spec.degree;
   report["solve_geometry"] = disc.solve_geometry;
   report["physics"] = spec.physics;
-  report["dofs"] = static_cast<long long>(disc.space.num_dofs) * solution.components;
+  report["dofs"] = static_cast<long long>(disc.space.num_dofs) * spec.components();
   report["nodes"] = disc.space.num_dofs;
-  report["physics_details"] = solution.physics;
-  const fem::LinearSolveInfo& s = solution.solve;
-  report["solver"] = {{"method", s.method},
-                      {"iterations", s.iterations},
-                      {"relative_residual", s.relative_residual},
-                      {"setup_s", s.setup_s},
-                      {"solve_s", s.solve_s},
-                      {"near_nullspace", s.near_nullspace},
-                      {"null_space_dim", s.null_space_dim}};
   return report;
 }
 
 void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretization& disc,
-                   const Solution& solution, const ErrorResult& errors,
-                   const InputSolution* on_input, const OutputOptions& options, json& report,
+                   const std::vector<LoadResult>& loads, const OutputOptions& options, json& report,
                    const StageContext& ctx) {
   const LagrangeMesh& mesh = disc.mesh;
-  const fem::FunctionSpace& space = disc.space;
-  const int c = solution.components;
+  const int c = spec.components();
+  const bool several = named(loads);
   // Nothing is written before this point; a failure while writing removes what was made.
   const bool existed = std::filesystem::exists(spec.output_dir);
   std::optional<StagedOutputDir> staged;
   try {
     staged.emplace(spec.output_dir);
     StagedOutputDir& out = *staged;
+    std::vector<io::PvdEntry> parts{{"volume.vtu", 0, 0.0, "volume"}};
     {
       std::optional<ScopedTimer> t;
       if (ctx.timings) t.emplace(*ctx.timings, "output");
       ctx.update("write output", 0.0);
       const int m = std::max(spec.degree, mesh.order);
       const fem::FunctionSpace out_space =
-          m == spec.degree ? space : fem::build_function_space(mesh, m);
-      const Eigen::MatrixXd values = fem::interpolate_field(space, solution.u, c, out_space);
-      MeshFields fields;
-      Field uf{c == 1 ? "u" : "displacement", c, {}};
-      uf.values.resize(std::size_t(values.size()));
-      for (int r = 0; r < values.rows(); ++r)
-        for (int i = 0; i < c; ++i) uf.values[static_cast<std::size_t>(r) * c + i] = values(r, i);
-      fields.point_data.push_back(uf);
-      if (errors.exact_value) {
-        Field ef{"exact", c, {}}, err{"error", c, {}};
-        for (int r = 0; r < out_space.num_dofs; ++r) {
-          double ex[3];
-          errors.exact_value(out_space.dof_points.row(r).transpose(), ex);
-          for (int i = 0; i < c; ++i) {
-            ef.values.push_back(ex[i]);
-            err.values.push_back(values(r, i) - ex[i]);
+          m == spec.degree ? disc.space : fem::build_function_space(mesh, m);
+      const LagrangeMesh volume = fem::lagrange_mesh_of_space(mesh, out_space);
+      LagrangeMesh surface;
+      if (domain.on_input()) {
+        surface.kind = CellKind::triangle;
+        surface.order = 1;
+        surface.nodes = domain.input.V;
+        surface.cells = domain.input.F;
+        if (domain.input.has_tags()) surface.cell_tags = domain.input.tags;
+      }
+      std::vector<Field> quality;
+      for (const Field& f : domain.cell_quality)
+        if (int(f.values.size()) == mesh.num_cells()) quality.push_back(f);
+      MeshFields all, all_surface;
+      all.cell_data = quality;
+      if (several) parts.clear();
+      for (std::size_t i = 0; i < loads.size(); ++i) {
+        const LoadResult& l = loads[i];
+        MeshFields own;
+        own.point_data = volume_fields(spec, disc, out_space, l);
+        own.cell_data = quality;
+        for (Field f : own.point_data) {
+          f.name = suffixed(f.name, l.load);
+          all.point_data.push_back(std::move(f));
+        }
+        if (l.on_input)
+          for (Field f : l.on_input->fields.point_data) {
+            if (f.name == "phi_offset" && i > 0) continue;  // the same for every load case
+            if (f.name != "phi_offset") f.name = suffixed(f.name, l.load);
+            all_surface.point_data.push_back(std::move(f));
+          }
+        if (l.on_input)
+          for (Field f : l.on_input->fields.cell_data) {
+            f.name = suffixed(f.name, l.load);
+            all_surface.cell_data.push_back(std::move(f));
+          }
+        if (several) {
+          // One time step of result.pvd per load case, its fields without the suffix.
+          const std::string vname = "volume_" + l.load.name + ".vtu";
+          io::write_vtu(out.path(vname), volume, own);
+          parts.push_back({vname, 0, double(i), l.load.name});
+          if (l.on_input) {
+            const std::string sname = "surface_" + l.load.name + ".vtu";
+            io::write_vtu(out.path(sname), surface, l.on_input->fields);
+            parts.push_back({sname, 1, double(i), l.load.name});
           }
         }
-        fields.point_data.push_back(ef);
-        fields.point_data.push_back(err);
       }
-      if (spec.physics == "linear_elasticity") {
-        const Eigen::VectorXd vm =
-            fem::von_mises_at_dofs(mesh, out_space, {spec.E, spec.nu},
-                                   values.transpose().reshaped(), solution.cell_material);
-        fields.point_data.push_back(
-            {"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
+      io::write_vtu(out.path("volume.vtu"), volume, all);
+      if (domain.on_input()) {
+        io::write_vtu(out.path("surface.vtu"), surface, all_surface);
+        if (!several) parts.push_back({"surface.vtu", 1, 0.0, "surface"});
       }
-      for (const Field& f : domain.cell_quality)
-        if (int(f.values.size()) == mesh.num_cells()) fields.cell_data.push_back(f);
-      io::write_vtu(out.path("volume.vtu"), fem::lagrange_mesh_of_space(mesh, out_space), fields);
       write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
-    }
-
-    std::vector<io::PvdEntry> parts{{"volume.vtu", 0, 0.0, "volume"}};
-    if (domain.on_input() && on_input) {
-      LagrangeMesh surface;
-      surface.kind = CellKind::triangle;
-      surface.order = 1;
-      surface.nodes = domain.input.V;
-      surface.cells = domain.input.F;
-      if (domain.input.has_tags()) surface.cell_tags = domain.input.tags;
-      io::write_vtu(out.path("surface.vtu"), surface, on_input->fields);
-      parts.push_back({"surface.vtu", 1, 0.0, "surface"});
     }
     io::write_pvd(out.path("result.pvd"), parts);
     if (options.paraview) {
       ParaviewScriptOptions script;
       script.dir = std::filesystem::absolute(spec.output_dir);
-      script.field = c == 1 ? "u" : "displacement";
+      script.field = suffixed(c == 1 ? "u" : "displacement", loads[0].load);
       script.components = c;
       script.surface = domain.on_input();
-      script.exact = !spec.exact.empty();
+      script.exact = !loads[0].load.exact.empty();
       write_text_file_atomic(out.path("open_in_paraview.py"), paraview_state_script(script));
     }
     if (ctx.timings) {

@@ -1,5 +1,6 @@
 #include "pipeline/run_case.hpp"
 
+#include "pipeline/report_json.hpp"
 #include "pipeline/stages.hpp"
 
 namespace curvefem::pipeline {
@@ -9,21 +10,24 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   RunOutcome outcome;
   const StageContext ctx{
       .threads = settings.threads, .progress = progress, .timings = &outcome.timings};
+  auto r = std::make_shared<RunResults>();
   SurfaceMesh input;
   if (spec.dense_surface()) input = load_surface(spec, ctx);
-  const Domain domain = mesh_domain(spec, std::move(input), ctx);
-  const Discretization disc = discretize(spec, domain, ctx);
-  const BoundaryData data = bind_boundary(spec, spec.boundary_conditions, domain, disc);
-  const Solution solution = solve(spec, disc, data, spec.rhs, ctx);
-  const ErrorResult errors = compute_errors(spec, disc, solution, ctx);
-  std::optional<InputSolution> on_input;
-  if (domain.on_input()) on_input = transfer_to_input(spec, domain, disc, solution, errors, ctx);
-  outcome.report =
-      run_report(spec, domain, disc, solution, errors, on_input ? &*on_input : nullptr);
+  r->domain = mesh_domain(spec, std::move(input), ctx);
+  r->disc = discretize(spec, r->domain, ctx);
+  for (const LoadCase& load : spec.loads())
+    r->loads.push_back(solve_load(spec, load, r->domain, r->disc, ctx));
+  outcome.report = run_report(spec, r->domain, r->disc, r->loads);
   outcome.report["threads"] = settings.threads;
-  write_outputs(spec, domain, disc, solution, errors, on_input ? &*on_input : nullptr,
-                {.paraview = settings.paraview, .total = &total}, outcome.report, ctx);
-  outcome.exit_code = domain.valid ? 0 : 3;
+  if (settings.write) {
+    write_outputs(spec, r->domain, r->disc, r->loads,
+                  {.paraview = settings.paraview, .total = &total}, outcome.report, ctx);
+  } else {
+    outcome.timings.add("total", total.seconds());
+    outcome.report["time_s"] = timings_json(outcome.timings);
+  }
+  outcome.exit_code = r->domain.valid ? 0 : 3;
+  outcome.results = std::move(r);
   return outcome;
 }
 

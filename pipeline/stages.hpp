@@ -154,8 +154,8 @@ struct ErrorResult {
   nlohmann::json report;  ///< l2_error, h1_semi_error, ... (empty without an exact solution)
 };
 
-/// Errors of u_h against spec.exact (an empty result without one).
-ErrorResult compute_errors(const CaseSpec& spec, const Discretization& disc,
+/// Errors of u_h against the load case's exact solution (an empty result without one).
+ErrorResult compute_errors(const LoadCase& load, const Discretization& disc,
                            const Solution& solution, const StageContext& ctx = {});
 
 // ---- transfer_to_input ----------------------------------------------------------------------
@@ -167,10 +167,23 @@ struct InputSolution {
   nlohmann::json report;   ///< surface_* keys of report.json
 };
 
-/// u_h at φ(v) for every input vertex (curved | dense domains only).
-InputSolution transfer_to_input(const CaseSpec& spec, const Domain& domain,
+/// u_h at φ(v) for every input vertex (curved | dense domains only); surface.vtu's fields, with
+/// the coverage of the load case's selections.
+InputSolution transfer_to_input(const LoadCase& load, const Domain& domain,
                                 const Discretization& disc, const Solution& solution,
                                 const ErrorResult& errors, const StageContext& ctx = {});
+
+/// Everything one load case gave.
+struct LoadResult {
+  LoadCase load;
+  Solution solution;
+  ErrorResult errors;
+  std::optional<InputSolution> on_input;  ///< curved | dense
+};
+
+/// bind_boundary, solve, compute_errors and transfer_to_input for one load case.
+LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
+                      const Discretization& disc, const StageContext& ctx = {});
 
 // ---- write_outputs --------------------------------------------------------------------------
 
@@ -179,18 +192,18 @@ struct OutputOptions {
   const Stopwatch* total = nullptr;  ///< when set, time_s gets "total" from it
 };
 
-/// The full report.json of a run (without the output stage's time).
+/// The full report.json of a run (without time_s). One unnamed load case: its errors, solver and
+/// physics at the top level, as always; named load cases: under "load_cases", one entry each.
 nlohmann::json run_report(const CaseSpec& spec, const Domain& domain, const Discretization& disc,
-                          const Solution& solution, const ErrorResult& errors,
-                          const InputSolution* on_input);
+                          const std::vector<LoadResult>& loads);
 
-/// Writes volume.vtu, surface.vtu (curved | dense), result.pvd, resolved_case.json,
-/// open_in_paraview.py (options.paraview) and `report` as report.json (last), atomically into
-/// spec.output_dir: on a throw nothing new is left there. `report` gets time_s (ctx.timings, with
-/// "total" from options.total) and peak_rss_mb.
+/// Writes volume.vtu and surface.vtu (every load case's fields; a named case's fields end in
+/// "_<name>"), for named load cases also volume_<name>.vtu / surface_<name>.vtu as the time steps
+/// of result.pvd, resolved_case.json, open_in_paraview.py (options.paraview) and `report` as
+/// report.json (last), atomically into spec.output_dir: on a throw nothing new is left there.
+/// `report` gets time_s (ctx.timings, with "total" from options.total) and peak_rss_mb.
 void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretization& disc,
-                   const Solution& solution, const ErrorResult& errors,
-                   const InputSolution* on_input, const OutputOptions& options,
+                   const std::vector<LoadResult>& loads, const OutputOptions& options,
                    nlohmann::json& report, const StageContext& ctx = {});
 
 }  // namespace curvefem::pipeline

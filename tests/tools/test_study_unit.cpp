@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "tools/curvefem/convergence_fit.hpp"
 #include "pipeline/paraview_script.hpp"
+#include "tools/curvefem/convergence_fit.hpp"
 
 using namespace curvefem::cli;
 using namespace curvefem::pipeline;

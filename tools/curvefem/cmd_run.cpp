@@ -33,13 +33,25 @@ int run_command(const RunOptions& o) {
     std::printf("curvefem run: %s (%s), degree %d on %d tets of order %d: %lld unknowns\n",
                 spec.physics.c_str(), spec.method.c_str(), spec.degree, report["tets"].get<int>(),
                 report["order"].get<int>(), report["dofs"].get<long long>());
-    if (report.contains("l2_error"))
-      std::printf("  L2 error %.3e   H1-semi error %.3e\n", report["l2_error"].get<double>(),
-                  report["h1_semi_error"].get<double>());
-    if (report.contains("surface_l2_error"))
-      std::printf("  on the input surface (%d vertices): L2 error %.3e   max error %.3e\n",
-                  report["surface_vertices"].get<int>(), report["surface_l2_error"].get<double>(),
-                  report["surface_max_error"].get<double>());
+    auto errors = [](const json& r, const char* indent) {
+      if (r.contains("l2_error"))
+        std::printf("%sL2 error %.3e   H1-semi error %.3e\n", indent, r["l2_error"].get<double>(),
+                    r["h1_semi_error"].get<double>());
+      if (r.contains("surface_l2_error"))
+        std::printf("%son the input surface (%d vertices): L2 error %.3e   max error %.3e\n",
+                    indent, r["surface_vertices"].get<int>(), r["surface_l2_error"].get<double>(),
+                    r["surface_max_error"].get<double>());
+    };
+    if (report.contains("load_cases")) {
+      for (const json& l : report["load_cases"]) {
+        std::printf(
+            "  load case %s: solver %s, %d iterations\n", l["name"].get<std::string>().c_str(),
+            l["solver"]["method"].get<std::string>().c_str(), l["solver"]["iterations"].get<int>());
+        errors(l, "    ");
+      }
+    } else {
+      errors(report, "  ");
+    }
     for (const auto& [stage, sec] : outcome.timings.stages())
       std::printf("  %-16s %8.3f s\n", stage.c_str(), sec);
     std::printf("  results in %s\n", spec.output_dir.c_str());
