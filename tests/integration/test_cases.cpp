@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "pipeline/case_file.hpp"
 #include "tests/support/test_support.hpp"
-#include "tools/curvefem/case_file.hpp"
 #include "tools/curvefem/study_file.hpp"
 
 using namespace curvefem;

@@ -438,3 +438,100 @@ TEST(Run, TractionOnlyElasticityIsSolvedUpToARigidMotion) {
   EXPECT_EQ(j["solver"]["near_nullspace"], "rigid-body modes");
   EXPECT_EQ(j["solver"]["null_space_dim"], 6);
 }
+
+// load_cases: several sets of loads on one mesh and one space. Linear elasticity is linear in the
+// load: a case with twice the traction gives twice the displacement (to the solver's precision),
+// and a case with both loads gives their sum; each case's fields are in volume.vtu (suffixed) and
+// in its own time step of result.pvd.
+TEST(Run, LoadCasesShareTheMeshAndAddUpForLinearElasticity) {
+  const auto dir = test::scratch_dir("run_load_cases");
+  const auto file = write_case(dir, R"({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "physics": {"type": "linear_elasticity", "E": 1000, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "solver": {"type": "direct"},
+    "load_cases": [
+      {"name": "down", "boundary_conditions": [
+         {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+         {"type": "neumann", "select": {"tag": 2}, "value": [0, 0, -1]}]},
+      {"name": "down2", "boundary_conditions": [
+         {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+         {"type": "neumann", "select": {"tag": 2}, "value": [0, 0, -2]}]},
+      {"name": "side", "rhs": [0, "0.5", 0], "boundary_conditions": [
+         {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]}]},
+      {"name": "both", "rhs": [0, "0.5", 0], "boundary_conditions": [
+         {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+         {"type": "neumann", "select": {"tag": 2}, "value": [0, 0, -1]}]}
+    ]})");
+  const auto out = dir / "out";
+  std::string log;
+  ASSERT_EQ(run_case(file, out, &log), 0) << log;
+  const auto r = report(out);
+  ASSERT_EQ(r["load_cases"].size(), 4u);
+  EXPECT_FALSE(r.contains("l2_error"));
+  for (const auto& l : r["load_cases"]) {
+    EXPECT_LT(l["solver"]["relative_residual"].get<double>(), 1e-10) << l["name"];
+    EXPECT_LT(l["physics_details"]["force_balance"]["imbalance"].get<double>(), 1e-8);
+  }
+  EXPECT_EQ(r["load_cases"][0]["name"], "down");
+  const auto vtu = io::read_vtu(out / "volume.vtu");
+  auto field = [&](const std::string& name) -> const std::vector<double>& {
+    for (const auto& f : vtu.fields.point_data)
+      if (f.name == name) return f.values;
+    ADD_FAILURE() << "no field " << name;
+    static const std::vector<double> none;
+    return none;
+  };
+  const auto &down = field("displacement_down"), &down2 = field("displacement_down2"),
+             &side = field("displacement_side"), &both = field("displacement_both");
+  ASSERT_EQ(down.size(), down2.size());
+  ASSERT_EQ(down.size(), both.size());
+  double scale = 0, twice = 0, sum = 0;
+  for (std::size_t i = 0; i < down.size(); ++i) {
+    scale = std::max(scale, std::abs(down[i]));
+    twice = std::max(twice, std::abs(down2[i] - 2 * down[i]));
+    sum = std::max(sum, std::abs(both[i] - down[i] - side[i]));
+  }
+  EXPECT_GT(scale, 1e-4);
+  EXPECT_LT(twice, 1e-9 * scale);
+  EXPECT_LT(sum, 1e-9 * scale);
+  // One time step per load case, its fields without the suffix.
+  for (const char* name : {"down", "down2", "side", "both"}) {
+    const auto own = io::read_vtu(out / (std::string("volume_") + name + ".vtu"));
+    EXPECT_EQ(own.fields.point_data[0].name, "displacement");
+  }
+  std::ifstream pvd(out / "result.pvd");
+  const std::string text((std::istreambuf_iterator<char>(pvd)), {});
+  EXPECT_NE(text.find("volume_side.vtu"), std::string::npos);
+  EXPECT_EQ(text.find("\"volume.vtu\""), std::string::npos);
+  const auto resolved = nlohmann::json::parse(std::ifstream(out / "resolved_case.json"));
+  EXPECT_EQ(resolved["load_cases"][2]["rhs"][1], "0.5");
+}
+
+TEST(Run, LoadCasesAreCheckedLikeTheTopLevelKeys) {
+  const auto dir = test::scratch_dir("run_load_cases_bad");
+  const std::string head = R"({"geometry": {"builtin": {"shape": "cube", "divisions": 2}},
+    "physics": {"type": "poisson"}, )";
+  struct Bad {
+    std::string body, expected;
+  };
+  const Bad cases[] = {
+      {R"("load_cases": [])", "/load_cases: expected a non-empty array"},
+      {R"("load_cases": [{"boundary_conditions": []}])", "/load_cases/0/name: missing"},
+      {R"("load_cases": [{"name": "a b", "boundary_conditions": []}])",
+       "/load_cases/0/name: 'a b': use letters"},
+      {R"("load_cases": [{"name": "a"}, {"name": "a"}])", "/load_cases/1/name: 'a' names two"},
+      {R"("rhs": "1", "load_cases": [{"name": "a"}])", "/rhs: give it in each of load_cases"},
+      {R"("load_cases": [{"name": "a", "boundary_conditions": [{"type": "dirichlet",
+          "select": {"tag": 9}, "value": "0"}]}])",
+       "/load_cases/0/boundary_conditions/0/select: selects no boundary face"},
+      {R"("load_cases": [{"name": "a", "rhs": "1", "exactt": "x"}])",
+       "/load_cases/0/exactt: unknown key"}};
+  for (const Bad& b : cases) {
+    const auto file = write_case(dir, head + b.body + "}");
+    std::string log;
+    EXPECT_EQ(run_case(file, dir / "out", &log), 2) << b.body << "\n" << log;
+    EXPECT_NE(log.find(b.expected), std::string::npos) << b.body << "\n" << log;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out")) << b.body;
+  }
+}

@@ -3,10 +3,11 @@
 
 #include <cmath>
 
+#include "pipeline/paraview_script.hpp"
 #include "tools/curvefem/convergence_fit.hpp"
-#include "tools/curvefem/paraview_script.hpp"
 
 using namespace curvefem::cli;
+using namespace curvefem::pipeline;
 
 TEST(ConvergenceFit, RecoversAnExactPowerLaw) {
   // error = 5 · n^(−4/3): rate 4 in h ~ n^(−1/3).

@@ -21,11 +21,14 @@
 #include "meshing/io/pvd.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
-#include "tools/curvefem/report_json.hpp"
 
 namespace curvefem::cli {
+
+using pipeline::check_report_json;
+using pipeline::timings_json;
 namespace {
 
 struct DemoOptions {

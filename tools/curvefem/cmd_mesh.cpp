@@ -24,112 +24,15 @@
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/fibers_of.hpp"
+#include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
 namespace curvefem::cli {
 
-nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
-  return {
-      {"sweeps", s.sweeps},
-      {"movable_vertices", s.movable_vertices},
-      {"visits", s.visits},
-      {"moves", s.moves},
-      {"rejected_by_certificate", s.rejected_by_certificate},
-      {"nodes",
-       {{"sweeps", s.node_sweeps},
-        {"movable", s.movable_nodes},
-        {"visits", s.node_visits},
-        {"moves", s.node_moves}}},
-      {"energy_before", {{"mean", s.mean_energy_before}, {"max", s.max_energy_before}}},
-      {"energy_after", {{"mean", s.mean_energy_after}, {"max", s.max_energy_after}}},
-      {"energy", "conformal AMIPS against the regular tet, mean over the order-k lattice"},
-      {"seconds", s.seconds},
-      {"interior_flips",
-       {{"flips", s.flips.count},
-        {"tets", {{"before", s.flips.tets_before}, {"after", s.flips.tets_after}}},
-        {"energy_before",
-         {{"mean", s.flips.mean_energy_before}, {"max", s.flips.max_energy_before}}},
-        {"energy_after", {{"mean", s.flips.mean_energy_after}, {"max", s.flips.max_energy_after}}},
-        {"seconds", s.flips.seconds}}}};
-}
-
-// Per tet, from the independent validation (mesh.vtu, run's volume.vtu; for ParaView).
-std::vector<Field> curved_validation_cell_fields(const meshing::curved::CurvedValidation& v) {
-  return {
-      {"certified", 1, std::vector<double>(v.cell_certificate.begin(), v.cell_certificate.end())},
-      {"scaled_jacobian", 1, v.cell_scaled_jacobian},
-      {"curved_mips", 1, v.cell_mips},
-      {"jacobian_ratio", 1, v.cell_jacobian_ratio},
-      {"distortion_d2", 1, v.cell_d2},
-      {"distortion_d3", 1, v.cell_d3}};
-}
-
-nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
-                                              double eps_rel) {
-  nlohmann::ordered_json by_tag = nlohmann::ordered_json::object();
-  for (const auto& [tag, q] : v.quality_by_tag)
-    by_tag[tag == 1   ? "slab"
-           : tag == 2 ? "interior"
-           : tag == 3 ? "outer_slab"
-           : tag == 4 ? "exterior"
-                      : std::to_string(tag)] = {
-        {"tets", q.tets},
-        {"min_scaled_jacobian", q.min_scaled_jacobian},
-        {"tets_scaled_jacobian_below_0.01", q.tets_sj_below_1e2},
-        {"tets_scaled_jacobian_below_0.001", q.tets_sj_below_1e3},
-        {"mean_mips", q.mean_mips},
-        {"max_mips", q.max_mips},
-        {"min_jacobian_ratio", q.min_jacobian_ratio},
-        {"max_d2", q.max_d2},
-        {"mean_d2", q.mean_d2},
-        {"max_d3", q.max_d3},
-        {"mean_d3", q.mean_d3}};
-  return {{"valid", v.valid(eps_rel)},
-          {"tets", v.tets},
-          {"min_jacobian_certified", v.certified()},
-          {"non_positive_tets", v.non_positive_tets},
-          {"undecided_tets", v.undecided_tets},
-          {"first_bad_tet", v.first_bad_tet},
-          {"min_scaled_jacobian", v.min_scaled_jacobian},
-          {"tets_scaled_jacobian_below_0.01", v.tets_sj_below_1e2},
-          {"tets_scaled_jacobian_below_0.001", v.tets_sj_below_1e3},
-          {"mean_mips", v.mean_mips},
-          {"max_mips", v.max_mips},
-          {"distortion",
-           {{"definition",
-             "per tet, sampled: jacobian_ratio = min/max det J; d2 = |D2F| |DF^-1|, d3 = |D3F| "
-             "|DF^-1| (reference tet; 0 when straight), element_distortion.hpp"},
-            {"min_jacobian_ratio", v.min_jacobian_ratio},
-            {"max_d2", v.max_d2},
-            {"mean_d2", v.mean_d2},
-            {"max_d3", v.max_d3},
-            {"mean_d3", v.mean_d3}}},
-          {"quality_by_tag", by_tag},
-          {"boundary_faces", v.boundary_faces},
-          {"boundary_faces_missing", v.boundary_faces_missing},
-          {"boundary_faces_extra", v.boundary_faces_extra},
-          {"boundary_node_mismatches", v.boundary_node_mismatches},
-          {"exterior", v.exterior},
-          {"exterior_boundary_faces", v.exterior_boundary_faces},
-          {"exterior_faces_off_box", v.exterior_faces_off_box},
-          {"boundary_subdivision", v.subdivision},
-          {"boundary_self_intersections", v.boundary_self_intersections},
-          {"unmapped_vertices", v.unmapped_vertices},
-          {"max_distance_rel", v.max_distance_rel},
-          {"max_distance_vertex", v.max_distance_vertex},
-          {"distance_points", v.distance_points},
-          {"distance_points_bad", v.bad_distance_points},
-          {"distance_points_max_distance_rel", v.points_max_distance_rel},
-          {"distance_points_max_distance_point", v.points_max_distance_point},
-          {"eps_rel", eps_rel},
-          {"feature_edges", v.feature_edges},
-          {"features_off_boundary_edges", v.features_off_edges},
-          {"first_feature_off", v.first_feature_off},
-          {"input_faces_orientation_checked", v.input_faces_checked},
-          {"flipped_input_faces", v.flipped_input_faces},
-          {"seconds", v.seconds}};
-}
+using pipeline::curved_validation_cell_fields;
+using pipeline::curved_validation_json;
+using pipeline::optimize_json;
 
 // φ⁻¹(φ(v)) for every input vertex: φ(v) is located on the curved boundary from its position
 // alone (TriangleLocator: box tree + Gauss–Newton) and pulled back along the shell's fibers (P_T

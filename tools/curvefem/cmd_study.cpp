@@ -20,11 +20,11 @@
 #include "meshing/core/log.hpp"
 #include "meshing/core/progress.hpp"
 #include "meshing/core/timer.hpp"
+#include "pipeline/run_case.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 #include "tools/curvefem/convergence_fit.hpp"
 #include "tools/curvefem/gnuplot_plot.hpp"
-#include "tools/curvefem/run_case.hpp"
 #include "tools/curvefem/study_file.hpp"
 
 namespace curvefem::cli {
@@ -147,12 +147,14 @@ RunRow run_one(const StudySpec& study, const StudyRun& run, const std::filesyste
                int threads, TerminalProgress& progress) {
   RunRow row;
   row.run = &run;
-  CaseSpec spec = run.spec;
+  pipeline::CaseSpec spec = run.spec;
   spec.output_dir = runs_dir / run.name;  // staged; resolved_case.json names the final folder
   spec.resolved["output"]["dir"] = (study.output_dir / "runs" / run.name).string();
   Stopwatch watch;
   try {
-    const RunOutcome outcome = run_case(spec, {.threads = threads}, progress);
+    const pipeline::RunOutcome outcome =
+        pipeline::run_case(spec, {.threads = threads}, progress.callback());
+    progress.end_stage();
     row.report = outcome.report;
     row.exit_code = outcome.exit_code;
     row.status = outcome.exit_code == 0 ? "ok" : "invalid_mesh";

@@ -14,13 +14,13 @@
 #include "meshing/io/boundary_map_io.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
 namespace curvefem::cli {
 
-nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,
-                                              double eps_rel);  // cmd_mesh.cpp
+using pipeline::curved_validation_json;
 std::pair<double, int> map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
                                      const SurfaceMesh& input);  // cmd_mesh.cpp
 

@@ -11,9 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "tools/curvefem/case_file.hpp"
+#include "pipeline/case_file.hpp"
 
 namespace curvefem::cli {
+
+using pipeline::CaseSpec;
+using pipeline::read_case_json;
 
 /// One swept parameter.
 struct SweepKey {

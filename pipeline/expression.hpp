@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 class Expression {
  public:
@@ -34,4 +34,4 @@ class Expression {
   bool m_uses_normal = false;
 };
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

@@ -1,4 +1,4 @@
-#include "tools/curvefem/expression.hpp"
+#include "pipeline/expression.hpp"
 
 #include <muParser.h>
 
@@ -7,7 +7,7 @@
 
 #include "meshing/core/error.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 namespace {
 
 struct Evaluator {
@@ -77,4 +77,4 @@ Eigen::Vector3d Expression::gradient(const Eigen::Vector3d& x, double h) const {
   return g;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

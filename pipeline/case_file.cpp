@@ -1,4 +1,4 @@
-#include "tools/curvefem/case_file.hpp"
+#include "pipeline/case_file.hpp"
 
 #include <fstream>
 #include <map>
@@ -7,7 +7,7 @@
 
 #include "meshing/core/error.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 namespace {
 
 using json = nlohmann::json;
@@ -183,6 +183,108 @@ json selection_json(const Selection& s) {
   return {};
 }
 
+/// The load part of a case (rhs, exact, exact_gradient, boundary_conditions) from the object `o`
+/// at JSON path `pre` (the case itself, or one of its load_cases).
+LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const CaseSpec& c) {
+  const int comps = c.components();
+  LoadCase l;
+  if (const json* v = r.get(o, "rhs")) l.rhs = r.expressions(*v, pre + "/rhs", comps);
+  if (const json* v = r.get(o, "exact")) l.exact = r.expressions(*v, pre + "/exact", comps);
+  if (const json* v = r.get(o, "exact_gradient")) {
+    if (l.exact.empty()) fail(pre + "/exact_gradient", "needs \"exact\"", r.file);
+    if (comps == 1) {
+      l.exact_gradient = r.expressions(*v, pre + "/exact_gradient", 3);
+    } else {
+      if (!v->is_array() || v->size() != 3)
+        fail(pre + "/exact_gradient", "expected three arrays of three expressions (vector problem)",
+             r.file);
+      for (int i = 0; i < 3; ++i) {
+        const auto g =
+            r.expressions((*v)[std::size_t(i)], pre + "/exact_gradient/" + std::to_string(i), 3);
+        l.exact_gradient.insert(l.exact_gradient.end(), g.begin(), g.end());
+      }
+    }
+    // A typo in a derivative would silently change the H1 error: compare with 4th-order
+    // differences of `exact` at a few points (skipping points where either is not finite).
+    const Eigen::Vector3d probes[] = {
+        {0.13, -0.27, 0.31}, {-0.41, 0.22, -0.17}, {0.37, 0.45, -0.29}, {-0.23, -0.36, 0.44}};
+    for (int i = 0; i < comps; ++i)
+      for (const Eigen::Vector3d& x : probes) {
+        const Eigen::Vector3d fd = l.exact[std::size_t(i)].gradient(x);
+        for (int d = 0; d < 3; ++d) {
+          const double g = l.exact_gradient[std::size_t(3 * i + d)](x);
+          if (!std::isfinite(g) || !std::isfinite(fd[d])) continue;
+          if (std::abs(g - fd[d]) > 1e-5 * (1 + std::abs(fd[d])))
+            fail(pre + "/exact_gradient" + (comps == 1 ? "" : "/" + std::to_string(i)) + "/" +
+                     std::to_string(d),
+                 "is not the derivative of exact: " + std::to_string(g) + " vs " +
+                     std::to_string(fd[d]) + " by finite differences at (" + std::to_string(x.x()) +
+                     ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + ")",
+                 r.file);
+        }
+      }
+  }
+
+  const json* bcs = r.get(o, "boundary_conditions");
+  if (bcs) {
+    if (!bcs->is_array()) fail(pre + "/boundary_conditions", "expected an array", r.file);
+    for (std::size_t i = 0; i < bcs->size(); ++i) {
+      const std::string p = pre + "/boundary_conditions/" + std::to_string(i);
+      const json& b = (*bcs)[i];
+      r.only_keys(b, p, {"type", "select", "value", "components"});
+      BoundaryConditionSpec bc;
+      const json* type = r.get(b, "type");
+      if (!type) fail(p + "/type", "missing (dirichlet or neumann)", r.file);
+      bc.type = r.string(*type, p + "/type");
+      if (bc.type != "dirichlet" && bc.type != "neumann")
+        fail(p + "/type", "'" + bc.type + "': expected dirichlet or neumann", r.file);
+      const json* select = r.get(b, "select");
+      if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
+      bc.select = read_selection(r, *select, p + "/select");
+      if (!c.exterior && mapping::uses_outer_box(bc.select))
+        fail(p + "/select", "outer_box needs meshing.exterior: true", r.file);
+      if (c.solve_on == "both" && !mapping::uses_outer_box(bc.select))
+        fail(p + "/select",
+             "with meshing.solve_on \"both\" the input surface is inside the domain: only the "
+             "outer box is boundary (select it with outer_box)",
+             r.file);
+      if (!c.dense_surface()) {
+        const auto k = bc.select.kind;
+        if (k != Selection::Kind::all && k != Selection::Kind::tag && k != Selection::Kind::box &&
+            k != Selection::Kind::plane)
+          fail(p + "/select",
+               "normal, and, or, not are evaluated on a dense input surface: they need "
+               "meshing.method curved or dense",
+               r.file);
+      }
+      const json* value = r.get(b, "value");
+      if (!value) fail(p + "/value", "missing", r.file);
+      bc.value = r.expressions(*value, p + "/value", comps, /*normal=*/true);
+      if (bc.type == "dirichlet")
+        for (std::size_t k = 0; k < bc.value.size(); ++k)
+          if (bc.value[k].uses_normal())
+            fail(p + "/value" + (comps == 1 ? "" : "/" + std::to_string(k)),
+                 "nx, ny, nz (the mesh's outward normal at a quadrature point) are for Neumann "
+                 "values: a Dirichlet node on an edge has no single normal",
+                 r.file);
+      if (const json* m = r.get(b, "components")) {
+        if (comps == 1 || bc.type != "dirichlet")
+          fail(p + "/components", "only for vector Dirichlet conditions", r.file);
+        if (!m->is_array() || m->size() != 3)
+          fail(p + "/components", "expected [bool, bool, bool]", r.file);
+        for (int k = 0; k < 3; ++k) {
+          if (!(*m)[k].is_boolean())
+            fail(p + "/components/" + std::to_string(k), "expected true/false", r.file);
+          bc.components[k] = (*m)[k].get<bool>();
+        }
+      }
+      l.boundary_conditions.push_back(std::move(bc));
+    }
+  }
+
+  return l;
+}
+
 }  // namespace
 
 CaseSpec read_case(const std::filesystem::path& path, const std::string& output_override) {
@@ -202,7 +304,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   const Reader r{path.string()};
   r.only_keys(j, "",
               {"geometry", "meshing", "physics", "discretization", "rhs", "boundary_conditions",
-               "exact", "exact_gradient", "solver", "output"});
+               "exact", "exact_gradient", "load_cases", "solver", "output"});
   CaseSpec c;
   c.case_file = path;
   const auto base = path.parent_path();
@@ -213,18 +315,31 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   const json* geometry = r.get(j, "geometry");
   if (!geometry) fail("/geometry", "missing (e.g. {\"surface\": \"part.obj\"})", r.file);
   r.only_keys(*geometry, "/geometry",
-              {"mesh", "builtin", "surface", "builtin_surface", "features"});
+              {"mesh", "builtin", "surface", "builtin_surface", "features", "mesh_dir"});
   const json* mesh = r.get(*geometry, "mesh");
   const json* builtin = r.get(*geometry, "builtin");
   const json* surface = r.get(*geometry, "surface");
   const json* builtin_surface = r.get(*geometry, "builtin_surface");
+  const json* mesh_dir = r.get(*geometry, "mesh_dir");
   if ((mesh != nullptr) + (builtin != nullptr) + (surface != nullptr) +
-          (builtin_surface != nullptr) !=
+          (builtin_surface != nullptr) + (mesh_dir != nullptr) !=
       1)
     fail("/geometry",
          "give exactly one of \"surface\" (a dense triangle surface), \"builtin_surface\", "
-         "\"mesh\" (a .msh/.vtu tet mesh) or \"builtin\"",
+         "\"mesh\" (a .msh/.vtu tet mesh), \"builtin\" or \"mesh_dir\" (a curved mesh saved "
+         "by curvefem mesh or run)",
          r.file);
+  if (mesh_dir) {
+    c.mesh_dir = resolve(r.string(*mesh_dir, "/geometry/mesh_dir"));
+    for (const char* name : {"mesh.msh", "boundary_map.json"})
+      if (!std::filesystem::is_regular_file(c.mesh_dir / name))
+        fail("/geometry/mesh_dir",
+             "no " + std::string(name) + " in " + c.mesh_dir.string() +
+                 " (expected the output directory of curvefem mesh, or of a curved curvefem run)",
+             r.file);
+    if (r.get(*geometry, "features"))
+      fail("/geometry/features", "the mesh of geometry.mesh_dir is reused as saved", r.file);
+  }
   if (mesh) c.mesh = resolve(r.string(*mesh, "/geometry/mesh"));
   if (builtin) {
     r.only_keys(*builtin, "/geometry/builtin", {"shape", "size", "divisions", "order"});
@@ -308,7 +423,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       }
     }
   }
-  const bool dense_input = surface || builtin_surface;
+  const bool dense_input = surface || builtin_surface || mesh_dir;
   c.method = dense_input ? "curved" : "given";
 
   if (const json* m = r.get(j, "meshing")) {
@@ -316,7 +431,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                 {"method", "order", "eps", "thickness", "thickness_per_edge", "eps_samples",
                  "feature_chains", "curved_coarsening", "validate", "deterministic", "exterior",
                  "padding", "solve_on"});
+    if (mesh_dir)
+      for (const auto& [key, value] : m->items())
+        if (key != "method" && key != "validate")
+          fail("/meshing/" + key,
+               "the mesh of geometry.mesh_dir is reused as saved (only method \"curved\" and "
+               "validate may be given)",
+               r.file);
     if (const json* v = r.get(*m, "method")) c.method = r.string(*v, "/meshing/method");
+    if (mesh_dir && c.method != "curved")
+      fail("/meshing/method", "geometry.mesh_dir holds a curved mesh: method \"curved\"", r.file);
     if (c.method != "given" && c.method != "curved" && c.method != "dense")
       fail("/meshing/method", "'" + c.method + "': expected curved, dense or given", r.file);
     if (c.method == "given" && dense_input)
@@ -457,99 +581,41 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
   if (c.partial_dirichlet.empty())  // measured trade-off: cases/README.md
     c.partial_dirichlet = c.physics == "poisson" ? "nitsche" : "nodal";
-  const int comps = c.components();
-  if (const json* v = r.get(j, "rhs")) c.rhs = r.expressions(*v, "/rhs", comps);
-  if (const json* v = r.get(j, "exact")) c.exact = r.expressions(*v, "/exact", comps);
-  if (const json* v = r.get(j, "exact_gradient")) {
-    if (c.exact.empty()) fail("/exact_gradient", "needs \"exact\"", r.file);
-    if (comps == 1) {
-      c.exact_gradient = r.expressions(*v, "/exact_gradient", 3);
-    } else {
-      if (!v->is_array() || v->size() != 3)
-        fail("/exact_gradient", "expected three arrays of three expressions (vector problem)",
+  if (const json* lc = r.get(j, "load_cases")) {
+    for (const char* key : {"rhs", "boundary_conditions", "exact", "exact_gradient"})
+      if (r.get(j, key))
+        fail(std::string("/") + key,
+             "give it in each of load_cases (a case with load_cases has no top-level " +
+                 std::string(key) + ")",
              r.file);
-      for (int i = 0; i < 3; ++i) {
-        const auto g =
-            r.expressions((*v)[std::size_t(i)], "/exact_gradient/" + std::to_string(i), 3);
-        c.exact_gradient.insert(c.exact_gradient.end(), g.begin(), g.end());
-      }
+    if (!lc->is_array() || lc->empty())
+      fail("/load_cases", "expected a non-empty array of {name, boundary_conditions, ...}", r.file);
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < lc->size(); ++i) {
+      const std::string p = "/load_cases/" + std::to_string(i);
+      const json& o = (*lc)[i];
+      r.only_keys(o, p, {"name", "rhs", "boundary_conditions", "exact", "exact_gradient"});
+      const json* name = r.get(o, "name");
+      if (!name)
+        fail(p + "/name", "missing (a name for the load case's fields and report)", r.file);
+      LoadCase l = read_load(r, o, p, c);
+      l.name = r.string(*name, p + "/name");
+      if (l.name.empty() ||
+          l.name.find_first_not_of(
+              "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+              std::string::npos)
+        fail(p + "/name",
+             "'" + l.name + "': use letters, digits, _ and - (it names fields and files)", r.file);
+      if (!names.insert(l.name).second)
+        fail(p + "/name", "'" + l.name + "' names two load cases", r.file);
+      c.load_cases.push_back(std::move(l));
     }
-    // A typo in a derivative would silently change the H1 error: compare with 4th-order
-    // differences of `exact` at a few points (skipping points where either is not finite).
-    const Eigen::Vector3d probes[] = {
-        {0.13, -0.27, 0.31}, {-0.41, 0.22, -0.17}, {0.37, 0.45, -0.29}, {-0.23, -0.36, 0.44}};
-    for (int i = 0; i < comps; ++i)
-      for (const Eigen::Vector3d& x : probes) {
-        const Eigen::Vector3d fd = c.exact[std::size_t(i)].gradient(x);
-        for (int d = 0; d < 3; ++d) {
-          const double g = c.exact_gradient[std::size_t(3 * i + d)](x);
-          if (!std::isfinite(g) || !std::isfinite(fd[d])) continue;
-          if (std::abs(g - fd[d]) > 1e-5 * (1 + std::abs(fd[d])))
-            fail("/exact_gradient" + (comps == 1 ? "" : "/" + std::to_string(i)) + "/" +
-                     std::to_string(d),
-                 "is not the derivative of exact: " + std::to_string(g) + " vs " +
-                     std::to_string(fd[d]) + " by finite differences at (" + std::to_string(x.x()) +
-                     ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + ")",
-                 r.file);
-        }
-      }
-  }
-
-  const json* bcs = r.get(j, "boundary_conditions");
-  if (bcs) {
-    if (!bcs->is_array()) fail("/boundary_conditions", "expected an array", r.file);
-    for (std::size_t i = 0; i < bcs->size(); ++i) {
-      const std::string p = "/boundary_conditions/" + std::to_string(i);
-      const json& b = (*bcs)[i];
-      r.only_keys(b, p, {"type", "select", "value", "components"});
-      BoundaryConditionSpec bc;
-      const json* type = r.get(b, "type");
-      if (!type) fail(p + "/type", "missing (dirichlet or neumann)", r.file);
-      bc.type = r.string(*type, p + "/type");
-      if (bc.type != "dirichlet" && bc.type != "neumann")
-        fail(p + "/type", "'" + bc.type + "': expected dirichlet or neumann", r.file);
-      const json* select = r.get(b, "select");
-      if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
-      bc.select = read_selection(r, *select, p + "/select");
-      if (!c.exterior && mapping::uses_outer_box(bc.select))
-        fail(p + "/select", "outer_box needs meshing.exterior: true", r.file);
-      if (c.solve_on == "both" && !mapping::uses_outer_box(bc.select))
-        fail(p + "/select",
-             "with meshing.solve_on \"both\" the input surface is inside the domain: only the "
-             "outer box is boundary (select it with outer_box)",
-             r.file);
-      if (!c.dense_surface()) {
-        const auto k = bc.select.kind;
-        if (k != Selection::Kind::all && k != Selection::Kind::tag && k != Selection::Kind::box &&
-            k != Selection::Kind::plane)
-          fail(p + "/select",
-               "normal, and, or, not are evaluated on a dense input surface: they need "
-               "meshing.method curved or dense",
-               r.file);
-      }
-      const json* value = r.get(b, "value");
-      if (!value) fail(p + "/value", "missing", r.file);
-      bc.value = r.expressions(*value, p + "/value", comps, /*normal=*/true);
-      if (bc.type == "dirichlet")
-        for (std::size_t k = 0; k < bc.value.size(); ++k)
-          if (bc.value[k].uses_normal())
-            fail(p + "/value" + (comps == 1 ? "" : "/" + std::to_string(k)),
-                 "nx, ny, nz (the mesh's outward normal at a quadrature point) are for Neumann "
-                 "values: a Dirichlet node on an edge has no single normal",
-                 r.file);
-      if (const json* m = r.get(b, "components")) {
-        if (comps == 1 || bc.type != "dirichlet")
-          fail(p + "/components", "only for vector Dirichlet conditions", r.file);
-        if (!m->is_array() || m->size() != 3)
-          fail(p + "/components", "expected [bool, bool, bool]", r.file);
-        for (int k = 0; k < 3; ++k) {
-          if (!(*m)[k].is_boolean())
-            fail(p + "/components/" + std::to_string(k), "expected true/false", r.file);
-          bc.components[k] = (*m)[k].get<bool>();
-        }
-      }
-      c.boundary_conditions.push_back(std::move(bc));
-    }
+  } else {
+    LoadCase l = read_load(r, j, "", c);
+    c.rhs = std::move(l.rhs);
+    c.exact = std::move(l.exact);
+    c.exact_gradient = std::move(l.exact_gradient);
+    c.boundary_conditions = std::move(l.boundary_conditions);
   }
 
   if (const json* s = r.get(j, "solver")) {
@@ -592,6 +658,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
          {{"shape", "cube"}, {"divisions", c.builtin_divisions}, {"order", c.builtin_order}}}};
   else if (!c.surface.empty())
     res["geometry"] = {{"surface", c.surface.string()}};
+  else if (!c.mesh_dir.empty())
+    res["geometry"] = {{"mesh_dir", c.mesh_dir.string()}};
   else if (c.builtin_surface == "sphere")
     res["geometry"] = {{"builtin_surface",
                         {{"shape", "sphere"}, {"level", c.sphere_level}, {"radius", c.radius}}}};
@@ -608,7 +676,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                          {"lo", vec(c.box_lo)},
                          {"hi", vec(c.box_hi)},
                          {"divisions", c.box_divisions}}}};
-  if (c.dense_surface()) {
+  if (c.dense_surface() && c.mesh_dir.empty()) {
     if (c.features == "angle")
       res["geometry"]["features"] = {{"angle", c.feature_angle}};
     else if (c.features == "file")
@@ -617,7 +685,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       res["geometry"]["features"] = c.features;
   }
   res["meshing"] = {{"method", c.method}};
-  if (c.method == "curved") {
+  if (!c.mesh_dir.empty()) {
+    res["meshing"]["reused"] = true;
+    res["meshing"]["validate"] = c.validate;
+  } else if (c.method == "curved") {
     res["meshing"]["order"] = c.order;
     res["meshing"]["eps"] = c.eps;
     res["meshing"]["thickness"] = c.thickness;
@@ -650,23 +721,39 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                            {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
                            {"partial_dirichlet", c.partial_dirichlet},
                            {"geometry", c.geometry}};
-  res["rhs"] = c.rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(c.rhs);
-  res["boundary_conditions"] = json::array();
-  for (const auto& bc : c.boundary_conditions) {
-    json b = {{"type", bc.type}, {"value", exprs(bc.value)}};
-    b["select"] = selection_json(bc.select);
-    if (comps == 3 && bc.type == "dirichlet") b["components"] = bc.components;
-    res["boundary_conditions"].push_back(b);
-  }
-  if (!c.exact.empty()) res["exact"] = exprs(c.exact);
-  if (!c.exact_gradient.empty()) {
-    if (c.components() == 1) {
-      res["exact_gradient"] = exprs(c.exact_gradient);
-    } else {
-      res["exact_gradient"] = json::array();
-      for (int i = 0; i < 3; ++i)
-        res["exact_gradient"].push_back(exprs(std::vector<Expression>(
-            c.exact_gradient.begin() + 3 * i, c.exact_gradient.begin() + 3 * i + 3)));
+  const int comps = c.components();
+  auto write_load = [&](json& out, const std::vector<Expression>& rhs,
+                        const std::vector<BoundaryConditionSpec>& bcs,
+                        const std::vector<Expression>& exact,
+                        const std::vector<Expression>& exact_gradient) {
+    out["rhs"] = rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(rhs);
+    out["boundary_conditions"] = json::array();
+    for (const auto& bc : bcs) {
+      json b = {{"type", bc.type}, {"value", exprs(bc.value)}};
+      b["select"] = selection_json(bc.select);
+      if (comps == 3 && bc.type == "dirichlet") b["components"] = bc.components;
+      out["boundary_conditions"].push_back(b);
+    }
+    if (!exact.empty()) out["exact"] = exprs(exact);
+    if (!exact_gradient.empty()) {
+      if (comps == 1) {
+        out["exact_gradient"] = exprs(exact_gradient);
+      } else {
+        out["exact_gradient"] = json::array();
+        for (int i = 0; i < 3; ++i)
+          out["exact_gradient"].push_back(exprs(std::vector<Expression>(
+              exact_gradient.begin() + 3 * i, exact_gradient.begin() + 3 * i + 3)));
+      }
+    }
+  };
+  if (c.load_cases.empty()) {
+    write_load(res, c.rhs, c.boundary_conditions, c.exact, c.exact_gradient);
+  } else {
+    res["load_cases"] = json::array();
+    for (const LoadCase& l : c.load_cases) {
+      json o = {{"name", l.name}};
+      write_load(o, l.rhs, l.boundary_conditions, l.exact, l.exact_gradient);
+      res["load_cases"].push_back(o);
     }
   }
   res["solver"] = {{"type", c.solver},
@@ -678,4 +765,4 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   return c;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

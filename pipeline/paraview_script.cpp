@@ -1,8 +1,8 @@
-#include "tools/curvefem/paraview_script.hpp"
+#include "pipeline/paraview_script.hpp"
 
 #include <cstdio>
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 std::string python_string_literal(const std::string& text) {
   std::string out = "'";
@@ -87,4 +87,4 @@ Render(volume_view)
   return s;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <string>
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 struct ParaviewScriptOptions {
   std::filesystem::path dir;  ///< absolute output directory (fallback when __file__ is unset)
@@ -26,4 +26,4 @@ std::string paraview_state_script(const ParaviewScriptOptions& options);
 /// escaped).
 std::string python_string_literal(const std::string& text);
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "mapping/selection.hpp"
-#include "tools/curvefem/expression.hpp"
+#include "pipeline/expression.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 using Selection = mapping::Selection;
 
@@ -24,6 +24,17 @@ struct BoundaryConditionSpec {
   Selection select;
   std::vector<Expression> value;                     ///< 1 (scalar) or 3 (vector) expressions
   std::array<bool, 3> components{true, true, true};  ///< vector Dirichlet: which are imposed
+};
+
+/// One set of loads solved on a run's mesh and space: the body load, the boundary conditions and
+/// optionally the exact solution (case key load_cases; without it the case's own top-level keys
+/// are its one, unnamed, load case).
+struct LoadCase {
+  std::string name;             ///< "" for the top-level load case
+  std::vector<Expression> rhs;  ///< empty, 1 or 3
+  std::vector<BoundaryConditionSpec> boundary_conditions;
+  std::vector<Expression> exact;           ///< empty, 1 or 3
+  std::vector<Expression> exact_gradient;  ///< empty, or 3 per component of exact
 };
 
 struct CaseSpec {
@@ -42,6 +53,10 @@ struct CaseSpec {
   int torus_nu = 48, torus_nv = 24;
   Eigen::Vector3d box_lo = Eigen::Vector3d::Zero(), box_hi = Eigen::Vector3d::Ones();
   int box_divisions = 4;
+  /// geometry.mesh_dir, resolved: a curved mesh saved by `curvefem mesh` or a curved `run`
+  /// (mesh.msh + boundary_map.json), reused without meshing; the input it was made from is read
+  /// from the path saved with it and must still have the saved checksum.
+  std::filesystem::path mesh_dir;
   std::string features = "auto";  ///< auto | none | angle | file
   double feature_angle = 60.0;
   std::filesystem::path feature_file;
@@ -86,6 +101,14 @@ struct CaseSpec {
   /// Empty, or 3 per component of `exact` (∂/∂x, ∂/∂y, ∂/∂z of component 0, then 1, 2): the H1
   /// error uses them instead of finite differences of `exact`.
   std::vector<Expression> exact_gradient;
+  /// load_cases: solved in turn on one mesh and one space (empty: the top-level rhs,
+  /// boundary_conditions, exact and exact_gradient are the run's one load case).
+  std::vector<LoadCase> load_cases;
+  /// The load cases to solve: load_cases, or one unnamed case from the top-level keys.
+  std::vector<LoadCase> loads() const {
+    if (!load_cases.empty()) return load_cases;
+    return {LoadCase{"", rhs, boundary_conditions, exact, exact_gradient}};
+  }
   std::string solver = "auto";
   double solver_rtol = 1e-10;
   int solver_max_iterations = 5000;
@@ -103,4 +126,4 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
 CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& path,
                         const std::string& output_override = {});
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

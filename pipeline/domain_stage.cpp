@@ -1,0 +1,308 @@
+// Stages load_surface and mesh_domain (stages.hpp).
+#include <algorithm>
+#include <fstream>
+#include <tuple>
+
+#include "mapping/boundary_inverse.hpp"
+#include "mapping/selection.hpp"
+#include "meshing/check/check_surface.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
+#include "meshing/curved/curved_validate.hpp"
+#include "meshing/curved/features.hpp"
+#include "meshing/io/cad_part.hpp"
+#include "meshing/io/msh_io.hpp"
+#include "meshing/io/surface_io.hpp"
+#include "meshing/io/vtu_io.hpp"
+#include "meshing/tetfill/tetfill.hpp"
+#include "pipeline/report_json.hpp"
+#include "pipeline/stages.hpp"
+
+namespace curvefem::pipeline {
+namespace {
+namespace cv = meshing::curved;
+using json = nlohmann::json;
+
+/// Fails early (before meshing) when a selection covers no point of the input surface.
+void check_selection_on_input(const Selection& s, const SurfaceMesh& input,
+                              const std::string& file) {
+  for (int f = 0; f < input.num_faces(); ++f)
+    if (mapping::face_coverage(s, input, f) > 0) return;
+  throw InputError(s.where +
+                       ": selects nothing on the input surface (no corner or centroid of an "
+                       "input face is selected)",
+                   {.file = file});
+}
+
+LagrangeMesh load_mesh_file(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) throw IoError("mesh file not found", {.file = path.string()});
+  const std::string ext = path.extension().string();
+  LagrangeMesh mesh;
+  if (ext == ".vtu")
+    mesh = io::read_vtu(path).mesh;
+  else if (ext == ".msh")
+    mesh = io::read_msh(path);
+  else
+    throw InputError("mesh must be .msh or .vtu", {.file = path.string()});
+  if (mesh.kind != CellKind::tetrahedron)
+    throw InputError("mesh holds no tetrahedra", {.file = path.string()});
+  return mesh;
+}
+
+/// The cells of `mesh` tagged in `tags`, with the nodes they use (renumbered in order);
+/// `old_to_new` gets, for every node of `mesh`, its new id or -1.
+LagrangeMesh extract_cells(const LagrangeMesh& mesh, std::initializer_list<int> tags,
+                           std::vector<int>& old_to_new) {
+  CF_VERIFY(mesh.cell_tags.size() == mesh.num_cells(), "extract_cells: the mesh has no cell tags");
+  std::vector<int> kept;
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    if (std::find(tags.begin(), tags.end(), mesh.cell_tags[c]) != tags.end()) kept.push_back(c);
+  old_to_new.assign(std::size_t(mesh.num_nodes()), -1);
+  int n = 0;
+  for (int c : kept)
+    for (int j = 0; j < mesh.cells.cols(); ++j)
+      if (old_to_new[std::size_t(mesh.cells(c, j))] < 0)
+        old_to_new[std::size_t(mesh.cells(c, j))] = n++;
+  LagrangeMesh out;
+  out.kind = mesh.kind;
+  out.order = mesh.order;
+  out.nodes.resize(n, 3);
+  for (int v = 0; v < mesh.num_nodes(); ++v)
+    if (old_to_new[std::size_t(v)] >= 0)
+      out.nodes.row(old_to_new[std::size_t(v)]) = mesh.nodes.row(v);
+  out.cells.resize(Eigen::Index(kept.size()), mesh.cells.cols());
+  out.cell_tags.resize(Eigen::Index(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    for (int j = 0; j < mesh.cells.cols(); ++j)
+      out.cells(Eigen::Index(i), j) = old_to_new[std::size_t(mesh.cells(kept[i], j))];
+    out.cell_tags[Eigen::Index(i)] = mesh.cell_tags[kept[i]];
+  }
+  return out;
+}
+
+/// Sets the outer box of an exterior run from the mesh's bounding box.
+void set_outer_box(Domain& d, double padding) {
+  OuterBox box;
+  std::tie(box.lo, box.hi) = vertex_bounding_box(d.mesh);
+  box.tol = 1e-9 * (box.hi - box.lo).norm();
+  d.report["exterior"] = {
+      {"padding", padding},
+      {"box", {{box.lo[0], box.lo[1], box.lo[2]}, {box.hi[0], box.hi[1], box.hi[2]}}},
+      {"tets", d.mesh.num_cells()}};
+  d.outer_box = box;
+}
+
+void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
+  cv::CurvedMeshOptions options;
+  options.order = spec.order;
+  options.eps_rel = spec.eps;
+  options.thickness_rel = spec.thickness;
+  options.thickness_per_edge = spec.thickness_per_edge;
+  options.eps_samples = spec.eps_samples;
+  options.feature_chains = spec.feature_chains;
+  options.curved_coarsening = spec.curved_coarsening;
+  options.threads = ctx.threads;
+  options.deterministic = spec.deterministic;
+  options.feature_edges = case_feature_edges(spec, d.input);
+  options.exterior = spec.exterior;
+  options.exterior_padding = spec.padding;
+  cv::CurvedMeshStats stats;
+  d.curved = cv::build_curved_mesh(d.input, options, stats, ctx.progress);
+  d.mesh = d.curved->mesh;
+  json stages = json::object();
+  for (const auto& [name, sec] : stats.stage_seconds) stages[name] = sec;
+  d.report["feature_edges"] = stats.feature_edges;
+  d.report["coarse_faces"] = stats.coarse_faces;
+  d.report["slab_tets"] = stats.slab_tets;
+  d.report["interior_tets"] = stats.interior_tets;
+  d.report["faces_fully_curved"] = stats.faces_fully_curved;
+  d.report["faces_blended"] = stats.faces_blended;
+  d.report["faces_linear"] = stats.faces_linear;
+  d.report["curve_refused"] = {{"certificate", stats.curve_refused_certificate},
+                               {"distance", stats.curve_refused_distance},
+                               {"deferred_outer", stats.curve_deferred_outer}};
+  d.report["faces_recurved"] = stats.faces_recurved;
+  d.report["faces_sheared"] = stats.faces_sheared;
+  d.report["fiber_misses"] = stats.fiber_misses;
+  d.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
+  d.report["curved_coarsening"] = {
+      {"curved_aware", stats.curved_coarsening},  {"attempts", stats.curved_attempts},
+      {"strict_vertices", stats.strict_vertices}, {"widened", stats.curved_widened},
+      {"repairs", stats.curved_repairs},          {"repair_splits", stats.repair_splits}};
+  d.report["optimize"] = json::parse(optimize_json(stats.optimize).dump());
+  d.report["stage_s"] = stages;
+  if (spec.validate) {
+    ctx.update("validate mesh", 0.0);
+    const cv::CurvedValidation v = cv::validate_curved_mesh(d.mesh, d.curved->map, d.input);
+    d.report["validation"] = json::parse(curved_validation_json(v, spec.eps).dump());
+    d.report["max_distance_rel"] = v.max_distance_rel;
+    d.report["min_jacobian_certified"] = v.certified();
+    d.valid = v.valid(spec.eps);
+    d.cell_quality = curved_validation_cell_fields(v);
+  }
+  if (spec.exterior) {
+    d.report["outer_slab_tets"] = stats.outer_slab_tets;
+    d.report["exterior_tets"] = stats.exterior_tets;
+  }
+  if (spec.exterior && spec.solve_on != "both") {
+    // The domain is the outside: the outer slab layer and the exterior (tags 3, 4; the whole
+    // mesh was validated above). The map's triangles are faces of outer slab tets too.
+    std::vector<int> old_to_new;
+    d.mesh = extract_cells(d.mesh, {3, 4}, old_to_new);
+    Eigen::VectorXi& to_volume = d.curved->map.boundary_node_to_volume;
+    for (Eigen::Index i = 0; i < to_volume.size(); ++i)
+      if (to_volume[i] >= 0) {
+        to_volume[i] = old_to_new[std::size_t(to_volume[i])];
+        if (to_volume[i] < 0)
+          throw MeshingError("exterior: a node of the curved surface is in no outer tet");
+      }
+  }
+  // solve_on both: the whole box; the curved surface is an interface (its triangles are faces
+  // of a slab tet and of an outer slab tet), the box the only boundary.
+  if (spec.exterior) set_outer_box(d, spec.padding);
+}
+
+void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
+  ctx.update("tetrahedralize input", 0.0);
+  meshing::tetfill::TetFillOptions options;
+  options.threads = std::max(ctx.threads, 1);
+  meshing::tetfill::TetFillResult fill;
+  const SurfaceMesh& input = d.input;
+  int inside_tets = 0;  // exterior, solve_on both: the first tets are the inside's
+  if (!spec.exterior) {
+    fill = meshing::tetfill::fill_interior(input.V, input.F, options);
+  } else {
+    // Outside the input, inside its bounding box padded as the curved mesher pads it: the
+    // input enters reversed, as the box's cavity; its vertices stay first (φ = identity).
+    const auto [lo, hi] = padded_bounding_box(input.V, spec.padding);
+    const SurfaceMesh box = make_box(lo, hi, 4);
+    const int nv = input.num_vertices();
+    Eigen::MatrixXd V(nv + box.num_vertices(), 3);
+    V << input.V, box.V;
+    Eigen::MatrixXi F(input.num_faces() + box.num_faces(), 3);
+    F.topRows(input.num_faces()) = input.F.rowwise().reverse();
+    F.bottomRows(box.num_faces()) = box.F.array() + nv;
+    fill = meshing::tetfill::fill_interior(V, F, options);
+    if (spec.solve_on == "both") {
+      // The inside too, sharing the input's vertices (both fills keep them first and keep the
+      // input's triangles): its other vertices go after the outside's, its tets first.
+      const meshing::tetfill::TetFillResult inside =
+          meshing::tetfill::fill_interior(input.V, input.F, options);
+      const Eigen::Index n_out = fill.V.rows(), extra = inside.V.rows() - nv;
+      fill.V.conservativeResize(n_out + extra, 3);
+      fill.V.bottomRows(extra) = inside.V.bottomRows(extra);
+      Eigen::MatrixXi T(inside.T.rows() + fill.T.rows(), 4);
+      for (Eigen::Index t = 0; t < inside.T.rows(); ++t)
+        for (int j = 0; j < 4; ++j)
+          T(t, j) = inside.T(t, j) < nv ? inside.T(t, j) : int(n_out) + inside.T(t, j) - nv;
+      T.bottomRows(fill.T.rows()) = fill.T;
+      inside_tets = int(inside.T.rows());
+      fill.T = T;
+    }
+  }
+  d.mesh = LagrangeMesh{};
+  d.mesh.kind = CellKind::tetrahedron;
+  d.mesh.order = 1;
+  d.mesh.nodes = fill.V;
+  d.mesh.cells = fill.T;
+  if (spec.exterior) {
+    d.mesh.cell_tags = Eigen::VectorXi::Constant(d.mesh.num_cells(), 4);
+    d.mesh.cell_tags.head(inside_tets).setConstant(2);
+    set_outer_box(d, spec.padding);
+  }
+  d.identity_map = mapping::make_identity_boundary_map(input);
+  d.report["interior_vertices"] = fill.V.rows() - fill.boundary_vertices;
+  d.report["tetfill_s"] = fill.seconds;
+}
+
+}  // namespace
+
+int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
+
+SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
+  std::optional<ScopedTimer> t;
+  if (ctx.timings) t.emplace(*ctx.timings, "load_surface");
+  ctx.update("load surface", 0.0);
+  SurfaceMesh input;
+  if (spec.builtin_surface == "sphere")
+    input = make_icosphere(spec.sphere_level, spec.radius);
+  else if (spec.builtin_surface == "torus")
+    input = make_torus(spec.torus_R, spec.torus_r, spec.torus_nu, spec.torus_nv);
+  else if (spec.builtin_surface == "box")
+    input = make_box(spec.box_lo, spec.box_hi, spec.box_divisions);
+  else
+    input = io::read_surface(spec.surface);
+  const std::string where =
+      spec.builtin_surface.empty() ? "/geometry/surface" : "/geometry/builtin_surface";
+  const check::CheckReport report = check::check_surface(input, {});
+  if (!report.acceptable)
+    throw InputError(where + ": not a valid meshing input: " +
+                         (report.defects.empty() ? std::string("empty surface")
+                                                 : report.defects.front().message) +
+                         (spec.surface.empty() ? std::string()
+                                               : " (curvefem check " + spec.surface.string() +
+                                                     " gives the full diagnosis)"),
+                     {.file = spec.case_file.string()});
+  for (const LoadCase& load : spec.loads())
+    for (const auto& bc : load.boundary_conditions)
+      if (!mapping::uses_outer_box(bc.select))  // may select the box only: checked on the mesh
+        check_selection_on_input(bc.select, input, spec.case_file.string());
+  return input;
+}
+
+std::vector<std::array<int, 2>> case_feature_edges(const CaseSpec& spec, const SurfaceMesh& input) {
+  if (spec.features == "none") return {};
+  if (spec.features != "file")
+    return cv::detect_feature_edges(input, spec.features == "angle" ? spec.feature_angle : 60.0);
+  const std::string where = "/geometry/features/file";
+  std::ifstream f(spec.feature_file);
+  if (!f) throw InputError(where + ": cannot open " + spec.feature_file.string());
+  std::vector<std::array<int, 2>> edges;
+  try {
+    const json j = json::parse(f);
+    const json& list = j.is_object() ? j.at("edges") : j;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      if (!list[i].is_array() || list[i].size() != 2)
+        throw InputError(where + ": feature edge " + std::to_string(i) +
+                         " is not a pair of vertex ids");
+      edges.push_back({list[i][0].get<int>(), list[i][1].get<int>()});
+    }
+  } catch (const json::exception& e) {
+    throw InputError(where + ": not a JSON list of vertex-index pairs: " + e.what());
+  }
+  try {
+    return cv::validate_feature_edges(input, edges);
+  } catch (const InputError& e) {
+    throw InputError(where + ": " + e.what());
+  }
+}
+
+Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& ctx) {
+  Domain d;
+  d.method = spec.method;
+  if (!spec.dense_surface()) {
+    std::optional<ScopedTimer> t;
+    if (ctx.timings) t.emplace(*ctx.timings, "load_mesh");
+    ctx.update("load mesh", 0.0);
+    if (spec.builtin == "ball")
+      d.mesh = io::make_ball_mesh(1.0, spec.builtin_size, spec.builtin_order);
+    else if (spec.builtin == "cube")
+      d.mesh = elevate_order(make_cube_tets(spec.builtin_divisions), spec.builtin_order,
+                             [](const Eigen::Vector3d& x) { return x; });
+    else
+      d.mesh = load_mesh_file(spec.mesh);
+    return d;
+  }
+  d.input = std::move(input);
+  d.report["input_vertices"] = d.input.num_vertices();
+  d.report["input_faces"] = d.input.num_faces();
+  std::optional<ScopedTimer> t;
+  if (ctx.timings) t.emplace(*ctx.timings, "meshing");
+  if (spec.method == "curved")
+    mesh_curved(spec, ctx, d);
+  else
+    mesh_dense(spec, ctx, d);
+  return d;
+}
+
+}  // namespace curvefem::pipeline

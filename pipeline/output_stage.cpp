@@ -1,0 +1,346 @@
+// Stages compute_errors, transfer_to_input and write_outputs (stages.hpp).
+#include <cmath>
+#include <memory>
+
+#include "fem/problems/elasticity.hpp"
+#include "fem/problems/interpolation.hpp"
+#include "fem/problems/null_space.hpp"
+#include "mapping/selection.hpp"
+#include "mapping/surface_transfer.hpp"
+#include "meshing/core/atomic_file.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/io/pvd.hpp"
+#include "meshing/io/vtu_io.hpp"
+#include "pipeline/paraview_script.hpp"
+#include "pipeline/report_json.hpp"
+#include "pipeline/stages.hpp"
+
+namespace curvefem::pipeline {
+namespace {
+using json = nlohmann::json;
+
+Field field_of(const std::string& name, const Eigen::MatrixXd& m) {
+  Field f{name, int(m.cols()), {}};
+  f.values.reserve(std::size_t(m.size()));
+  for (Eigen::Index r = 0; r < m.rows(); ++r)
+    for (Eigen::Index i = 0; i < m.cols(); ++i) f.values.push_back(m(r, i));
+  return f;
+}
+
+}  // namespace
+
+ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
+                           const Solution& solution, const StageContext& ctx) {
+  ErrorResult out;
+  out.report = json::object();
+  if (spec.exact.empty()) return out;
+  std::optional<ScopedTimer> t;
+  if (ctx.timings) t.emplace(*ctx.timings, "errors");
+  ctx.update("errors", 0.0);
+  const LagrangeMesh& mesh = disc.mesh;
+  const fem::FunctionSpace& space = disc.space;
+  const int c = solution.components;
+  const auto exact = spec.exact;
+  const fem::ExactValue value = [exact](const Eigen::Vector3d& x, double* v) {
+    for (std::size_t i = 0; i < exact.size(); ++i) v[i] = exact[i](x);
+  };
+  const fem::ExactGradient gradient = [exact, grad = spec.exact_gradient](const Eigen::Vector3d& x,
+                                                                          double* g) {
+    for (std::size_t i = 0; i < exact.size(); ++i) {
+      if (!grad.empty()) {
+        for (int d = 0; d < 3; ++d) g[3 * i + d] = grad[3 * i + std::size_t(d)](x);
+        continue;
+      }
+      const Eigen::Vector3d gi = exact[i].gradient(x);
+      for (int d = 0; d < 3; ++d) g[3 * i + d] = gi[d];
+    }
+  };
+  // Without Dirichlet data u_h is determined up to the null space: the errors are those of
+  // u_h − (u + r) with the mode r that takes out the null-space part of u_h − u (its mean for
+  // Poisson); `exact` and `error` in the VTU files use u + r too.
+  out.exact_value = value;
+  fem::ErrorNorms e;
+  if (solution.null_space_dim > 0) {
+    auto modes = std::make_shared<const fem::NullSpaceModes>(fem::null_space_modes(mesh, space, c));
+    Eigen::VectorXd theta;
+    e = fem::compute_errors_modulo_null_space(mesh, space, *modes, solution.u, value, gradient,
+                                              &theta);
+    out.exact_value = [value, modes, theta](const Eigen::Vector3d& x, double* v) {
+      double r[3];
+      value(x, v);
+      modes->evaluate(theta, x, r);
+      for (int i = 0; i < modes->components; ++i) v[i] += r[i];
+    };
+    out.report["errors_modulo"] =
+        c == 1 ? "constant: errors of u_h - (u + m), m = the mean of u_h - u (pure Neumann: u is "
+                 "determined up to a constant)"
+               : "rigid motion: errors of u_h - (u + r), r = the rigid motion with the mean "
+                 "translation and rotation of u_h - u (tractions only: u is determined up to a "
+                 "rigid motion)";
+    out.report["error_offset"] = std::vector<double>(theta.data(), theta.data() + theta.size());
+  } else {
+    e = fem::compute_errors(mesh, space, solution.u, c, value, gradient);
+  }
+  out.report["l2_error"] = e.l2;
+  out.report["h1_semi_error"] = e.h1_semi;
+  out.report["h1_error"] = std::sqrt(e.l2 * e.l2 + e.h1_semi * e.h1_semi);
+  out.report["l2_norm_exact"] = e.l2_exact;
+  out.report["h1_semi_norm_exact"] = e.h1_semi_exact;
+  out.report["exact_gradient"] =
+      spec.exact_gradient.empty()
+          ? "4th-order central differences of the exact expression, h = 1e-3"
+          : "exact_gradient of the case (checked against those differences at 4 points)";
+  ctx.update("errors", 1.0);
+  return out;
+}
+
+InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
+                                const Discretization& disc, const Solution& solution,
+                                const ErrorResult& errors, const StageContext& ctx) {
+  CF_VERIFY(domain.on_input(), "transfer_to_input: the domain has no dense input");
+  std::optional<ScopedTimer> t;
+  if (ctx.timings) t.emplace(*ctx.timings, "surface_transfer");
+  ctx.update("transfer to input", 0.0);
+  InputSolution out;
+  const SurfaceMesh& input = domain.input;
+  const int c = solution.components;
+  const mapping::SurfaceSamples samples = mapping::locate_input_vertices(disc.mesh, domain.map());
+  out.values = mapping::evaluate_on_surface(disc.space, solution.u, c, samples);
+  out.images = mapping::sample_positions(disc.mesh, samples);
+  out.fields.point_data.push_back(field_of(c == 1 ? "u" : "displacement", out.values));
+  out.fields.point_data.push_back(field_of("phi_offset", out.images - input.V));
+  out.report = json::object();
+  if (errors.exact_value) {
+    const mapping::SurfaceErrors e = mapping::surface_errors(input, out.values, errors.exact_value);
+    out.fields.point_data.push_back(field_of("exact", e.exact));
+    out.fields.point_data.push_back(field_of("error", e.error));
+    out.report["surface_l2_error"] = e.l2;
+    out.report["surface_l2_norm_exact"] = e.l2_exact;
+    out.report["surface_max_error"] = e.max;
+  }
+  out.report["surface_vertices"] = input.num_vertices();
+  long long unmapped = 0;
+  for (Eigen::Index v = 0; v < samples.cell.size(); ++v) unmapped += samples.cell[v] < 0;
+  out.report["surface_unmapped_vertices"] = unmapped;
+  for (std::size_t i = 0; i < spec.boundary_conditions.size(); ++i) {
+    const auto& bc = spec.boundary_conditions[i];
+    Field f{"bc" + std::to_string(i) + "_" + bc.type, 1, {}};
+    for (int k = 0; k < input.num_faces(); ++k)
+      f.values.push_back(mapping::face_coverage(bc.select, input, k));
+    out.fields.cell_data.push_back(f);
+  }
+  ctx.update("transfer to input", 1.0);
+  return out;
+}
+
+LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
+                      const Discretization& disc, const StageContext& ctx) {
+  LoadResult r;
+  r.load = load;
+  const BoundaryData data = bind_boundary(spec, r.load.boundary_conditions, domain, disc);
+  r.solution = solve(spec, disc, data, r.load.rhs, ctx);
+  r.errors = compute_errors(r.load, disc, r.solution, ctx);
+  if (domain.on_input())
+    r.on_input = transfer_to_input(r.load, domain, disc, r.solution, r.errors, ctx);
+  return r;
+}
+
+namespace {
+
+/// The report keys of one load case: errors, surface errors, physics details, solver.
+json load_report(const LoadResult& l) {
+  json report = l.errors.report.is_object() ? l.errors.report : json::object();
+  if (l.on_input)
+    for (const auto& [k, v] : l.on_input->report.items()) report[k] = v;
+  report["physics_details"] = l.solution.physics;
+  const fem::LinearSolveInfo& s = l.solution.solve;
+  report["solver"] = {{"method", s.method},
+                      {"iterations", s.iterations},
+                      {"relative_residual", s.relative_residual},
+                      {"setup_s", s.setup_s},
+                      {"solve_s", s.solve_s},
+                      {"near_nullspace", s.near_nullspace},
+                      {"null_space_dim", s.null_space_dim}};
+  return report;
+}
+
+bool named(const std::vector<LoadResult>& loads) {
+  return !(loads.size() == 1 && loads[0].load.name.empty());
+}
+
+/// A field name with the load case's suffix ("u" → "u_lift"; unnamed: unchanged).
+std::string suffixed(const std::string& field, const LoadCase& load) {
+  return load.name.empty() ? field : field + "_" + load.name;
+}
+
+/// volume.vtu's point fields of one load case, on `out_space` (unsuffixed names).
+std::vector<Field> volume_fields(const CaseSpec& spec, const Discretization& disc,
+                                 const fem::FunctionSpace& out_space, const LoadResult& l) {
+  const int c = l.solution.components;
+  const Eigen::MatrixXd values = fem::interpolate_field(disc.space, l.solution.u, c, out_space);
+  std::vector<Field> fields;
+  Field uf{c == 1 ? "u" : "displacement", c, {}};
+  uf.values.resize(std::size_t(values.size()));
+  for (int r = 0; r < values.rows(); ++r)
+    for (int i = 0; i < c; ++i) uf.values[static_cast<std::size_t>(r) * c + i] = values(r, i);
+  fields.push_back(uf);
+  if (l.errors.exact_value) {
+    Field ef{"exact", c, {}}, err{"error", c, {}};
+    for (int r = 0; r < out_space.num_dofs; ++r) {
+      double ex[3];
+      l.errors.exact_value(out_space.dof_points.row(r).transpose(), ex);
+      for (int i = 0; i < c; ++i) {
+        ef.values.push_back(ex[i]);
+        err.values.push_back(values(r, i) - ex[i]);
+      }
+    }
+    fields.push_back(ef);
+    fields.push_back(err);
+  }
+  if (spec.physics == "linear_elasticity") {
+    const Eigen::VectorXd vm =
+        fem::von_mises_at_dofs(disc.mesh, out_space, {spec.E, spec.nu},
+                               values.transpose().reshaped(), l.solution.cell_material);
+    fields.push_back({"von_mises", 1, std::vector<double>(vm.data(), vm.data() + vm.size())});
+  }
+  return fields;
+}
+
+}  // namespace
+
+json run_report(const CaseSpec& spec, const Domain& domain, const Discretization& disc,
+                const std::vector<LoadResult>& loads) {
+  CF_VERIFY(!loads.empty(), "run_report: no load case");
+  json report = json::object();
+  if (!named(loads)) {
+    report = load_report(loads[0]);
+  } else {
+    report["load_cases"] = json::array();
+    for (const LoadResult& l : loads) {
+      json r = load_report(l);
+      r["name"] = l.load.name;
+      report["load_cases"].push_back(r);
+    }
+  }
+  report["command"] = "run";
+  report["case"] = spec.case_file.string();
+  report["method"] = spec.method;
+  if (domain.on_input()) {
+    report["surface"] =
+        spec.surface.empty() ? "builtin " + spec.builtin_surface : spec.surface.string();
+    report["meshing"] = domain.report;
+    report["mesh_valid"] = domain.valid;
+  } else {
+    report["mesh"] = spec.builtin.empty() ? spec.mesh.string() : "builtin " + spec.builtin;
+  }
+  report["tets"] = disc.mesh.num_cells();
+  report["order"] = disc.mesh.order;
+  report["degree"] = spec.degree;
+  report["solve_geometry"] = disc.solve_geometry;
+  report["physics"] = spec.physics;
+  report["dofs"] = static_cast<long long>(disc.space.num_dofs) * spec.components();
+  report["nodes"] = disc.space.num_dofs;
+  return report;
+}
+
+void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretization& disc,
+                   const std::vector<LoadResult>& loads, const OutputOptions& options, json& report,
+                   const StageContext& ctx) {
+  const LagrangeMesh& mesh = disc.mesh;
+  const int c = spec.components();
+  const bool several = named(loads);
+  // Nothing is written before this point; a failure while writing removes what was made.
+  const bool existed = std::filesystem::exists(spec.output_dir);
+  std::optional<StagedOutputDir> staged;
+  try {
+    staged.emplace(spec.output_dir);
+    StagedOutputDir& out = *staged;
+    std::vector<io::PvdEntry> parts{{"volume.vtu", 0, 0.0, "volume"}};
+    {
+      std::optional<ScopedTimer> t;
+      if (ctx.timings) t.emplace(*ctx.timings, "output");
+      ctx.update("write output", 0.0);
+      const int m = std::max(spec.degree, mesh.order);
+      const fem::FunctionSpace out_space =
+          m == spec.degree ? disc.space : fem::build_function_space(mesh, m);
+      const LagrangeMesh volume = fem::lagrange_mesh_of_space(mesh, out_space);
+      LagrangeMesh surface;
+      if (domain.on_input()) {
+        surface.kind = CellKind::triangle;
+        surface.order = 1;
+        surface.nodes = domain.input.V;
+        surface.cells = domain.input.F;
+        if (domain.input.has_tags()) surface.cell_tags = domain.input.tags;
+      }
+      std::vector<Field> quality;
+      for (const Field& f : domain.cell_quality)
+        if (int(f.values.size()) == mesh.num_cells()) quality.push_back(f);
+      MeshFields all, all_surface;
+      all.cell_data = quality;
+      if (several) parts.clear();
+      for (std::size_t i = 0; i < loads.size(); ++i) {
+        const LoadResult& l = loads[i];
+        MeshFields own;
+        own.point_data = volume_fields(spec, disc, out_space, l);
+        own.cell_data = quality;
+        for (Field f : own.point_data) {
+          f.name = suffixed(f.name, l.load);
+          all.point_data.push_back(std::move(f));
+        }
+        if (l.on_input)
+          for (Field f : l.on_input->fields.point_data) {
+            if (f.name == "phi_offset" && i > 0) continue;  // the same for every load case
+            if (f.name != "phi_offset") f.name = suffixed(f.name, l.load);
+            all_surface.point_data.push_back(std::move(f));
+          }
+        if (l.on_input)
+          for (Field f : l.on_input->fields.cell_data) {
+            f.name = suffixed(f.name, l.load);
+            all_surface.cell_data.push_back(std::move(f));
+          }
+        if (several) {
+          // One time step of result.pvd per load case, its fields without the suffix.
+          const std::string vname = "volume_" + l.load.name + ".vtu";
+          io::write_vtu(out.path(vname), volume, own);
+          parts.push_back({vname, 0, double(i), l.load.name});
+          if (l.on_input) {
+            const std::string sname = "surface_" + l.load.name + ".vtu";
+            io::write_vtu(out.path(sname), surface, l.on_input->fields);
+            parts.push_back({sname, 1, double(i), l.load.name});
+          }
+        }
+      }
+      io::write_vtu(out.path("volume.vtu"), volume, all);
+      if (domain.on_input()) {
+        io::write_vtu(out.path("surface.vtu"), surface, all_surface);
+        if (!several) parts.push_back({"surface.vtu", 1, 0.0, "surface"});
+      }
+      write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
+    }
+    io::write_pvd(out.path("result.pvd"), parts);
+    if (options.paraview) {
+      ParaviewScriptOptions script;
+      script.dir = std::filesystem::absolute(spec.output_dir);
+      script.field = suffixed(c == 1 ? "u" : "displacement", loads[0].load);
+      script.components = c;
+      script.surface = domain.on_input();
+      script.exact = !loads[0].load.exact.empty();
+      write_text_file_atomic(out.path("open_in_paraview.py"), paraview_state_script(script));
+    }
+    if (ctx.timings) {
+      if (options.total) ctx.timings->add("total", options.total->seconds());
+      report["time_s"] = timings_json(*ctx.timings);
+    }
+    report["peak_rss_mb"] = peak_rss_mb();
+    write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
+    out.commit();
+  } catch (...) {
+    staged.reset();  // removes the staging folder
+    std::error_code ec;
+    if (!existed) std::filesystem::remove(spec.output_dir, ec);  // only if empty
+    throw;
+  }
+  ctx.update("write output", 1.0);
+}
+
+}  // namespace curvefem::pipeline

@@ -1,0 +1,285 @@
+// Stages bind_boundary and solve (stages.hpp).
+#include <cmath>
+
+#include "fem/assembly/face_integration.hpp"
+#include "fem/problems/constraints.hpp"
+#include "fem/problems/elasticity.hpp"
+#include "fem/problems/null_space.hpp"
+#include "fem/problems/poisson.hpp"
+#include "fem/quadrature/simplex_quadrature.hpp"
+#include "mapping/input_selection.hpp"
+#include "mapping/selection.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+#include "pipeline/stages.hpp"
+
+namespace curvefem::pipeline {
+namespace {
+using json = nlohmann::json;
+
+/// A selection of a given mesh's boundary faces (tags from the mesh file) or of its points.
+BoundCondition bind_on_mesh(const BoundaryConditionSpec& bc, const Discretization& disc,
+                            const std::string& file) {
+  const Selection& s = bc.select;
+  BoundCondition out;
+  out.spec = &bc;
+  out.faces.assign(disc.face_tags.size(), 0);
+  long long count = 0;
+  for (std::size_t f = 0; f < disc.face_tags.size(); ++f) {
+    const bool take = s.kind != Selection::Kind::tag || disc.face_tags[f] == s.tag;
+    out.faces[f] = take;
+    count += take;
+  }
+  const bool pointwise = s.kind == Selection::Kind::box || s.kind == Selection::Kind::plane;
+  if (pointwise) {
+    out.where = [s](const Eigen::Vector3d& x) { return mapping::selects(s, {.x = x}); };
+    // A region acts point-wise: it selects something only if a boundary DOF lies inside it.
+    count = 0;
+    fem::for_each_boundary_dof(disc.space, out.faces, out.where, [&](int) { ++count; });
+  }
+  if (count == 0)
+    throw InputError(
+        s.where + ": selects no boundary face" +
+            (s.kind == Selection::Kind::box ? std::string(" (no boundary node inside the box)")
+             : s.kind == Selection::Kind::plane
+                 ? std::string(" (no boundary node on the selected side of the plane)")
+                 : std::string()) +
+            (s.kind == Selection::Kind::tag
+                 ? " (no boundary triangle has tag " + std::to_string(s.tag) + ")"
+                 : ""),
+        {.file = file});
+  return out;
+}
+
+/// A selection of the dense input, judged at φ⁻¹(x). All boundary faces are flagged; the point
+/// filter does the selecting.
+BoundCondition bind_on_input(const BoundaryConditionSpec& bc, const Domain& domain,
+                             const Discretization& disc, const std::string& file,
+                             bool weak_dirichlet) {
+  const Selection& s = bc.select;
+  BoundCondition out;
+  out.spec = &bc;
+  out.faces.assign(disc.space.boundary_faces.size(), 1);
+  out.where = mapping::input_selection_filter(s, domain.input, disc.inverse,
+                                              /*closed=*/bc.type == "dirichlet");
+  if (domain.outer_box) {
+    // Exterior runs: points of the outer box are selected there (selects_point: only through
+    // outer_box), the others on the input as above.
+    out.where = [s, box = *domain.outer_box, on_input = out.where](const Eigen::Vector3d& x) {
+      mapping::SelectionSite site;
+      site.box_side = box.side(x);
+      if (site.box_side < 0) return !on_input || on_input(x);
+      site.x = x;
+      return mapping::selects_point(s, site);
+    };
+  }
+  // A Neumann selection, or a Dirichlet one imposed by Nitsche on faces it cuts, acts at the
+  // face quadrature points the assembly uses; a nodal Dirichlet one at nodes.
+  const bool at_points = bc.type == "neumann" || weak_dirichlet;
+  long long count = 0;
+  fem::for_each_boundary_dof(disc.space, out.faces, out.where, [&](int) { ++count; });
+  if (count == 0 && at_points)
+    fem::for_each_face_point(
+        disc.mesh, disc.space, out.faces,
+        fem::default_quadrature_degree(disc.space.degree, disc.mesh.order,
+                                       fem::QuadratureUse::mass),
+        [&](int, int, const fem::FacePoint& p) { count += !out.where || out.where(p.x); });
+  if (count == 0)
+    throw InputError(s.where + ": selects no boundary " + (at_points ? "point" : "node") +
+                         " of the mesh (the selected part of the input is smaller than the "
+                         "mesh resolution)",
+                     {.file = file});
+  return out;
+}
+
+}  // namespace
+
+BoundaryData bind_boundary(const CaseSpec& spec,
+                           const std::vector<BoundaryConditionSpec>& conditions,
+                           const Domain& domain, const Discretization& disc) {
+  BoundaryData data;
+  const std::string file = spec.case_file.string();
+  for (const auto& bc : conditions)
+    data.conditions.push_back(domain.on_input() ? bind_on_input(bc, domain, disc, file,
+                                                                spec.partial_dirichlet == "nitsche")
+                                                : bind_on_mesh(bc, disc, file));
+  if (domain.on_input()) {
+    std::optional<OuterBox> box = domain.outer_box;
+    data.data_point = [box, inverse = disc.inverse](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+      if (box && box->side(x) >= 0) return x;
+      return inverse->at(x).position;
+    };
+  } else {
+    data.data_point = [](const Eigen::Vector3d& x) { return x; };
+  }
+  return data;
+}
+
+Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryData& data,
+               const std::vector<Expression>& rhs, const StageContext& ctx) {
+  const LagrangeMesh& mesh = disc.mesh;
+  const fem::FunctionSpace& space = disc.space;
+  ctx.update("solve " + spec.physics, 0.0);
+  fem::LinearSolverOptions solver;
+  solver.type = spec.solver;
+  solver.rtol = spec.solver_rtol;
+  solver.max_iterations = spec.solver_max_iterations;
+  solver.use_near_nullspace = spec.solver_near_nullspace;
+  const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == "nodal"
+                                                      ? fem::PartialDirichlet::nodal
+                                                      : fem::PartialDirichlet::nitsche;
+  // Boundary values are read at data_point(x): φ⁻¹(x) on a dense input, x on a given mesh. The
+  // normal of a Neumann value is the mesh's outward normal at the quadrature point.
+  const auto point = data.data_point;
+  Solution out;
+  out.components = spec.components();
+  auto add_stages = [&](const Timings& t) {
+    if (ctx.timings)
+      for (const auto& [stage, s] : t.stages()) ctx.timings->add(stage, s);
+  };
+  if (spec.physics == "poisson") {
+    fem::PoissonProblem problem;
+    const Expression kappa = spec.kappa;
+    problem.kappa = [kappa](const Eigen::Vector3d& x) { return kappa(x); };
+    if (spec.solve_on == "both" && !spec.kappa_inside.empty()) {
+      // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
+      const Expression inside = spec.kappa_inside;
+      const Eigen::VectorXi* tags = &mesh.cell_tags;
+      problem.cell_kappa = [kappa, inside, tags](int cell, const Eigen::Vector3d& x) {
+        return (*tags)[cell] <= 2 ? inside(x) : kappa(x);
+      };
+    }
+    if (!rhs.empty()) {
+      const Expression f = rhs[0];
+      problem.rhs = [f](const Eigen::Vector3d& x) { return f(x); };
+    }
+    problem.quadrature_degree = spec.quadrature;
+    problem.partial_dirichlet = partial_dirichlet;
+    for (const BoundCondition& bc : data.conditions) {
+      const Expression e = bc.spec->value[0];
+      if (bc.spec->type == "dirichlet")
+        problem.dirichlet.push_back(
+            {bc.faces, [e, point](const Eigen::Vector3d& x) { return e(point(x)); }, bc.where});
+      else
+        problem.neumann.push_back({bc.faces,
+                                   [e, point](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+                                     return e(point(x), n);
+                                   },
+                                   bc.where});
+    }
+    const fem::PoissonSolution sol = fem::solve_poisson(mesh, space, problem, solver);
+    out.u = sol.u;
+    out.solve = sol.solve;
+    add_stages(sol.timings);
+    out.physics["free_dofs"] = sol.free_dofs;
+    out.physics["nitsche_faces"] = sol.nitsche_faces;
+    out.null_space_dim = sol.null_space_dim;
+    if (out.null_space_dim > 0) {
+      const fem::LoadCompatibility& cc = sol.compatibility;
+      out.physics["null_space"] = {
+          {"removed", "constants"},
+          {"dimension", out.null_space_dim},
+          {"solution", "mean zero (no Dirichlet condition: u is determined up to a constant)"},
+          {"rhs_integral", sol.rhs_integral},
+          {"flux_integral", sol.flux_integral},
+          {"resultant", cc.resultant[0]},
+          {"relative_imbalance", cc.relative},
+          {"compatible", cc.compatible()},
+          {"tolerance", fem::k_compatibility_tolerance}};
+    }
+  } else {
+    fem::ElasticityProblem problem;
+    problem.material = {spec.E, spec.nu};
+    if (spec.solve_on == "both") {
+      // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
+      const fem::ElasticMaterial inside{spec.E_inside.value_or(spec.E),
+                                        spec.nu_inside.value_or(spec.nu)};
+      const fem::ElasticMaterial outside = problem.material;
+      const Eigen::VectorXi* tags = &mesh.cell_tags;
+      problem.cell_material = [inside, outside, tags](int cell) {
+        return (*tags)[cell] <= 2 ? inside : outside;
+      };
+    }
+    out.cell_material = problem.cell_material;
+    problem.quadrature_degree = spec.quadrature;
+    problem.partial_dirichlet = partial_dirichlet;
+    if (!rhs.empty())
+      problem.body_force = [e = rhs](const Eigen::Vector3d& x) {
+        return Eigen::Vector3d(e[0](x), e[1](x), e[2](x));
+      };
+    for (const BoundCondition& bc : data.conditions) {
+      const std::vector<Expression> e = bc.spec->value;
+      if (bc.spec->type == "dirichlet")
+        problem.dirichlet.push_back({bc.faces, bc.spec->components,
+                                     [e, point](const Eigen::Vector3d& x) {
+                                       const Eigen::Vector3d y = point(x);
+                                       return Eigen::Vector3d(e[0](y), e[1](y), e[2](y));
+                                     },
+                                     bc.where});
+      else
+        problem.traction.push_back({bc.faces,
+                                    [e, point](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+                                      const Eigen::Vector3d y = point(x);
+                                      return Eigen::Vector3d(e[0](y, n), e[1](y, n), e[2](y, n));
+                                    },
+                                    bc.where});
+    }
+    fem::ElasticitySolution sol;
+    if (spec.physics == "linear_elasticity") {
+      sol = fem::solve_linear_elasticity(mesh, space, problem, solver);
+    } else {
+      fem::NewtonOptions newton;
+      newton.load_steps = spec.load_steps;
+      sol = fem::solve_neo_hookean(mesh, space, problem, solver, newton);
+      json steps = json::array();
+      for (const auto& s : sol.newton)
+        steps.push_back({{"load_step", s.load_step},
+                         {"iteration", s.iteration},
+                         {"residual", s.residual},
+                         {"step_length", s.step_length},
+                         {"energy", s.energy}});
+      out.physics["newton"] = steps;
+    }
+    out.u = sol.u;
+    out.solve = sol.solve;
+    add_stages(sol.timings);
+    out.null_space_dim = sol.null_space_dim;
+    auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
+    if (out.null_space_dim > 0) {
+      // Tractions only: no supports; the load's own balance is what counts.
+      const fem::LoadCompatibility& cc = sol.compatibility;
+      out.physics["null_space"] = {{"removed", "rigid motions"},
+                                   {"dimension", out.null_space_dim},
+                                   {"solution",
+                                    "no mean translation or rotation (no Dirichlet condition: u is "
+                                    "determined up to a rigid motion)"},
+                                   {"total_force", vec(cc.resultant.head<3>())},
+                                   {"total_moment", vec(cc.resultant.tail<3>())},
+                                   {"moment_center", vec(cc.center)},
+                                   {"relative_imbalance", cc.relative},
+                                   {"compatible", cc.compatible()},
+                                   {"tolerance", fem::k_compatibility_tolerance}};
+    } else {
+      // Equilibrium, recomputed from u: the supports' force against the applied load.
+      std::optional<ScopedTimer> t;
+      if (ctx.timings) t.emplace(*ctx.timings, "force_balance");
+      const fem::ForceBalance fb =
+          fem::force_balance(mesh, space, problem, out.u, spec.physics != "linear_elasticity");
+      out.physics["force_balance"] = {{"applied", vec(fb.applied)},
+                                      {"reaction", vec(fb.reaction)},
+                                      {"supported_unknowns", fb.supported_unknowns},
+                                      {"imbalance", fb.imbalance()}};
+      if (fb.imbalance() > 1e-6)
+        log::warn("force balance: applied + reaction is ", fb.imbalance(),
+                  " of the load (the solve did not converge to equilibrium)");
+    }
+    out.physics["free_unknowns"] = sol.free_unknowns;
+    if (spec.physics == "linear_elasticity") out.physics["nitsche_faces"] = sol.nitsche_faces;
+    out.physics["E"] = spec.E;
+    out.physics["nu"] = spec.nu;
+  }
+  ctx.update("solve " + spec.physics, 1.0);
+  return out;
+}
+
+}  // namespace curvefem::pipeline

@@ -1,0 +1,317 @@
+// The `curvefem` Python module's native part (`curvefem._curvefem`, pybind11): the pipeline
+// library's stages (pipeline/stages.hpp) and run_case, with arrays as NumPy arrays and reports as
+// JSON text (curvefem/__init__.py turns them into dicts). Long stages release the GIL; progress
+// callbacks take it back. curvefem errors become Python exceptions carrying the CLI's exit code.
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <tbb/global_control.h>
+
+#include <memory>
+
+#include "meshing/check/check_surface.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+#include "meshing/io/surface_io.hpp"
+#include "pipeline/case_file.hpp"
+#include "pipeline/report_json.hpp"
+#include "pipeline/run_case.hpp"
+#include "pipeline/stages.hpp"
+
+namespace py = pybind11;
+using namespace curvefem;
+using namespace curvefem::pipeline;
+
+namespace {
+
+/// A Python progress callable as a ProgressFn that may be copied and called from any thread.
+ProgressFn progress_of(const py::object& callback) {
+  if (callback.is_none()) return {};
+  std::shared_ptr<py::object> held(new py::object(callback), [](py::object* o) {
+    py::gil_scoped_acquire gil;
+    delete o;
+  });
+  return [held](std::string_view stage, double fraction) {
+    py::gil_scoped_acquire gil;
+    try {
+      (*held)(std::string(stage), fraction);
+    } catch (py::error_already_set& e) {
+      e.discard_as_unraisable("curvefem progress callback");
+    }
+  };
+}
+
+/// oneTBB uses at most `threads` workers while it lives (0: all cores).
+std::unique_ptr<tbb::global_control> limit_threads(int threads) {
+  if (threads <= 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               static_cast<std::size_t>(threads));
+}
+
+/// The load case `name` of a case ("": the first).
+LoadCase load_of(const CaseSpec& spec, const std::string& name) {
+  const std::vector<LoadCase> loads = spec.loads();
+  if (name.empty()) return loads.front();
+  for (const LoadCase& l : loads)
+    if (l.name == name) return l;
+  throw InputError("no load case named '" + name + "'", {.file = spec.case_file.string()});
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_curvefem, m) {
+  m.doc() = "curvefem: coarse curved tetrahedral meshes with a bijective boundary map, and p-FEM";
+
+  // Exception classes: curvefem.Error (a RuntimeError) and one subclass per error kind, each
+  // instance with `exit_code` (the CLI's: 2 input, 3 meshing/solver, 4 I/O).
+  auto make = [&m](const char* name, PyObject* base) {
+    PyObject* type =
+        PyErr_NewException((std::string("curvefem._curvefem.") + name).c_str(), base, nullptr);
+    m.attr(name) = py::handle(type);
+    return type;
+  };
+  static PyObject* error = make("Error", PyExc_RuntimeError);
+  static PyObject* input_error = make("InputError", error);
+  static PyObject* meshing_error = make("MeshingError", error);
+  static PyObject* solver_error = make("SolverError", error);
+  static PyObject* io_error = make("IoError", error);
+  py::register_exception_translator([](std::exception_ptr p) {
+    auto raise = [](PyObject* type, const Error& e) {
+      py::object instance = py::reinterpret_borrow<py::object>(type)(e.what());
+      instance.attr("exit_code") = e.exit_code();
+      PyErr_SetObject(type, instance.ptr());
+    };
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      raise(input_error, e);
+    } catch (const MeshingError& e) {
+      raise(meshing_error, e);
+    } catch (const SolverError& e) {
+      raise(solver_error, e);
+    } catch (const IoError& e) {
+      raise(io_error, e);
+    } catch (const Error& e) {
+      raise(error, e);
+    }
+  });
+
+  m.def(
+      "set_log_level", [](const std::string& level) { log::set_level(log::parse_level(level)); },
+      py::arg("level"), "trace | debug | info | warn | error | off");
+
+  m.def(
+      "check_surface",
+      [](const std::string& path) {
+        const SurfaceMesh s = io::read_surface(path);
+        return check_report_json(check::check_surface(s, {})).dump();
+      },
+      py::arg("path"), "The `curvefem check` report of a surface file, as JSON text.");
+
+  py::class_<SurfaceMesh, std::shared_ptr<SurfaceMesh>>(m, "Surface")
+      .def_property_readonly("vertices", [](const SurfaceMesh& s) { return s.V; })
+      .def_property_readonly("faces", [](const SurfaceMesh& s) { return s.F; })
+      .def_property_readonly("tags", [](const SurfaceMesh& s) { return s.tags; });
+
+  py::class_<CaseSpec, std::shared_ptr<CaseSpec>>(m, "Case")
+      .def_property_readonly("resolved_json", [](const CaseSpec& c) { return c.resolved.dump(); })
+      .def_property_readonly("output_dir", [](const CaseSpec& c) { return c.output_dir.string(); })
+      .def_property_readonly("method", [](const CaseSpec& c) { return c.method; })
+      .def_property_readonly("physics", [](const CaseSpec& c) { return c.physics; })
+      .def_property_readonly("degree", [](const CaseSpec& c) { return c.degree; })
+      .def_property_readonly("order", [](const CaseSpec& c) { return c.order; })
+      .def_property_readonly("eps", [](const CaseSpec& c) { return c.eps; })
+      .def_property_readonly("components", &CaseSpec::components);
+
+  m.def(
+      "read_case",
+      [](const std::string& path, const std::string& output) {
+        return std::make_shared<CaseSpec>(read_case(path, output));
+      },
+      py::arg("path"), py::arg("output_dir") = "");
+  m.def(
+      "read_case_json",
+      [](const std::string& text, const std::string& path, const std::string& output) {
+        nlohmann::json j;
+        try {
+          j = nlohmann::json::parse(text);
+        } catch (const nlohmann::json::parse_error& e) {
+          throw InputError(std::string("invalid JSON: ") + e.what(), {.file = path});
+        }
+        return std::make_shared<CaseSpec>(read_case_json(j, path, output));
+      },
+      py::arg("text"), py::arg("path"), py::arg("output_dir") = "");
+
+  m.def(
+      "load_surface",
+      [](const CaseSpec& spec) {
+        py::gil_scoped_release release;
+        return std::make_shared<SurfaceMesh>(load_surface(spec));
+      },
+      py::arg("case"));
+
+  py::class_<Domain, std::shared_ptr<Domain>>(m, "Domain")
+      .def_property_readonly("method", [](const Domain& d) { return d.method; })
+      .def_property_readonly("nodes", [](const Domain& d) { return d.mesh.nodes; })
+      .def_property_readonly("cells", [](const Domain& d) { return d.mesh.cells; })
+      .def_property_readonly("cell_tags", [](const Domain& d) { return d.mesh.cell_tags; })
+      .def_property_readonly("order", [](const Domain& d) { return d.mesh.order; })
+      .def_property_readonly("valid", [](const Domain& d) { return d.valid; })
+      .def_property_readonly("report_json", [](const Domain& d) { return d.report.dump(); })
+      .def_property_readonly("input_vertices", [](const Domain& d) { return d.input.V; })
+      .def_property_readonly("input_faces", [](const Domain& d) { return d.input.F; })
+      .def_property_readonly("vertex_face", [](const Domain& d) { return d.map().vertex_face; })
+      .def_property_readonly("vertex_uv", [](const Domain& d) { return d.map().vertex_uv; })
+      .def(
+          "phi",
+          [](const Domain& d) {
+            const BoundaryMap& map = d.map();
+            Eigen::MatrixXd X(map.num_input_vertices(), 3);
+            for (int v = 0; v < map.num_input_vertices(); ++v)
+              X.row(v) = map.vertex_face[v] >= 0 ? Eigen::RowVector3d(map.image(v).transpose())
+                                                 : Eigen::RowVector3d::Constant(std::nan(""));
+            return X;
+          },
+          "φ(v) for every input vertex (#V × 3; NaN for unreferenced vertices).");
+
+  m.def(
+      "mesh_domain",
+      [](const CaseSpec& spec, std::shared_ptr<SurfaceMesh> input, int threads,
+         const py::object& progress) {
+        const ProgressFn fn = progress_of(progress);
+        py::gil_scoped_release release;
+        const auto limit = limit_threads(threads);
+        return std::make_shared<Domain>(mesh_domain(spec, input ? *input : SurfaceMesh{},
+                                                    {.threads = threads, .progress = fn}));
+      },
+      py::arg("case"), py::arg("surface") = nullptr, py::arg("threads") = 0,
+      py::arg("progress") = py::none());
+
+  py::class_<Discretization, std::shared_ptr<Discretization>>(m, "Discretization")
+      .def_property_readonly("nodes", [](const Discretization& d) { return d.mesh.nodes; })
+      .def_property_readonly("cells", [](const Discretization& d) { return d.mesh.cells; })
+      .def_property_readonly("order", [](const Discretization& d) { return d.mesh.order; })
+      .def_property_readonly("degree", [](const Discretization& d) { return d.space.degree; })
+      .def_property_readonly("dof_points",
+                             [](const Discretization& d) { return d.space.dof_points; })
+      .def_property_readonly("dofs", [](const Discretization& d) {
+        return static_cast<long long>(d.space.num_dofs) * d.components;
+      });
+
+  m.def(
+      "discretize",
+      [](const CaseSpec& spec, const Domain& domain) {
+        py::gil_scoped_release release;
+        return std::make_shared<Discretization>(discretize(spec, domain));
+      },
+      py::arg("case"), py::arg("domain"), py::keep_alive<0, 2>());
+
+  py::class_<Solution, std::shared_ptr<Solution>>(m, "Solution")
+      .def_property_readonly(
+          "values",
+          [](const Solution& s) {
+            return Eigen::MatrixXd(
+                s.u.reshaped(s.components, s.u.size() / s.components).transpose());
+          })
+      .def_property_readonly("components", [](const Solution& s) { return s.components; })
+      .def_property_readonly("null_space_dim", [](const Solution& s) { return s.null_space_dim; })
+      .def_property_readonly("physics_json", [](const Solution& s) { return s.physics.dump(); })
+      .def_property_readonly("solver_method", [](const Solution& s) { return s.solve.method; })
+      .def_property_readonly("solver_iterations",
+                             [](const Solution& s) { return s.solve.iterations; });
+
+  m.def(
+      "solve",
+      [](const CaseSpec& spec, const Domain& domain, const Discretization& disc,
+         const std::string& load, int threads, const py::object& progress) {
+        const ProgressFn fn = progress_of(progress);
+        py::gil_scoped_release release;
+        const auto limit = limit_threads(threads);
+        const LoadCase l = load_of(spec, load);
+        const BoundaryData data = bind_boundary(spec, l.boundary_conditions, domain, disc);
+        return std::make_shared<Solution>(
+            solve(spec, disc, data, l.rhs, {.threads = threads, .progress = fn}));
+      },
+      py::arg("case"), py::arg("domain"), py::arg("discretization"), py::arg("load") = "",
+      py::arg("threads") = 0, py::arg("progress") = py::none(), py::keep_alive<0, 3>());
+
+  py::class_<ErrorResult, std::shared_ptr<ErrorResult>>(m, "Errors")
+      .def_property_readonly("report_json", [](const ErrorResult& e) { return e.report.dump(); });
+  m.def(
+      "compute_errors",
+      [](const CaseSpec& spec, const Discretization& disc, const Solution& solution,
+         const std::string& load) {
+        py::gil_scoped_release release;
+        return std::make_shared<ErrorResult>(compute_errors(load_of(spec, load), disc, solution));
+      },
+      py::arg("case"), py::arg("discretization"), py::arg("solution"), py::arg("load") = "");
+
+  py::class_<InputSolution, std::shared_ptr<InputSolution>>(m, "InputSolution")
+      .def_property_readonly("values", [](const InputSolution& s) { return s.values; })
+      .def_property_readonly("images", [](const InputSolution& s) { return s.images; })
+      .def_property_readonly("report_json", [](const InputSolution& s) { return s.report.dump(); });
+  m.def(
+      "transfer_to_input",
+      [](const CaseSpec& spec, const Domain& domain, const Discretization& disc,
+         const Solution& solution, const ErrorResult& errors, const std::string& load) {
+        py::gil_scoped_release release;
+        return std::make_shared<InputSolution>(
+            transfer_to_input(load_of(spec, load), domain, disc, solution, errors));
+      },
+      py::arg("case"), py::arg("domain"), py::arg("discretization"), py::arg("solution"),
+      py::arg("errors"), py::arg("load") = "");
+
+  py::class_<RunOutcome, std::shared_ptr<RunOutcome>>(m, "RunOutcome")
+      .def_property_readonly("report_json", [](const RunOutcome& o) { return o.report.dump(); })
+      .def_property_readonly("exit_code", [](const RunOutcome& o) { return o.exit_code; })
+      .def_property_readonly("timings",
+                             [](const RunOutcome& o) {
+                               std::vector<std::pair<std::string, double>> t;
+                               for (const auto& [stage, s] : o.timings.stages())
+                                 t.emplace_back(stage, s);
+                               return t;
+                             })
+      .def_property_readonly("domain",
+                             [](const RunOutcome& o) {
+                               return std::const_pointer_cast<Domain>(
+                                   std::shared_ptr<const Domain>(o.results, &o.results->domain));
+                             })
+      .def_property_readonly("load_names",
+                             [](const RunOutcome& o) {
+                               std::vector<std::string> names;
+                               for (const LoadResult& l : o.results->loads)
+                                 names.push_back(l.load.name);
+                               return names;
+                             })
+      .def(
+          "solution",
+          [](const RunOutcome& o, std::size_t i) {
+            if (i >= o.results->loads.size()) throw py::index_error("no such load case");
+            return std::const_pointer_cast<Solution>(
+                std::shared_ptr<const Solution>(o.results, &o.results->loads[i].solution));
+          },
+          py::arg("index") = 0)
+      .def(
+          "on_input",
+          [](const RunOutcome& o, std::size_t i) {
+            if (i >= o.results->loads.size()) throw py::index_error("no such load case");
+            const LoadResult& l = o.results->loads[i];
+            return l.on_input ? std::const_pointer_cast<InputSolution>(
+                                    std::shared_ptr<const InputSolution>(o.results, &*l.on_input))
+                              : nullptr;
+          },
+          py::arg("index") = 0);
+
+  m.def(
+      "run_case",
+      [](const CaseSpec& spec, int threads, bool paraview, bool write, const py::object& progress) {
+        const ProgressFn fn = progress_of(progress);
+        py::gil_scoped_release release;
+        const auto limit = limit_threads(threads);
+        return std::make_shared<RunOutcome>(
+            run_case(spec, {.threads = threads, .paraview = paraview, .write = write}, fn));
+      },
+      py::arg("case"), py::arg("threads") = 0, py::arg("paraview") = false, py::arg("write") = true,
+      py::arg("progress") = py::none());
+}
