@@ -10,7 +10,6 @@
 #include "meshing/core/log.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/io/msh_io.hpp"
-#include "meshing/shell/fibers_of.hpp"
 #include "pipeline/stages.hpp"
 
 namespace curvefem::pipeline {
@@ -129,20 +128,20 @@ Discretization discretize(const CaseSpec& spec, const Domain& domain, const Stag
   if (!domain.on_input()) {
     disc.face_tags = spec.builtin == "cube" ? cube_face_tags(disc.mesh, disc.space)
                                             : boundary_face_tags(spec.mesh, disc.mesh, disc.space);
-  } else if (domain.curved) {
-    const BoundaryMap* map = &domain.curved->map;
+  } else if (domain.curved_map) {
+    const BoundaryMap* map = &*domain.curved_map;
     if (disc.solve_geometry["degree"] != disc.solve_geometry["mesh_order"]) {
       // Boundary data are read at the solver's points, on the lowered boundary: locate them on
       // the boundary triangles moved with it (same faces, same (u, v)).
-      auto lowered = std::make_shared<BoundaryMap>(domain.curved->map);
+      auto lowered = std::make_shared<BoundaryMap>(*domain.curved_map);
       const Eigen::VectorXi& to_volume = lowered->boundary_node_to_volume;
       for (Eigen::Index i = 0; i < to_volume.size(); ++i)
         if (to_volume[i] >= 0) lowered->boundary.nodes.row(i) = disc.mesh.nodes.row(to_volume[i]);
       disc.solve_map = lowered;
       map = lowered.get();
     }
-    disc.inverse = std::make_shared<const mapping::BoundaryInverse>(
-        *map, meshing::shell::fibers_of(domain.curved->shell, domain.input), domain.input);
+    disc.inverse =
+        std::make_shared<const mapping::BoundaryInverse>(*map, *domain.fibers, domain.input);
   } else {
     disc.inverse = std::make_shared<const mapping::BoundaryInverse>(
         mapping::BoundaryInverse::identity(domain.input));

@@ -8,13 +8,17 @@
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
+#include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/io/cad_part.hpp"
 #include "meshing/io/msh_io.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "meshing/shell/fibers_of.hpp"
 #include "meshing/tetfill/tetfill.hpp"
+#include "pipeline/mesh_dir.hpp"
+#include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
 #include "pipeline/stages.hpp"
 
@@ -107,10 +111,14 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   options.exterior = spec.exterior;
   options.exterior_padding = spec.padding;
   cv::CurvedMeshStats stats;
-  d.curved = cv::build_curved_mesh(d.input, options, stats, ctx.progress);
-  d.mesh = d.curved->mesh;
+  cv::CurvedMesh curved = cv::build_curved_mesh(d.input, options, stats, ctx.progress);
+  d.mesh = std::move(curved.mesh);
+  d.curved_map = std::move(curved.map);
+  d.fibers = std::make_shared<const ShellFibers>(meshing::shell::fibers_of(curved.shell, d.input));
   json stages = json::object();
   for (const auto& [name, sec] : stats.stage_seconds) stages[name] = sec;
+  d.report["eps_rel"] = spec.eps;
+  d.report["order"] = spec.order;
   d.report["feature_edges"] = stats.feature_edges;
   d.report["coarse_faces"] = stats.coarse_faces;
   d.report["slab_tets"] = stats.slab_tets;
@@ -133,12 +141,7 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   d.report["stage_s"] = stages;
   if (spec.validate) {
     ctx.update("validate mesh", 0.0);
-    const cv::CurvedValidation v = cv::validate_curved_mesh(d.mesh, d.curved->map, d.input);
-    d.report["validation"] = json::parse(curved_validation_json(v, spec.eps).dump());
-    d.report["max_distance_rel"] = v.max_distance_rel;
-    d.report["min_jacobian_certified"] = v.certified();
-    d.valid = v.valid(spec.eps);
-    d.cell_quality = curved_validation_cell_fields(v);
+    validate_domain(d, spec.eps);
   }
   if (spec.exterior) {
     d.report["outer_slab_tets"] = stats.outer_slab_tets;
@@ -149,7 +152,7 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
     // mesh was validated above). The map's triangles are faces of outer slab tets too.
     std::vector<int> old_to_new;
     d.mesh = extract_cells(d.mesh, {3, 4}, old_to_new);
-    Eigen::VectorXi& to_volume = d.curved->map.boundary_node_to_volume;
+    Eigen::VectorXi& to_volume = d.curved_map->boundary_node_to_volume;
     for (Eigen::Index i = 0; i < to_volume.size(); ++i)
       if (to_volume[i] >= 0) {
         to_volume[i] = old_to_new[std::size_t(to_volume[i])];
@@ -220,6 +223,7 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
 int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
 
 SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
+  if (!spec.mesh_dir.empty()) return {};  // the input is the saved mesh's (mesh_domain)
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "load_surface");
   ctx.update("load surface", 0.0);
@@ -291,6 +295,13 @@ Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& 
                              [](const Eigen::Vector3d& x) { return x; });
     else
       d.mesh = load_mesh_file(spec.mesh);
+    return d;
+  }
+  if (!spec.mesh_dir.empty()) {
+    d = load_mesh_dir(spec, ctx);
+    for (const LoadCase& load : spec.loads())
+      for (const auto& bc : load.boundary_conditions)
+        check_selection_on_input(bc.select, d.input, spec.case_file.string());
     return d;
   }
   d.input = std::move(input);

@@ -10,7 +10,9 @@
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/io/pvd.hpp"
+#include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "pipeline/mesh_dir.hpp"
 #include "pipeline/paraview_script.hpp"
 #include "pipeline/report_json.hpp"
 #include "pipeline/stages.hpp"
@@ -316,6 +318,24 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
         if (!several) parts.push_back({"surface.vtu", 1, 0.0, "surface"});
       }
       write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
+      if (domain.curved_map && domain.fibers && !domain.outer_box) {
+        // The mesh, φ and the fibers, so that geometry.mesh_dir can reuse this folder. A
+        // built-in input is saved beside them (input.msh with its tags, recorded relative to the
+        // folder).
+        std::string input =
+            spec.surface.empty() ? std::string() : std::filesystem::absolute(spec.surface).string();
+        std::filesystem::path input_file = spec.surface;
+        if (!spec.mesh_dir.empty()) {
+          input = domain.report.at("reused").at("input").get<std::string>();
+          input_file = input;
+        } else if (spec.surface.empty()) {
+          io::write_surface(out.path("input.msh"), domain.input, io::SurfaceFormat::msh41);
+          input = "input.msh";
+          input_file = out.path("input.msh");
+        }
+        save_mesh_dir(out.path("."), domain.mesh, *domain.curved_map, *domain.fibers, input,
+                      file_checksum(input_file));
+      }
     }
     io::write_pvd(out.path("result.pvd"), parts);
     if (options.paraview) {

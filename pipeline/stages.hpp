@@ -35,9 +35,9 @@
 #include "meshing/core/boundary_map.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/progress.hpp"
+#include "meshing/core/shell_fibers.hpp"
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/core/timer.hpp"
-#include "meshing/curved/curved_mesher.hpp"
 #include "pipeline/case_file.hpp"
 
 namespace curvefem::pipeline {
@@ -77,19 +77,22 @@ struct Domain {
   LagrangeMesh mesh;   ///< as meshed (order k); volume.vtu's geometry
   // curved | dense:
   SurfaceMesh input;
-  std::optional<meshing::curved::CurvedMesh> curved;  ///< curved
-  BoundaryMap identity_map;                           ///< dense: φ = identity
-  std::optional<OuterBox> outer_box;                  ///< exterior runs
+  std::optional<BoundaryMap> curved_map;  ///< curved: φ
+  /// curved: the fibers of the coarse shell the boundary was curved in (φ⁻¹ = P_T on them).
+  std::shared_ptr<const ShellFibers> fibers;
+  BoundaryMap identity_map;           ///< dense: φ = identity
+  std::optional<OuterBox> outer_box;  ///< exterior runs
   /// Per tet, from the independent validation (curved): certificate, scaled Jacobian, MIPS, ...
   std::vector<Field> cell_quality;
   bool valid = true;      ///< curved: the independent validation passed (or was not asked for)
   nlohmann::json report;  ///< report.json "meshing" (curved | dense)
-  const BoundaryMap& map() const { return curved ? curved->map : identity_map; }
+  const BoundaryMap& map() const { return curved_map ? *curved_map : identity_map; }
   bool on_input() const { return method != "given"; }
 };
 
-/// curved: build_curved_mesh + validate_curved_mesh; dense: tetfill of the input (φ = identity);
-/// given: the case's mesh file or built-in mesh (`input` is ignored).
+/// curved: build_curved_mesh + validate_curved_mesh, or the saved mesh of geometry.mesh_dir
+/// (pipeline/mesh_dir.hpp); dense: tetfill of the input (φ = identity); given: the case's mesh
+/// file or built-in mesh (`input` is ignored).
 Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& ctx = {});
 
 // ---- discretize -----------------------------------------------------------------------------

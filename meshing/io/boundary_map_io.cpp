@@ -26,11 +26,13 @@ Eigen::MatrixXd read_rows(const nlohmann::json& j) {
 }  // namespace
 
 void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& map,
-                        const std::string& input, const ShellFibers* fibers) {
+                        const std::string& input, const ShellFibers* fibers,
+                        const std::string& input_checksum) {
   nlohmann::ordered_json j;
   j["format"] = "curvefem-boundary-map";
   j["version"] = k_boundary_map_version;
   j["input"] = input;
+  if (!input_checksum.empty()) j["input_checksum"] = input_checksum;
   j["order"] = map.boundary.order;
   j["input_vertices"] = map.num_input_vertices();
   auto& nodes = j["boundary"]["nodes"] = nlohmann::ordered_json::array();
@@ -116,6 +118,7 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
   BoundaryMap& map = saved.map;
   try {
     saved.input = j.value("input", std::string());
+    saved.input_checksum = j.value("input_checksum", std::string());
     if (j.at("format") != "curvefem-boundary-map")
       throw InputError(path.string() + ": not a curvefem boundary map");
     const int version = j.at("version").get<int>();

@@ -22,14 +22,18 @@ namespace curvefem::io {
 
 inline constexpr int k_boundary_map_version = 2;
 
-/// `input`: the dense input's path, recorded for later runs. `fibers` (optional): the coarse
-/// shell's fibers the boundary was curved in (φ⁻¹ = P_T on them). Written atomically.
+/// `input`: the dense input's path, recorded for later runs (absolute, or relative to the file's
+/// folder). `fibers` (optional): the coarse shell's fibers the boundary was curved in (φ⁻¹ = P_T
+/// on them). `input_checksum` (optional): of the input file's bytes, so that a later run reusing
+/// the map (geometry.mesh_dir) can refuse a changed input. Written atomically.
 void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& map,
-                        const std::string& input, const ShellFibers* fibers = nullptr);
+                        const std::string& input, const ShellFibers* fibers = nullptr,
+                        const std::string& input_checksum = {});
 
 struct SavedBoundaryMap {
   BoundaryMap map;
-  std::string input;                  // absolute path of the dense input
+  std::string input;                  // path of the dense input, as written
+  std::string input_checksum;         // "" when not written
   std::optional<ShellFibers> fibers;  // present when the map was written with them
 };
 /// Throws IoError when the file cannot be opened, InputError naming the file and the defect

@@ -535,3 +535,102 @@ TEST(Run, LoadCasesAreCheckedLikeTheTopLevelKeys) {
     EXPECT_FALSE(std::filesystem::exists(dir / "out")) << b.body;
   }
 }
+
+// geometry.mesh_dir: a curved run's output folder (mesh.msh, boundary_map.json with the fibers,
+// input.msh for a built-in surface) is reused without meshing: the same case on the reused mesh
+// gives the same numbers bit for bit, another physics runs on it, and a changed input is refused.
+TEST(Run, AMeshDirIsReusedWithoutMeshingAndAChangedInputIsRefused) {
+  const auto dir = test::scratch_dir("run_mesh_dir");
+  const std::string load = R"J(
+    "discretization": {"degree": 2}, "rhs": "sin(x)*cos(y)*exp(z)",
+    "boundary_conditions": [{"type": "dirichlet", "select": {"all": true},
+                             "value": "sin(x)*cos(y)*exp(z)"}],
+    "exact": "sin(x)*cos(y)*exp(z)")J";
+  std::ofstream(dir / "first.json") << R"J({
+    "geometry": {"builtin_surface": {"shape": "sphere", "level": 2}, "features": "none"},
+    "meshing": {"method": "curved", "order": 2, "eps": 0.02}, "physics": {"type": "poisson"},)J"
+                                    << load << "}";
+  std::string log;
+  ASSERT_EQ(run_case(dir / "first.json", dir / "first", &log), 0) << log;
+  for (const char* f : {"mesh.msh", "boundary_map.json", "input.msh"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "first" / f)) << f;
+  std::ofstream(dir / "again.json") << R"J({"geometry": {"mesh_dir": "first"},
+    "physics": {"type": "poisson"},)J"
+                                    << load << "}";
+  ASSERT_EQ(run_case(dir / "again.json", dir / "again", &log), 0) << log;
+  const auto a = report(dir / "first"), b = report(dir / "again");
+  EXPECT_EQ(b["meshing"]["reused"]["mesh_dir"], (dir / "first").string());
+  EXPECT_EQ(b["tets"], a["tets"]);
+  EXPECT_EQ(b["dofs"], a["dofs"]);
+  EXPECT_EQ(b["l2_error"].get<double>(), a["l2_error"].get<double>());
+  EXPECT_EQ(b["surface_max_error"].get<double>(), a["surface_max_error"].get<double>());
+  EXPECT_TRUE(b["mesh_valid"].get<bool>());
+  EXPECT_TRUE(b["meshing"]["validation"]["valid"].get<bool>());
+  EXPECT_FALSE(b["time_s"].contains("meshing"));
+  EXPECT_TRUE(b["time_s"].contains("load_mesh"));
+  // The reused run's folder is reusable in turn (its map records the input's absolute path).
+  std::ofstream(dir / "third.json") << R"J({"geometry": {"mesh_dir": "again"},
+    "physics": {"type": "linear_elasticity", "E": 100, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"box": [[-2, -2, -2], [2, 2, -0.5]]}, "value": [0, 0, 0]},
+      {"type": "neumann", "select": {"normal": {"direction": [0, 0, 1], "angle": 45}},
+       "value": [0, 0, -1]}]})J";
+  ASSERT_EQ(run_case(dir / "third.json", dir / "third", &log), 0) << log;
+  EXPECT_EQ(report(dir / "third")["tets"], a["tets"]);
+  EXPECT_LT(report(dir / "third")["physics_details"]["force_balance"]["imbalance"].get<double>(),
+            1e-8);
+  // Meshing keys do not apply to a reused mesh.
+  std::ofstream(dir / "bad.json") << R"J({"geometry": {"mesh_dir": "first"},
+    "meshing": {"order": 3}, "physics": {"type": "poisson"},)J"
+                                  << load << "}";
+  EXPECT_EQ(run_case(dir / "bad.json", dir / "bad", &log), 2) << log;
+  EXPECT_NE(log.find("/meshing/order: the mesh of geometry.mesh_dir is reused as saved"),
+            std::string::npos)
+      << log;
+  // A changed input: refused, naming the file, nothing written.
+  std::ofstream(dir / "first" / "input.msh", std::ios::app) << "\n";
+  EXPECT_EQ(run_case(dir / "again.json", dir / "again2", &log), 2) << log;
+  EXPECT_NE(log.find("input.msh"), std::string::npos) << log;
+  EXPECT_NE(log.find("the input surface changed since the mesh was made"), std::string::npos)
+      << log;
+  EXPECT_FALSE(std::filesystem::exists(dir / "again2"));
+  // A folder that is not a mesh output.
+  std::ofstream(dir / "none.json") << R"J({"geometry": {"mesh_dir": "."},
+    "physics": {"type": "poisson"},)J"
+                                   << load << "}";
+  EXPECT_EQ(run_case(dir / "none.json", dir / "none", &log), 2) << log;
+  EXPECT_NE(log.find("/geometry/mesh_dir: no mesh.msh in"), std::string::npos) << log;
+}
+
+// The output of `curvefem mesh` is a mesh_dir too; its input is the file it was given.
+TEST(Run, AMeshCommandOutputIsAMeshDir) {
+  const auto dir = test::scratch_dir("run_mesh_dir_mesh");
+  std::string log;
+  ASSERT_EQ(
+      test::run_command(cli() + " generate noise_sphere_2 -o " + (dir / "s.obj").string(), &log), 0)
+      << log;
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + (dir / "s.obj").string() + " -o " +
+                                  (dir / "mesh").string() + " --order 2",
+                              &log),
+            0)
+      << log;
+  std::ofstream(dir / "case.json") << R"J({"geometry": {"mesh_dir": "mesh"},
+    "physics": {"type": "poisson"}, "discretization": {"degree": 2}, "rhs": "-6",
+    "boundary_conditions": [{"type": "dirichlet", "select": {"all": true},
+                             "value": "x*x + y*y + z*z"}],
+    "exact": "x*x + y*y + z*z"})J";
+  ASSERT_EQ(run_case(dir / "case.json", dir / "out", &log), 0) << log;
+  const auto r = report(dir / "out");
+  const auto m = report(dir / "mesh");
+  EXPECT_EQ(r["tets"], m["output_tets"]);
+  EXPECT_EQ(r["meshing"]["reused"]["input"], std::filesystem::absolute(dir / "s.obj").string());
+  EXPECT_EQ(r["meshing"]["eps_rel"], m["eps_rel"]);
+  EXPECT_TRUE(r["mesh_valid"].get<bool>());
+  // u = r² is quadratic: P2 on the order-2 mesh, with data read at φ⁻¹(x) on the input (ε = 1%):
+  // measured 0.5% of the norm.
+  EXPECT_LT(r["l2_error"].get<double>(), 0.02 * r["l2_norm_exact"].get<double>());
+  std::ofstream(dir / "s.obj", std::ios::app) << "# edited\n";
+  EXPECT_EQ(run_case(dir / "case.json", dir / "out2", &log), 2) << log;
+  EXPECT_NE(log.find("s.obj"), std::string::npos) << log;
+}

@@ -24,6 +24,8 @@
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/fibers_of.hpp"
+#include "pipeline/mesh_dir.hpp"
+#include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
@@ -33,28 +35,6 @@ namespace curvefem::cli {
 using pipeline::curved_validation_cell_fields;
 using pipeline::curved_validation_json;
 using pipeline::optimize_json;
-
-// φ⁻¹(φ(v)) for every input vertex: φ(v) is located on the curved boundary from its position
-// alone (TriangleLocator: box tree + Gauss–Newton) and pulled back along the shell's fibers (P_T
-// at h = 0, the data boundary_map.json saves). Returns (max error relative to the bbox edge,
-// vertices that could not be mapped back).
-std::pair<double, int> map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
-                                     const SurfaceMesh& input) {
-  const mapping::BoundaryInverse inverse(map, fibers, input);
-  const double unit = bbox_longest_edge(input.V);
-  double worst = 0;
-  int failures = 0;
-  for (int v = 0; v < map.num_input_vertices(); ++v) {
-    if (map.vertex_face[v] < 0) continue;
-    const auto back = inverse(map.image(v));
-    if (!back) {
-      ++failures;
-      continue;
-    }
-    worst = std::max(worst, (back->position - input.V.row(v).transpose()).norm() / unit);
-  }
-  return {worst, failures};
-}
 
 namespace {
 
@@ -245,9 +225,11 @@ void register_mesh(CLI::App& app) {
     const cv::CurvedValidation check = cv::validate_curved_mesh(result.mesh, result.map, input);
     Stopwatch roundtrip_watch;
     const ShellFibers fibers = meshing::shell::fibers_of(result.shell, input);
-    const auto [roundtrip, roundtrip_failures] = map_roundtrip(result.map, fibers, input);
+    const pipeline::MapRoundtrip trip = pipeline::map_roundtrip(result.map, fibers, input);
+    const double roundtrip = trip.max_error_rel;
+    const int roundtrip_failures = trip.failures;
     const double roundtrip_seconds = roundtrip_watch.seconds();
-    const bool ok = check.valid(args->eps) && roundtrip_failures == 0 && roundtrip <= 1e-6;
+    const bool ok = pipeline::curved_mesh_valid(check, args->eps, trip);
 
     StagedOutputDir out(args->output);
     Stopwatch write;
@@ -256,7 +238,8 @@ void register_mesh(CLI::App& app) {
     io::write_vtu(out.path("mesh.vtu"), result.mesh, quality);
     io::write_msh(out.path("mesh.msh"), result.mesh);
     const std::string input_abs = std::filesystem::absolute(args->input).string();
-    io::write_boundary_map(out.path("boundary_map.json"), result.map, input_abs, &fibers);
+    io::write_boundary_map(out.path("boundary_map.json"), result.map, input_abs, &fibers,
+                           pipeline::file_checksum(args->input));
     nlohmann::ordered_json stages = nlohmann::ordered_json::object();
     for (const auto& [name, s] : stats.stage_seconds) stages[name] = s;
     stages["validate"] = check.seconds;

@@ -14,6 +14,7 @@
 #include "meshing/io/boundary_map_io.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
@@ -21,8 +22,6 @@
 namespace curvefem::cli {
 
 using pipeline::curved_validation_json;
-std::pair<double, int> map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
-                                     const SurfaceMesh& input);  // cmd_mesh.cpp
 
 namespace {
 
@@ -78,11 +77,11 @@ void register_validate(CLI::App& app) {
                        std::to_string(map.boundary.order) + " differs from mesh.vtu's " +
                        std::to_string(vtu.mesh.order));
     const auto v = meshing::curved::validate_curved_mesh(vtu.mesh, map, input, args->subdivision);
-    double roundtrip = 0;
-    int roundtrip_failures = 0;
-    if (saved.fibers)
-      std::tie(roundtrip, roundtrip_failures) = map_roundtrip(map, *saved.fibers, input);
-    const bool ok = v.valid(eps) && roundtrip_failures == 0 && roundtrip <= 1e-6;
+    pipeline::MapRoundtrip trip;
+    if (saved.fibers) trip = pipeline::map_roundtrip(map, *saved.fibers, input);
+    const double roundtrip = trip.max_error_rel;
+    const int roundtrip_failures = trip.failures;
+    const bool ok = pipeline::curved_mesh_valid(v, eps, trip);
     progress.reset();
     if (args->json) {
       auto j = curved_validation_json(v, eps);
