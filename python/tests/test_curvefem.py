@@ -196,3 +196,16 @@ def test_load_cases_on_one_curved_mesh_superpose_on_the_input_surface():
     single = curvefem.run(sphere_case(method="curved"), write=False).report
     assert r["load_cases"][3]["l2_error"] == pytest.approx(single["l2_error"], rel=1e-12)
     assert r["tets"] == single["tets"]
+
+
+def test_a_saved_run_is_reused_as_mesh_dir_without_meshing(tmp_path):
+    first = curvefem.run(sphere_case(), output_dir=tmp_path / "first")
+    case = sphere_case()
+    case["geometry"] = {"mesh_dir": str(tmp_path / "first")}
+    case.pop("meshing")
+    again = curvefem.run(case, write=False)
+    assert "meshing" not in again.timings and "load_mesh" in again.timings
+    assert again.report["meshing"]["reused"]["mesh_dir"] == str(tmp_path / "first")
+    assert again.report["l2_error"] == first.report["l2_error"]
+    assert np.array_equal(again.surface_values, first.surface_values)
+    assert again.report["meshing"]["validation"]["map_roundtrip_max_error_rel"] <= 1e-6
