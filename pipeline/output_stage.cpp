@@ -136,11 +136,12 @@ InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
 }
 
 LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
-                      const Discretization& disc, const StageContext& ctx) {
+                      const Discretization& disc, const StageContext& ctx,
+                      std::shared_ptr<fem::FactorizationCache> cache) {
   LoadResult r;
   r.load = load;
   const BoundaryData data = bind_boundary(spec, r.load.boundary_conditions, domain, disc);
-  r.solution = solve(spec, disc, data, r.load.rhs, ctx);
+  r.solution = solve(spec, disc, data, r.load.rhs, ctx, std::move(cache));
   r.errors = compute_errors(r.load, disc, r.solution, ctx);
   if (domain.on_input())
     r.on_input = transfer_to_input(r.load, domain, disc, r.solution, r.errors, ctx);
@@ -162,7 +163,8 @@ json load_report(const LoadResult& l) {
                       {"setup_s", s.setup_s},
                       {"solve_s", s.solve_s},
                       {"near_nullspace", s.near_nullspace},
-                      {"null_space_dim", s.null_space_dim}};
+                      {"null_space_dim", s.null_space_dim},
+                      {"reused_factorization", s.reused_factorization}};
   return report;
 }
 

@@ -15,9 +15,16 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   if (spec.dense_surface()) input = load_surface(spec, ctx);
   r->domain = mesh_domain(spec, std::move(input), ctx);
   r->disc = discretize(spec, r->domain, ctx);
-  for (const LoadCase& load : spec.loads())
-    r->loads.push_back(solve_load(spec, load, r->domain, r->disc, ctx));
+  // Load cases with the same Dirichlet part share the matrix: one factorization for them.
+  const std::vector<LoadCase> loads = spec.loads();
+  auto cache = loads.size() > 1 ? std::make_shared<fem::FactorizationCache>() : nullptr;
+  for (const LoadCase& load : loads)
+    r->loads.push_back(solve_load(spec, load, r->domain, r->disc, ctx, cache));
   outcome.report = run_report(spec, r->domain, r->disc, r->loads);
+  if (cache) {
+    outcome.report["factorizations"] = cache->factorizations();
+    outcome.report["factorization_reuses"] = cache->reuses();
+  }
   outcome.report["threads"] = settings.threads;
   if (settings.write) {
     write_outputs(spec, r->domain, r->disc, r->loads,

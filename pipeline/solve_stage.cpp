@@ -116,7 +116,8 @@ BoundaryData bind_boundary(const CaseSpec& spec,
 }
 
 Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryData& data,
-               const std::vector<Expression>& rhs, const StageContext& ctx) {
+               const std::vector<Expression>& rhs, const StageContext& ctx,
+               std::shared_ptr<fem::FactorizationCache> cache) {
   const LagrangeMesh& mesh = disc.mesh;
   const fem::FunctionSpace& space = disc.space;
   ctx.update("solve " + spec.physics, 0.0);
@@ -125,6 +126,7 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   solver.rtol = spec.solver_rtol;
   solver.max_iterations = spec.solver_max_iterations;
   solver.use_near_nullspace = spec.solver_near_nullspace;
+  if (spec.physics != "neo_hookean") solver.factorization_cache = std::move(cache);
   const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == "nodal"
                                                       ? fem::PartialDirichlet::nodal
                                                       : fem::PartialDirichlet::nitsche;

@@ -146,8 +146,11 @@ struct Solution {
 };
 
 /// The case's physics with the bound conditions and body load `rhs` (empty, 1 or 3 expressions).
+/// `cache` (linear physics, direct solver): the factorization is reused from an earlier solve of
+/// an identical matrix (load cases with the same Dirichlet part), kept for the next otherwise.
 Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryData& data,
-               const std::vector<Expression>& rhs, const StageContext& ctx = {});
+               const std::vector<Expression>& rhs, const StageContext& ctx = {},
+               std::shared_ptr<fem::FactorizationCache> cache = nullptr);
 
 // ---- compute_errors -------------------------------------------------------------------------
 
@@ -186,7 +189,8 @@ struct LoadResult {
 
 /// bind_boundary, solve, compute_errors and transfer_to_input for one load case.
 LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
-                      const Discretization& disc, const StageContext& ctx = {});
+                      const Discretization& disc, const StageContext& ctx = {},
+                      std::shared_ptr<fem::FactorizationCache> cache = nullptr);
 
 // ---- write_outputs --------------------------------------------------------------------------
 

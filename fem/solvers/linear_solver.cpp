@@ -21,7 +21,8 @@ Eigen::MatrixXd orthonormal_basis(const Eigen::MatrixXd& V) {
 /// Direct solve of the semi-definite A: pins the m unknowns a column-pivoted QR of N^T picks
 /// (N = null space, #rows x m), solves the SPD remainder, pinned unknowns = 0.
 Eigen::VectorXd solve_pinned(const SparseMatrix& A, const Eigen::VectorXd& b,
-                             const Eigen::MatrixXd& N, LinearSolveInfo& info) {
+                             const Eigen::MatrixXd& N, LinearSolveInfo& info,
+                             FactorizationCache* cache) {
   const Eigen::Index n = A.rows(), m = N.cols();
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(N.transpose());
   std::vector<int> reduced(static_cast<std::size_t>(n), 0);
@@ -40,7 +41,7 @@ Eigen::VectorXd solve_pinned(const SparseMatrix& A, const Eigen::VectorXd& b,
   Eigen::VectorXd br(r);
   for (Eigen::Index i = 0; i < n; ++i)
     if (reduced[std::size_t(i)] >= 0) br[reduced[std::size_t(i)]] = b[i];
-  const Eigen::VectorXd xr = solve_cholmod(Ar, br, info);
+  const Eigen::VectorXd xr = solve_cholmod(Ar, br, info, cache);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
   for (Eigen::Index i = 0; i < n; ++i)
     if (reduced[std::size_t(i)] >= 0) x[i] = xr[reduced[std::size_t(i)]];
@@ -76,7 +77,8 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
   }
   Eigen::VectorXd x;
   if (type == "direct")
-    x = singular ? solve_pinned(A, rhs, options.null_space, out) : solve_cholmod(A, rhs, out);
+    x = singular ? solve_pinned(A, rhs, options.null_space, out, options.factorization_cache.get())
+                 : solve_cholmod(A, rhs, out, options.factorization_cache.get());
   else
     x = solve_petsc_cg(A, rhs, options, Q, out);
   const double bn = rhs.norm();

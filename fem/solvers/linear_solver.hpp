@@ -19,10 +19,30 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace curvefem::fem {
+
+/// A CHOLMOD factorization kept between direct solves (load cases of one run): the next matrix
+/// handed to solve_cholmod with the cache is checked against the factorized one bit for bit
+/// (sizes, pattern and values); the factor is reused when they are identical and recomputed (and
+/// kept) otherwise. Not thread-safe: one cache per sequence of solves.
+class FactorizationCache {
+ public:
+  FactorizationCache();
+  ~FactorizationCache();
+  FactorizationCache(const FactorizationCache&) = delete;
+  FactorizationCache& operator=(const FactorizationCache&) = delete;
+  int factorizations() const;  ///< how many times a matrix was factorized
+  int reuses() const;          ///< how many solves reused the kept factor
+  struct Impl;
+  Impl& impl() { return *m_impl; }
+
+ private:
+  std::unique_ptr<Impl> m_impl;
+};
 
 struct LinearSolverOptions {
   std::string type = "auto";  ///< direct | cg | auto
@@ -40,6 +60,8 @@ struct LinearSolverOptions {
   bool use_near_nullspace = true;
   /// Basis of ker A (#rows x m) for a singular positive semi-definite A; empty: A is SPD.
   Eigen::MatrixXd null_space;
+  /// direct: keep / reuse the factorization across solves of an identical matrix (may be null).
+  std::shared_ptr<FactorizationCache> factorization_cache;
 };
 
 struct LinearSolveInfo {
@@ -50,7 +72,8 @@ struct LinearSolveInfo {
   std::vector<double> residual_history;  ///< cg: preconditioned residual norms per iteration
   /// cg: "rigid-body modes" (from coordinates), "vectors" (explicit) or "default" (GAMG's own)
   std::string near_nullspace;
-  int null_space_dim = 0;  ///< dimension of the kernel handled (0: A was SPD)
+  int null_space_dim = 0;             ///< dimension of the kernel handled (0: A was SPD)
+  bool reused_factorization = false;  ///< direct: the factor of an identical earlier matrix
 };
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
@@ -62,7 +85,7 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
 
 // Engines (linear_solver_cholmod.cpp, linear_solver_petsc.cpp).
 Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
-                              LinearSolveInfo& info);
+                              LinearSolveInfo& info, FactorizationCache* cache = nullptr);
 /// null_space: an orthonormal basis of ker A (#rows x m) or empty.
 Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                                const LinearSolverOptions& options,

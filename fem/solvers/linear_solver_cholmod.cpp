@@ -1,5 +1,7 @@
 // CHOLMOD supernodal Cholesky through Eigen's CholmodSupport module.
 #include <Eigen/CholmodSupport>
+#include <cstring>
+#include <memory>
 
 #include "fem/solvers/linear_solver.hpp"
 #include "meshing/core/error.hpp"
@@ -7,21 +9,72 @@
 
 namespace curvefem::fem {
 
+using Llt = Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower>;
+
+struct FactorizationCache::Impl {
+  SparseMatrix matrix;  // compressed copy of the factorized matrix
+  std::unique_ptr<Llt> llt;
+  int factorizations = 0, reuses = 0;
+};
+
+FactorizationCache::FactorizationCache() : m_impl(std::make_unique<Impl>()) {}
+FactorizationCache::~FactorizationCache() = default;
+int FactorizationCache::factorizations() const { return m_impl->factorizations; }
+int FactorizationCache::reuses() const { return m_impl->reuses; }
+
+namespace {
+
+/// Same sizes, pattern and values, bit for bit (both compressed).
+bool identical(const SparseMatrix& a, const SparseMatrix& b) {
+  if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros()) return false;
+  const auto n = std::size_t(a.nonZeros());
+  return std::memcmp(a.outerIndexPtr(), b.outerIndexPtr(),
+                     sizeof(int) * std::size_t(a.cols() + 1)) == 0 &&
+         std::memcmp(a.innerIndexPtr(), b.innerIndexPtr(), sizeof(int) * n) == 0 &&
+         std::memcmp(a.valuePtr(), b.valuePtr(), sizeof(double) * n) == 0;
+}
+
+}  // namespace
+
 Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
-                              LinearSolveInfo& info) {
+                              LinearSolveInfo& info, FactorizationCache* cache) {
   info.method = "cholmod-supernodal";
   Stopwatch watch;
-  Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> llt;
-  llt.compute(A);
+  Llt local;
+  Llt* llt = &local;
+  bool factorized = false;
+  if (cache) {
+    SparseMatrix compressed = A;
+    compressed.makeCompressed();
+    FactorizationCache::Impl& c = cache->impl();
+    if (c.llt && identical(c.matrix, compressed)) {  // only successful factors are kept
+      ++c.reuses;
+      info.reused_factorization = true;
+      llt = c.llt.get();
+      factorized = true;
+    } else {
+      c.llt.reset();
+      c.matrix = std::move(compressed);
+      auto fresh = std::make_unique<Llt>();
+      fresh->compute(c.matrix);
+      ++c.factorizations;
+      factorized = fresh->info() == Eigen::Success;
+      if (factorized) c.llt = std::move(fresh);
+      llt = c.llt.get();
+    }
+  } else {
+    local.compute(A);
+    factorized = local.info() == Eigen::Success;
+  }
   info.setup_s = watch.seconds();
-  if (llt.info() != Eigen::Success)
+  if (!factorized)
     throw SolverError(
         "CHOLMOD factorization failed: the matrix is not positive definite "
         "(inverted element, missing Dirichlet condition or a floating part?)");
   watch.reset();
-  Eigen::VectorXd x = llt.solve(b);
+  Eigen::VectorXd x = llt->solve(b);
   info.solve_s = watch.seconds();
-  if (llt.info() != Eigen::Success) throw SolverError("CHOLMOD solve failed");
+  if (llt->info() != Eigen::Success) throw SolverError("CHOLMOD solve failed");
   return x;
 }
 

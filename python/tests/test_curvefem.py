@@ -192,6 +192,7 @@ def test_load_cases_on_one_curved_mesh_superpose_on_the_input_surface():
     assert [l["name"] for l in r["load_cases"]] == result.load_names
     s = result.surface_values_by_load
     assert np.abs(s["ab"] - s["a"] - s["b"]).max() < 1e-9
+    assert r["factorizations"] == 1 and r["factorization_reuses"] == 3  # one Dirichlet part
     # The same numbers as the single-load run on the same mesh (deterministic meshing).
     single = curvefem.run(sphere_case(method="curved"), write=False).report
     assert r["load_cases"][3]["l2_error"] == pytest.approx(single["l2_error"], rel=1e-12)

@@ -83,3 +83,43 @@ TEST(Solvers, CgNonConvergenceReportsResidualHistory) {
     EXPECT_NE(std::string(e.what()).find("residual history"), std::string::npos) << e.what();
   }
 }
+
+// A FactorizationCache reuses the CHOLMOD factor for a bit-identical matrix (load cases with the
+// same Dirichlet part): the same solution as a fresh factorization, bit for bit; another matrix
+// (other Dirichlet faces, or a changed value) is factorized again; a failed factorization is not
+// kept.
+TEST(Solvers, FactorizationCacheReusesTheFactorOfAnIdenticalMatrix) {
+  const LagrangeMesh mesh = wobbly_cube(3, 2);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  auto problem = [&](double load, bool all_faces) {
+    fem::PoissonProblem p;
+    p.rhs = [load](const Eigen::Vector3d& x) { return load * (1 + x[0]); };
+    std::vector<char> faces(space.boundary_faces.size(), 1);
+    if (!all_faces)
+      for (std::size_t f = 0; f < faces.size(); f += 2) faces[f] = 0;
+    p.dirichlet.push_back({faces, [load](const Eigen::Vector3d& x) { return load * x[1]; }, {}});
+    return p;
+  };
+  fem::LinearSolverOptions fresh;
+  fresh.type = "direct";
+  fem::LinearSolverOptions cached = fresh;
+  cached.factorization_cache = std::make_shared<fem::FactorizationCache>();
+  const auto a = fem::solve_poisson(mesh, space, problem(1.0, true), cached);
+  const auto b = fem::solve_poisson(mesh, space, problem(2.5, true), cached);
+  EXPECT_FALSE(a.solve.reused_factorization);
+  EXPECT_TRUE(b.solve.reused_factorization);
+  EXPECT_EQ(b.u, fem::solve_poisson(mesh, space, problem(2.5, true), fresh).u);
+  EXPECT_LT((b.u - 2.5 * a.u).cwiseAbs().maxCoeff(), 1e-12 * a.u.cwiseAbs().maxCoeff());
+  EXPECT_EQ(cached.factorization_cache->factorizations(), 1);
+  EXPECT_EQ(cached.factorization_cache->reuses(), 1);
+  const auto c = fem::solve_poisson(mesh, space, problem(1.0, false), cached);  // other faces
+  EXPECT_FALSE(c.solve.reused_factorization);
+  EXPECT_EQ(c.u, fem::solve_poisson(mesh, space, problem(1.0, false), fresh).u);
+  EXPECT_EQ(cached.factorization_cache->factorizations(), 2);
+  fem::PoissonProblem negative = problem(1.0, true);
+  negative.kappa = [](const Eigen::Vector3d&) { return -1.0; };
+  EXPECT_THROW(fem::solve_poisson(mesh, space, negative, cached), SolverError);
+  const auto d = fem::solve_poisson(mesh, space, problem(1.0, true), cached);
+  EXPECT_FALSE(d.solve.reused_factorization);  // the failed one was not kept, nor the one before
+  EXPECT_EQ(d.u, a.u);
+}

@@ -474,6 +474,11 @@ TEST(Run, LoadCasesShareTheMeshAndAddUpForLinearElasticity) {
     EXPECT_LT(l["physics_details"]["force_balance"]["imbalance"].get<double>(), 1e-8);
   }
   EXPECT_EQ(r["load_cases"][0]["name"], "down");
+  // The four cases share the Dirichlet part, so the matrix: one factorization, three reuses.
+  EXPECT_EQ(r["factorizations"], 1);
+  EXPECT_EQ(r["factorization_reuses"], 3);
+  EXPECT_FALSE(r["load_cases"][0]["solver"]["reused_factorization"].get<bool>());
+  EXPECT_TRUE(r["load_cases"][3]["solver"]["reused_factorization"].get<bool>());
   const auto vtu = io::read_vtu(out / "volume.vtu");
   auto field = [&](const std::string& name) -> const std::vector<double>& {
     for (const auto& f : vtu.fields.point_data)
