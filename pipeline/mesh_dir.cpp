@@ -43,15 +43,15 @@ void save_mesh_dir(const std::filesystem::path& dir, const LagrangeMesh& mesh,
 
 namespace {
 
-/// The ε the saved mesh was made for: report.json's eps_rel (curvefem mesh) or
-/// meshing.validation.eps_rel (curvefem run). InputError when neither is there.
+/// The ε the saved mesh was made for: report.json's eps_rel (curvefem mesh) or meshing.eps_rel
+/// (curvefem run). InputError when neither is there.
 double saved_eps(const std::filesystem::path& dir) {
   const std::filesystem::path file = dir / "report.json";
   std::ifstream in(file);
   try {
     const nlohmann::json r = nlohmann::json::parse(in);
-    if (r.contains("eps_rel")) return r.at("eps_rel").get<double>();
-    return r.at("meshing").at("validation").at("eps_rel").get<double>();
+    if (r.contains("eps_rel")) return r.at("eps_rel").get<double>();  // curvefem mesh
+    return r.at("meshing").at("eps_rel").get<double>();               // curvefem run
   } catch (const nlohmann::json::exception& e) {
     throw InputError(std::string("no eps_rel of the saved mesh in it: ") + e.what(),
                      {.file = file.string()});
