@@ -3,6 +3,7 @@
 // squared length; after a collapse the edges around the kept vertex are re-queued with their new
 // lengths, and queue entries whose length changed since they were queued are skipped.
 
+#include <atomic>
 #include <memory>
 
 #include "meshing/editing/algorithms/surface_passes.hpp"
@@ -17,8 +18,22 @@ void run_collapse_pass(SurfaceEditMesh& m, const std::function<double(const TriM
                        std::size_t target_faces, int threads, const std::string& name,
                        PassLog& log) {
   SurfacePass pass = make_surface_pass(m, threads);
-  pass.operations["collapse"] = [&m](TriMesh&, const TriMesh::Tuple& t) {
-    return m.collapse_edge(t);
+  // The face budget: parallel tasks reserve the faces a collapse removes (2, or 1 on a boundary
+  // edge) before collapsing, so they cannot all pass the stopping check at target + 2 and end
+  // below the target together. A collapse may start while any budget is left, as the serial
+  // check `faces <= target` allows: the result is the serial one's face count.
+  auto budget = std::make_shared<std::atomic<long long>>(static_cast<long long>(m.num_cells()) -
+                                                         static_cast<long long>(target_faces));
+  pass.operations["collapse"] =
+      [&m, budget](TriMesh&, const TriMesh::Tuple& t) -> std::optional<TriMesh::Tuple> {
+    const long long removes = m.is_boundary_edge(t) ? 1 : 2;
+    if (budget->fetch_sub(removes) < 1) {
+      budget->fetch_add(removes);
+      return std::nullopt;
+    }
+    auto result = m.collapse_edge(t);
+    if (!result) budget->fetch_add(removes);
+    return result;
   };
   pass.priority = [&cost](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
     return -cost(t);
