@@ -3,8 +3,9 @@
 // squared length; after a collapse the edges around the kept vertex are re-queued with their new
 // lengths, and queue entries whose length changed since they were queued are skipped.
 
-#include <atomic>
+#include <condition_variable>
 #include <memory>
+#include <mutex>
 
 #include "meshing/editing/algorithms/surface_passes.hpp"
 
@@ -18,21 +19,41 @@ void run_collapse_pass(SurfaceEditMesh& m, const std::function<double(const TriM
                        std::size_t target_faces, int threads, const std::string& name,
                        PassLog& log) {
   SurfacePass pass = make_surface_pass(m, threads);
-  // The face budget: parallel tasks reserve the faces a collapse removes (2, or 1 on a boundary
-  // edge) before collapsing, so they cannot all pass the stopping check at target + 2 and end
-  // below the target together. A collapse may start while any budget is left, as the serial
-  // check `faces <= target` allows: the result is the serial one's face count.
-  auto budget = std::make_shared<std::atomic<long long>>(static_cast<long long>(m.num_cells()) -
-                                                         static_cast<long long>(target_faces));
-  pass.operations["collapse"] =
-      [&m, budget](TriMesh&, const TriMesh::Tuple& t) -> std::optional<TriMesh::Tuple> {
-    const long long removes = m.is_boundary_edge(t) ? 1 : 2;
-    if (budget->fetch_sub(removes) < 1) {
-      budget->fetch_add(removes);
-      return std::nullopt;
-    }
+  // The face budget: a collapse reserves the faces it removes (2, or 1 on a boundary edge) as the
+  // last check before it (Rejection::before when none is left), so parallel tasks cannot all pass
+  // the stopping check at target + 2 and end below the target together. A task finding the budget
+  // spent while another's reservation is in flight waits for its outcome (that task holds its
+  // locks already and waits for nothing), so a failed collapse hands its faces on. A collapse may
+  // start while any budget is left, as the serial check `faces <= target` allows: the result has
+  // the serial run's face count.
+  struct Budget {
+    std::mutex mutex;
+    std::condition_variable changed;
+    long long left = 0;
+    int holders = 0;
+  };
+  auto budget = std::make_shared<Budget>();
+  budget->left = static_cast<long long>(m.num_cells()) - static_cast<long long>(target_faces);
+  m.collapse_admit = [&m, budget](const TriMesh::Tuple& t) {
+    std::unique_lock<std::mutex> lock(budget->mutex);
+    budget->changed.wait(lock, [&] { return budget->left >= 1 || budget->holders == 0; });
+    if (budget->left < 1) return false;
+    budget->left -= m.is_boundary_edge(t) ? 1 : 2;
+    ++budget->holders;
+    return true;
+  };
+  pass.operations["collapse"] = [&m, budget](TriMesh&, const TriMesh::Tuple& t) {
+    const long long removes = m.is_valid(t) && m.is_boundary_edge(t) ? 1 : 2;
     auto result = m.collapse_edge(t);
-    if (!result) budget->fetch_add(removes);
+    const Rejection why = m.last_rejection();
+    if (result || (why != Rejection::before && why != Rejection::invalid_tuple)) {
+      {  // the collapse had a reservation: keep it, or give it back
+        std::lock_guard<std::mutex> lock(budget->mutex);
+        if (!result) budget->left += removes;
+        --budget->holders;
+      }
+      budget->changed.notify_all();
+    }
     return result;
   };
   pass.priority = [&cost](const TriMesh&, const std::string&, const TriMesh::Tuple& t) {
@@ -54,6 +75,7 @@ void run_collapse_pass(SurfaceEditMesh& m, const std::function<double(const TriM
   std::vector<SurfacePass::Work> work;
   for (const auto& e : m.get_edges()) work.emplace_back("collapse", e);
   log.emplace_back(name, pass.run(m, work));
+  m.collapse_admit = nullptr;
 }
 
 void shortest_edge_collapse(SurfaceEditMesh& m, std::size_t target_faces, int threads,

@@ -99,7 +99,8 @@ bool SurfaceEditMesh::split_edge_after(const OperationRecord& r) {
 
 bool SurfaceEditMesh::collapse_edge_before(const Tuple& t) {
   m_scratch.local().kind = Kind::collapse;
-  return !frozen[t.vid] && !frozen[other_vertex(t)];
+  if (frozen[t.vid] || frozen[other_vertex(t)]) return false;
+  return !collapse_admit || collapse_admit(t);
 }
 
 bool SurfaceEditMesh::collapse_edge_after(const OperationRecord& r) {

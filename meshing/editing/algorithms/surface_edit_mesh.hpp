@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <functional>
 
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/editing/algorithms/surface_distance.hpp"
@@ -39,6 +40,11 @@ class SurfaceEditMesh : public TriMesh {
   // Valence on an edge-manifold surface: faces around v, plus one on the boundary (boundary
   // vertices are exactly the frozen ones here).
   int valence(Id v) const { return int(vertex_cells(v).size()) + (frozen[v] ? 1 : 0); }
+
+  // Optional last check before a collapse (after the frozen-vertex test): false rejects it as
+  // Rejection::before. Collapse passes use it to reserve their face budget
+  // (shortest_edge_collapse.cpp).
+  std::function<bool(const Tuple&)> collapse_admit;
 
  protected:
   // Placement hooks for the algorithms.
