@@ -135,19 +135,6 @@ InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
   return out;
 }
 
-LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
-                      const Discretization& disc, const StageContext& ctx,
-                      std::shared_ptr<fem::FactorizationCache> cache) {
-  LoadResult r;
-  r.load = load;
-  const BoundaryData data = bind_boundary(spec, r.load.boundary_conditions, domain, disc);
-  r.solution = solve(spec, disc, data, r.load.rhs, ctx, std::move(cache));
-  r.errors = compute_errors(r.load, disc, r.solution, ctx);
-  if (domain.on_input())
-    r.on_input = transfer_to_input(r.load, domain, disc, r.solution, r.errors, ctx);
-  return r;
-}
-
 namespace {
 
 /// The report keys of one load case: errors, surface errors, physics details, solver.
@@ -324,19 +311,20 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
         // The mesh, φ and the fibers, so that geometry.mesh_dir can reuse this folder. A
         // built-in input is saved beside them (input.msh with its tags, recorded relative to the
         // folder).
-        std::string input =
-            spec.surface.empty() ? std::string() : std::filesystem::absolute(spec.surface).string();
-        std::filesystem::path input_file = spec.surface;
-        if (!spec.mesh_dir.empty()) {
+        std::string input, checksum;
+        if (!spec.mesh_dir.empty()) {  // the input and checksum the reused folder was checked by
           input = domain.report.at("reused").at("input").get<std::string>();
-          input_file = input;
-        } else if (spec.surface.empty()) {
+          checksum = domain.report.at("reused").at("input_checksum").get<std::string>();
+        } else if (!spec.surface.empty()) {
+          input = std::filesystem::absolute(spec.surface).string();
+          checksum = file_checksum(spec.surface);
+        } else {
           io::write_surface(out.path("input.msh"), domain.input, io::SurfaceFormat::msh41);
           input = "input.msh";
-          input_file = out.path("input.msh");
+          checksum = file_checksum(out.path("input.msh"));
         }
         save_mesh_dir(out.path("."), domain.mesh, *domain.curved_map, *domain.fibers, input,
-                      file_checksum(input_file));
+                      checksum);
       }
     }
     io::write_pvd(out.path("result.pvd"), parts);

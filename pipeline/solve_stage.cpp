@@ -1,4 +1,4 @@
-// Stages bind_boundary and solve (stages.hpp).
+// Stages bind_boundary and solve, and solve_load (stages.hpp).
 #include <cmath>
 
 #include "fem/assembly/face_integration.hpp"
@@ -282,6 +282,19 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   }
   ctx.update("solve " + spec.physics, 1.0);
   return out;
+}
+
+LoadResult solve_load(const CaseSpec& spec, const LoadCase& load, const Domain& domain,
+                      const Discretization& disc, const StageContext& ctx,
+                      std::shared_ptr<fem::FactorizationCache> cache) {
+  LoadResult r;
+  r.load = load;
+  const BoundaryData data = bind_boundary(spec, r.load.boundary_conditions, domain, disc);
+  r.solution = solve(spec, disc, data, r.load.rhs, ctx, std::move(cache));
+  r.errors = compute_errors(r.load, disc, r.solution, ctx);
+  if (domain.on_input())
+    r.on_input = transfer_to_input(r.load, domain, disc, r.solution, r.errors, ctx);
+  return r;
 }
 
 }  // namespace curvefem::pipeline

@@ -254,13 +254,14 @@ PYBIND11_MODULE(_curvefem, m) {
   m.def(
       "transfer_to_input",
       [](const CaseSpec& spec, const Domain& domain, const Discretization& disc,
-         const Solution& solution, const ErrorResult& errors, const std::string& load) {
+         const Solution& solution, std::shared_ptr<ErrorResult> errors, const std::string& load) {
         py::gil_scoped_release release;
-        return std::make_shared<InputSolution>(
-            transfer_to_input(load_of(spec, load), domain, disc, solution, errors));
+        // Without errors: u_h(φ(v)) and φ(v) only (no exact / error fields).
+        return std::make_shared<InputSolution>(transfer_to_input(
+            load_of(spec, load), domain, disc, solution, errors ? *errors : ErrorResult{}));
       },
       py::arg("case"), py::arg("domain"), py::arg("discretization"), py::arg("solution"),
-      py::arg("errors"), py::arg("load") = "");
+      py::arg("errors") = nullptr, py::arg("load") = "");
 
   py::class_<RunOutcome, std::shared_ptr<RunOutcome>>(m, "RunOutcome")
       .def_property_readonly("report_json", [](const RunOutcome& o) { return o.report.dump(); })

@@ -111,9 +111,7 @@ def compute_errors(case, discretization, solution, load=""):
 
 def transfer_to_input(case, domain, discretization, solution, load=""):
     """Stage 7: (values, images): u_h(φ(v)) and φ(v) for every input vertex (NumPy)."""
-    c = read_case(case)
-    errors = _curvefem.compute_errors(c, discretization, solution, load)
-    s = _curvefem.transfer_to_input(c, domain, discretization, solution, errors, load)
+    s = _curvefem.transfer_to_input(read_case(case), domain, discretization, solution, None, load)
     return s.values, s.images
 
 
