@@ -70,7 +70,22 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
         {"energy_before",
          {{"mean", s.flips.mean_energy_before}, {"max", s.flips.max_energy_before}}},
         {"energy_after", {{"mean", s.flips.mean_energy_after}, {"max", s.flips.max_energy_after}}},
-        {"seconds", s.flips.seconds}}}};
+        {"seconds", s.flips.seconds}}},
+      {"curved_edits",
+       {{"passes", s.edits.passes},
+        {"collapses", s.edits.collapses},
+        {"flips", s.edits.flips},
+        {"attempted", s.edits.attempted},
+        {"rejected",
+         {{"certificate", s.edits.rejected_certificate},
+          {"energy", s.edits.rejected_energy},
+          {"topology", s.edits.rejected_topology}}},
+        {"tets", {{"before", s.edits.cells_before}, {"after", s.edits.cells_after}}},
+        {"targets", {{"before", s.edits.targets_before}, {"after", s.edits.targets_after}}},
+        {"energy_before",
+         {{"mean", s.edits.mean_energy_before}, {"max", s.edits.max_energy_before}}},
+        {"energy_after", {{"mean", s.edits.mean_energy_after}, {"max", s.edits.max_energy_after}}},
+        {"seconds", s.edits.seconds}}}};
 }
 
 // Per tet, from the independent validation (mesh.vtu, run's volume.vtu; for ParaView).

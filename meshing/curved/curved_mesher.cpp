@@ -20,6 +20,7 @@
 #include "meshing/core/log.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/core/timer.hpp"
+#include "meshing/curved/curved_edit.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/curved/slab_nodes.hpp"
@@ -1320,19 +1321,67 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
 
   // 7. Smooth the inner surface, the interior (and the exterior); the curved surface's nodes are
   // frozen (with an exterior they are not on the mesh boundary).
+  // Collapses and flips of the stitched mesh come first (curved_edit.hpp): they renumber the
+  // nodes, so the map's boundary nodes follow.
   watch = Stopwatch();
+  auto frozen_nodes = [&] {
+    std::vector<char> frozen(std::size_t(out.mesh.num_nodes()), 0);
+    for (Eigen::Index i = 0; i < map.boundary_node_to_volume.size(); ++i)
+      frozen[std::size_t(map.boundary_node_to_volume[i])] = 1;
+    return frozen;
+  };
+  // Edits before and after the smoothing: the first pass removes what the smoothing cannot move
+  // (the stitched slabs' flat and needle cells), the second what the smoothing left.
+  CurvedEditStats edits;
+  bool edited_once = false;
+  auto edit = [&] {
+    if (options.optimize.edits.passes <= 0) return;
+    const CurvedEditResult edited =
+        edit_curved_mesh(out.mesh, frozen_nodes(), options.optimize.edits, progress);
+    const CurvedEditStats& e = edited.stats;
+    if (!edited_once) {
+      edits = e;
+      edited_once = true;
+    } else {
+      edits.passes += e.passes;
+      edits.collapses += e.collapses;
+      edits.flips += e.flips;
+      edits.attempted += e.attempted;
+      edits.rejected_certificate += e.rejected_certificate;
+      edits.rejected_energy += e.rejected_energy;
+      edits.rejected_topology += e.rejected_topology;
+      edits.cells_after = e.cells_after;
+      edits.targets_after = e.targets_after;
+      edits.max_energy_after = e.max_energy_after;
+      edits.mean_energy_after = e.mean_energy_after;
+      edits.seconds += e.seconds;
+    }
+    for (Eigen::Index i = 0; i < map.boundary_node_to_volume.size(); ++i)
+      map.boundary_node_to_volume[i] = edited.node_map[std::size_t(map.boundary_node_to_volume[i])];
+    stats.nodes = out.mesh.num_nodes();
+    stats.slab_tets = stats.interior_tets = stats.outer_slab_tets = stats.exterior_tets = 0;
+    for (Eigen::Index c = 0; c < out.mesh.cell_tags.size(); ++c) {
+      const int tag = out.mesh.cell_tags[c];
+      (tag == 1   ? stats.slab_tets
+       : tag == 2 ? stats.interior_tets
+       : tag == 3 ? stats.outer_slab_tets
+                  : stats.exterior_tets) += 1;
+    }
+  };
+  edit();
   if (options.optimize.sweeps > 0) {
-    std::vector<char> frozen(nodes.size(), 0);
-    for (int node : volume_of) frozen[std::size_t(node)] = 1;
+    const std::vector<char> frozen = frozen_nodes();
     const OptimizeStats::Flips flips = stats.optimize.flips;
     stats.optimize = optimize_vertices(out.mesh, options.optimize, progress, &frozen);
     stats.optimize.flips = flips;
-    for (int node : volume_of)
-      CF_VERIFY((out.mesh.nodes.row(node) - map.boundary.nodes.row(local_of[node]))
-                        .cwiseAbs()
-                        .maxCoeff() == 0,
-                "optimize: a node of the curved surface moved");
+    edit();
   }
+  stats.optimize.edits = edits;
+  for (Eigen::Index i = 0; i < map.boundary_node_to_volume.size(); ++i)
+    CF_VERIFY((out.mesh.nodes.row(map.boundary_node_to_volume[i]) - map.boundary.nodes.row(i))
+                      .cwiseAbs()
+                      .maxCoeff() == 0,
+              "optimize: a node of the curved surface moved");
   stats.stage_seconds.emplace_back("optimize", watch.seconds());
   sh::restore_input_ids(shell, beveled.surface);
   out.shell = std::move(shell);

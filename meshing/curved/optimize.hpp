@@ -24,6 +24,7 @@
 
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/progress.hpp"
+#include "meshing/curved/curved_edit.hpp"
 
 namespace curvefem::meshing::curved {
 
@@ -46,6 +47,9 @@ struct OptimizeOptions {
   // Jacobian 5.3e-4 with the guard everywhere, 6.7e-3 with it lifted above 50; the geometry-order
   // matrix has no such cells and its errors are unchanged).
   double node_free_energy = 50;
+  // Collapses and flips of the stitched curved mesh before the smoothing (curved_edit.hpp; run by
+  // the curved mesher, not by optimize_vertices).
+  CurvedEditOptions edits;
 };
 
 struct OptimizeStats {
@@ -65,6 +69,7 @@ struct OptimizeStats {
     double mean_energy_before = 0, mean_energy_after = 0;
     double seconds = 0;
   } flips;
+  CurvedEditStats edits;  // set by the curved mesher
 };
 
 /// Energy of one cell as defined above (order from the node count).

@@ -146,7 +146,10 @@ TEST(GeometryMatrix, PoissonAtEveryOrderAndDegreeAgainstKEqualsP) {
   // Error at k > p against k = p on the same tets (the super-parametric solve, which `curvefem
   // run` uses only with discretization.geometry "mesh"). Measured (2026-12-01) L2 / H1 ratios:
   // torus p = 1 1.19-1.21 / 1.13-1.15, p = 2 1.69-1.78 / 2.08-2.31, p = 3 (k = 4) 2.56 / 2.78;
-  // cylinder p = 1, 2 1.00-1.01 / 1.00-1.08, p = 3 (k = 4) 1.69 / 2.97. Asserted: 3, so that a
+  // cylinder p = 1, 2 1.00-1.01 / 1.00-1.08, p = 3 (k = 4) 1.69 / 2.97. With the curved edits
+  // (collapses and flips of the stitched mesh, default since 2026-12-02) torus p = 3 (k = 4) is
+  // 3.24 / 3.72: k = p = 3 got better (L2 5.5e-4 -> 4.7e-4, 2,960 DOFs) while k = 4 stayed
+  // (1.4e-3 -> 1.5e-3); the rest moved by < 0.1. Asserted: 4 (3 before the edits), so that a
   // regression shows. Issue 20 asks for 1.1; no curved mesher measured here meets it: the error
   // of a degree-p space grows with the map's derivatives of order p + 1, which a degree-k > p
   // map has and the degree-p one lacks, and the ratio does not fall under refinement (sphere,
@@ -167,8 +170,8 @@ TEST(GeometryMatrix, PoissonAtEveryOrderAndDegreeAgainstKEqualsP) {
                     e.dofs, e.l2, e.l2 / base.l2, e.h1, e.h1 / base.h1);
         EXPECT_EQ(e.dofs, base.dofs);
         if (k > p) {
-          EXPECT_LT(e.l2, 3.0 * base.l2) << s.name << " p = " << p << " k = " << k;
-          EXPECT_LT(e.h1, 3.0 * base.h1) << s.name << " p = " << p << " k = " << k;
+          EXPECT_LT(e.l2, 4.0 * base.l2) << s.name << " p = " << p << " k = " << k;
+          EXPECT_LT(e.h1, 4.0 * base.h1) << s.name << " p = " << p << " k = " << k;
         }
       }
     }

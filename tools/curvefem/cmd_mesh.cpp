@@ -52,6 +52,8 @@ struct MeshArgs {
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
+  int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
+  double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
   double optimize_node_energy = meshing::curved::OptimizeOptions{}.node_energy;
   double padding = 0.25;
   GlobalOptions global;
@@ -135,6 +137,14 @@ void register_mesh(CLI::App& app) {
                   "node phase: move only nodes of stars with a sample whose "
                   "conformal AMIPS energy (1 for a regular tet) exceeds E (default 10)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--optimize-edit-passes", args->optimize_edit_passes,
+                  "rounds of edge collapses and 2-3/3-2/4-4 flips of the curved tets before the "
+                  "smoothing (default 2; 0: off)")
+      ->check(CLI::Range(0, 100));
+  sub->add_option("--optimize-edit-energy", args->optimize_edit_energy,
+                  "curved edits: only cells whose mean conformal AMIPS energy exceeds E are "
+                  "targets (default 4)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
   sub->add_option("--constraints", args->constraints,
@@ -198,6 +208,8 @@ void register_mesh(CLI::App& app) {
     options.optimize.sweeps = args->optimize_sweeps;
     options.optimize.node_sweeps = args->optimize_node_sweeps;
     options.optimize.node_energy = args->optimize_node_energy;
+    options.optimize.edits.passes = args->optimize_edit_passes;
+    options.optimize.edits.energy = args->optimize_edit_energy;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.low_degree_slabs = args->low_degree_slabs;

@@ -213,56 +213,65 @@ TEST(CurvedMesher, TorusIsValidAtEveryOrder) {
 
 TEST(CurvedMesher, ExteriorSharesTheCurvedSurfaceAndEndsOnTheBox) {
   const SurfaceMesh torus = curvefem::make_torus(1.0, 0.4, 40, 16);
-  for (int k : {2, 3}) {
-    SCOPED_TRACE("order " + std::to_string(k));
-    cv::CurvedMeshOptions o;
-    o.order = k;
-    o.exterior = true;
-    cv::CurvedMeshStats stats;
-    const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
-    const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
-    // Valid: certified tets, the inside's boundary is exactly the map's curved triangles (so the
-    // curved surface is an interface shared node for node), ε holds, and every face of the whole
-    // mesh's boundary lies on one side of the padded box (4 × 4 squares × 2 triangles per side).
-    EXPECT_TRUE(check.valid(1e-2));
-    EXPECT_TRUE(check.exterior);
-    EXPECT_EQ(check.exterior_boundary_faces, 6 * 32);
-    EXPECT_EQ(check.exterior_faces_off_box, 0);
-    EXPECT_EQ(check.boundary_faces, m.map.boundary.num_cells());
-    // Three order-k tets per coarse face on each side (no pinched vertices on a torus).
-    EXPECT_EQ(stats.outer_slab_tets, 3 * stats.coarse_faces);
-    EXPECT_EQ(stats.slab_tets, 3 * stats.coarse_faces);
-    EXPECT_GT(stats.exterior_tets, 0);
-    EXPECT_EQ(m.mesh.num_cells(),
-              stats.slab_tets + stats.interior_tets + stats.outer_slab_tets + stats.exterior_tets);
-    // Both tags 3 and 4 present, and each side's quality is reported.
-    EXPECT_EQ(check.quality_by_tag.count(3), 1u);
-    EXPECT_EQ(check.quality_by_tag.count(4), 1u);
-    // The box: the input's bounding box padded by 0.25 × its longest edge (2 × 1.4 for this
-    // torus), pushed out only where the outer surface comes within a quarter of that; it is the
-    // bounding box of the mesh.
-    const Eigen::Vector3d in_lo = torus.V.colwise().minCoeff().transpose();
-    const Eigen::Vector3d in_hi = torus.V.colwise().maxCoeff().transpose();
-    const double pad = 0.25 * (in_hi - in_lo).maxCoeff();
-    EXPECT_TRUE((stats.exterior_box_lo.array() <= in_lo.array() - pad).all());
-    EXPECT_TRUE((stats.exterior_box_hi.array() >= in_hi.array() + pad).all());
-    EXPECT_DOUBLE_EQ(stats.exterior_box_lo.x(), in_lo.x() - pad);  // the outer surface is far
-    EXPECT_EQ(curvefem::vertex_bounding_box(m.mesh).first, stats.exterior_box_lo);
-    // A higher-order node of a box face rounding past the box (a weighted mean of the face's
-    // corners can): the box is that of the tets' vertices, so every face is still on it.
-    curvefem::LagrangeMesh nudged = m.mesh;
-    const double top = nudged.nodes.col(2).maxCoeff();
-    int nudges = 0;
-    for (int n = 0; n < nudged.num_nodes() && nudges == 0; ++n)
-      if (nudged.nodes(n, 2) == top) {
-        bool vertex = false;
-        for (int c = 0; c < nudged.num_cells() && !vertex; ++c)
-          for (int j = 0; j < 4; ++j) vertex |= nudged.cells(c, j) == n;
-        if (!vertex) nudged.nodes(n, 2) = std::nextafter(top, HUGE_VAL), ++nudges;
+  for (int k : {2, 3})
+    for (const int edit_passes : {0, 2}) {
+      SCOPED_TRACE("order " + std::to_string(k) + ", curved edits " + std::to_string(edit_passes));
+      cv::CurvedMeshOptions o;
+      o.order = k;
+      o.exterior = true;
+      o.optimize.edits.passes = edit_passes;
+      cv::CurvedMeshStats stats;
+      const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);
+      const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+      // Valid: certified tets, the inside's boundary is exactly the map's curved triangles (so the
+      // curved surface is an interface shared node for node), ε holds, and every face of the whole
+      // mesh's boundary lies on one side of the padded box (4 × 4 squares × 2 triangles per side).
+      EXPECT_TRUE(check.valid(1e-2));
+      EXPECT_TRUE(check.exterior);
+      EXPECT_EQ(check.exterior_boundary_faces, 6 * 32);
+      EXPECT_EQ(check.exterior_faces_off_box, 0);
+      EXPECT_EQ(check.boundary_faces, m.map.boundary.num_cells());
+      // Three order-k tets per coarse face on each side (no pinched vertices on a torus), as
+      // stitched; the curved edits collapse and flip slab tets (each side keeps its own tags: the
+      // curved surface is never crossed).
+      if (edit_passes == 0) {
+        EXPECT_EQ(stats.outer_slab_tets, 3 * stats.coarse_faces);
+        EXPECT_EQ(stats.slab_tets, 3 * stats.coarse_faces);
+      } else {
+        EXPECT_GT(stats.optimize.edits.collapses + stats.optimize.edits.flips, 0);
+        EXPECT_EQ(stats.optimize.edits.cells_after, m.mesh.num_cells());
       }
-    ASSERT_EQ(nudges, 1);
-    EXPECT_EQ(cv::validate_curved_mesh(nudged, m.map, torus).exterior_faces_off_box, 0);
-  }
+      EXPECT_GT(stats.exterior_tets, 0);
+      EXPECT_EQ(m.mesh.num_cells(), stats.slab_tets + stats.interior_tets + stats.outer_slab_tets +
+                                        stats.exterior_tets);
+      // Both tags 3 and 4 present, and each side's quality is reported.
+      EXPECT_EQ(check.quality_by_tag.count(3), 1u);
+      EXPECT_EQ(check.quality_by_tag.count(4), 1u);
+      // The box: the input's bounding box padded by 0.25 × its longest edge (2 × 1.4 for this
+      // torus), pushed out only where the outer surface comes within a quarter of that; it is the
+      // bounding box of the mesh.
+      const Eigen::Vector3d in_lo = torus.V.colwise().minCoeff().transpose();
+      const Eigen::Vector3d in_hi = torus.V.colwise().maxCoeff().transpose();
+      const double pad = 0.25 * (in_hi - in_lo).maxCoeff();
+      EXPECT_TRUE((stats.exterior_box_lo.array() <= in_lo.array() - pad).all());
+      EXPECT_TRUE((stats.exterior_box_hi.array() >= in_hi.array() + pad).all());
+      EXPECT_DOUBLE_EQ(stats.exterior_box_lo.x(), in_lo.x() - pad);  // the outer surface is far
+      EXPECT_EQ(curvefem::vertex_bounding_box(m.mesh).first, stats.exterior_box_lo);
+      // A higher-order node of a box face rounding past the box (a weighted mean of the face's
+      // corners can): the box is that of the tets' vertices, so every face is still on it.
+      curvefem::LagrangeMesh nudged = m.mesh;
+      const double top = nudged.nodes.col(2).maxCoeff();
+      int nudges = 0;
+      for (int n = 0; n < nudged.num_nodes() && nudges == 0; ++n)
+        if (nudged.nodes(n, 2) == top) {
+          bool vertex = false;
+          for (int c = 0; c < nudged.num_cells() && !vertex; ++c)
+            for (int j = 0; j < 4; ++j) vertex |= nudged.cells(c, j) == n;
+          if (!vertex) nudged.nodes(n, 2) = std::nextafter(top, HUGE_VAL), ++nudges;
+        }
+      ASSERT_EQ(nudges, 1);
+      EXPECT_EQ(cv::validate_curved_mesh(nudged, m.map, torus).exterior_faces_off_box, 0);
+    }
 }
 
 // A padding thinner than the shell: the outer slab surface reaches past the input's bounding box
@@ -279,6 +288,9 @@ TEST(CurvedMesher, ExteriorBoxIsPushedOutWhereTheOuterSurfaceComesClose) {
     o.order = 2;
     o.exterior = true;
     o.exterior_padding = 0.001;
+    // The curved edits stay off: the outer slab layer whose corners are checked below is what
+    // they do not keep (a flip with an exterior tet hands its tag to a cell reaching the box).
+    o.optimize.edits.passes = 0;
     if (!optimize) o.optimize.sweeps = 0, o.optimize.flips = false;
     cv::CurvedMeshStats stats;
     const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, stats);

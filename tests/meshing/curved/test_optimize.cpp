@@ -198,6 +198,7 @@ TEST(Optimize, CurvedSphereMeshImprovesAndKeepsItsGuarantees) {
   cv::CurvedMeshOptions o;
   o.order = 3;
   o.optimize.sweeps = 0;
+  o.optimize.edits.passes = 0;  // the smoothing alone (curved edits: CurvedEdit tests)
   o.curved_coarsening = false;  // the mesh these numbers were measured on
   cv::CurvedMeshStats plain_stats;
   const cv::CurvedMesh plain = cv::build_curved_mesh(sphere, o, plain_stats);
@@ -250,4 +251,123 @@ TEST(Optimize, CurvedSphereMeshImprovesAndKeepsItsGuarantees) {
   // without the variation guard).
   EXPECT_GE(c.min_scaled_jacobian, b.min_scaled_jacobian);
   EXPECT_LE(c.max_mips, b.max_mips);
+}
+
+// Collapses and flips of curved tets (curved_edit.hpp).
+namespace {
+
+// Nodes on the octahedron's faces (|x|_1 = 1 before any projection).
+std::vector<char> on_octahedron_faces(const LagrangeMesh& m) {
+  std::vector<char> on(std::size_t(m.num_nodes()), 0);
+  for (int i = 0; i < m.num_nodes(); ++i)
+    on[std::size_t(i)] = std::abs(m.nodes.row(i).cwiseAbs().sum() - 1.0) < 1e-12;
+  return on;
+}
+
+}  // namespace
+
+TEST(CurvedEdit, ANearlyFlatCentreIsCollapsedAwayAtEveryOrder) {
+  for (int k = 1; k <= 4; ++k) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    LagrangeMesh m = octahedron(Eigen::Vector3d(0.32, 0.32, 0.32), k);
+    ASSERT_TRUE(all_certified(m));
+    const LagrangeMesh before = m;
+    const std::vector<char> face = on_octahedron_faces(m);
+    cv::CurvedEditOptions o;
+    o.energy = 1.5;
+    // Nothing frozen: the boundary faces alone keep the octahedron's corners.
+    const cv::CurvedEditResult r =
+        cv::edit_curved_mesh(m, std::vector<char>(std::size_t(m.num_nodes()), 0), o);
+    // The centre went (collapsed onto a corner: the 4 tets around a diagonal are left).
+    EXPECT_GE(r.stats.collapses, 1);
+    EXPECT_EQ(m.num_cells(), 4);
+    EXPECT_EQ(r.stats.cells_before, 8);
+    EXPECT_LT(r.stats.max_energy_after, 0.2 * r.stats.max_energy_before);
+    EXPECT_TRUE(all_certified(m));
+    EXPECT_LT(r.node_map[std::size_t(centre_node(before))], 0);
+    // Every node on the octahedron's faces is kept, bit for bit; the mesh stays straight.
+    for (int i = 0; i < before.num_nodes(); ++i) {
+      if (!face[std::size_t(i)]) continue;
+      ASSERT_GE(r.node_map[std::size_t(i)], 0) << "node " << i;
+      EXPECT_EQ(m.nodes.row(r.node_map[std::size_t(i)]), before.nodes.row(i));
+    }
+    const auto& lattice = curvefem::lagrange_lattice(CellKind::tetrahedron, k);
+    for (int cell = 0; cell < m.num_cells(); ++cell)
+      for (std::size_t n = 0; n < lattice.size(); ++n) {
+        Eigen::Vector3d x = Eigen::Vector3d::Zero();
+        for (int j = 0; j < 4; ++j)
+          x += double(lattice[n][j]) / k * m.nodes.row(m.cells(cell, j)).transpose();
+        EXPECT_LT((x - m.nodes.row(m.cells(cell, Eigen::Index(n))).transpose()).norm(), 1e-12);
+      }
+  }
+}
+
+TEST(CurvedEdit, NewNodesFollowTheCurvedBoundaryAndTheBoundaryIsKept) {
+  // The octahedron's faces bulge out halfway to the unit sphere (frozen); its inside stays
+  // straight, its centre off the middle.
+  for (int k = 2; k <= 4; ++k) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    LagrangeMesh m = octahedron(Eigen::Vector3d(0.2, 0.2, 0.2), k);
+    const std::vector<char> face = on_octahedron_faces(m);
+    for (int i = 0; i < m.num_nodes(); ++i)
+      if (face[std::size_t(i)]) m.nodes.row(i) /= std::sqrt(m.nodes.row(i).norm());
+    ASSERT_TRUE(all_certified(m));
+    const LagrangeMesh before = m;
+    cv::CurvedEditOptions o;
+    o.energy = 1.5;
+    const cv::CurvedEditResult r = cv::edit_curved_mesh(m, face, o);
+    std::printf(
+        "k %d: %lld collapses, %lld flips, attempted %lld, rejected %lld cert %lld energy %lld "
+        "topo, max %g -> %g\n",
+        k, r.stats.collapses, r.stats.flips, r.stats.attempted, r.stats.rejected_certificate,
+        r.stats.rejected_energy, r.stats.rejected_topology, r.stats.max_energy_before,
+        r.stats.max_energy_after);
+    EXPECT_GE(r.stats.collapses + r.stats.flips, 1);
+    EXPECT_LT(r.stats.max_energy_after, r.stats.max_energy_before);
+    EXPECT_TRUE(all_certified(m));
+    for (int i = 0; i < before.num_nodes(); ++i) {
+      if (!face[std::size_t(i)]) continue;
+      ASSERT_GE(r.node_map[std::size_t(i)], 0) << "node " << i;
+      EXPECT_EQ(m.nodes.row(r.node_map[std::size_t(i)]), before.nodes.row(i));
+    }
+    // No node leaves the unit ball.
+    for (int i = 0; i < m.num_nodes(); ++i) EXPECT_LE(m.nodes.row(i).norm(), 1 + 1e-12);
+  }
+}
+
+TEST(CurvedEdit, CurvedSphereMeshStaysValidWithItsBoundary) {
+  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.curved_coarsening = false;
+  o.optimize.sweeps = 0;
+  o.optimize.edits.passes = 0;
+  cv::CurvedMeshStats plain_stats;
+  const cv::CurvedMesh plain = cv::build_curved_mesh(sphere, o, plain_stats);
+  o.optimize.edits.passes = 2;
+  o.optimize.edits.energy = 1.5;
+  cv::CurvedMeshStats stats;
+  const cv::CurvedMesh edited = cv::build_curved_mesh(sphere, o, stats);
+  const cv::CurvedEditStats& e = stats.optimize.edits;
+  std::printf("edits: %lld collapses, %lld flips, tets %d -> %d, targets %d -> %d, max %g -> %g\n",
+              e.collapses, e.flips, e.cells_before, e.cells_after, e.targets_before,
+              e.targets_after, e.max_energy_before, e.max_energy_after);
+  EXPECT_GT(e.collapses, 0);
+  EXPECT_GT(e.flips, 0);
+  EXPECT_EQ(e.cells_after, edited.mesh.num_cells());
+  EXPECT_LT(e.targets_after, e.targets_before);
+  EXPECT_LE(e.max_energy_after, e.max_energy_before);
+  // Same boundary, bit for bit, at the renumbered nodes.
+  ASSERT_EQ(plain.map.boundary.cells, edited.map.boundary.cells);
+  EXPECT_EQ(plain.map.boundary.nodes, edited.map.boundary.nodes);
+  for (Eigen::Index i = 0; i < edited.map.boundary_node_to_volume.size(); ++i)
+    EXPECT_EQ(edited.mesh.nodes.row(edited.map.boundary_node_to_volume[i]),
+              plain.mesh.nodes.row(plain.map.boundary_node_to_volume[i]));
+  const cv::CurvedValidation a = cv::validate_curved_mesh(plain.mesh, plain.map, sphere);
+  const cv::CurvedValidation b = cv::validate_curved_mesh(edited.mesh, edited.map, sphere);
+  EXPECT_TRUE(b.valid(1e-2));
+  std::printf("validation: min sJ %g -> %g, max MIPS %g -> %g, mean MIPS %g -> %g\n",
+              a.min_scaled_jacobian, b.min_scaled_jacobian, a.max_mips, b.max_mips, a.mean_mips,
+              b.mean_mips);
+  EXPECT_GE(b.min_scaled_jacobian, a.min_scaled_jacobian);
 }

@@ -1,0 +1,510 @@
+#include "meshing/curved/curved_edit.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <compare>
+#include <limits>
+#include <map>
+#include <set>
+#include <string>
+#include <unordered_map>
+
+#include "meshing/core/error.hpp"
+#include "meshing/core/timer.hpp"
+#include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/editing/scheduler.hpp"
+#include "meshing/editing/tet_mesh.hpp"
+
+namespace curvefem::meshing::curved {
+namespace {
+
+using editing::Id;
+using editing::OperationRecord;
+using editing::TetMesh;
+
+constexpr double k_inf = std::numeric_limits<double>::infinity();
+
+// A node is the multiset of the vertex ids it is a lattice point of (sorted, padded), as in the
+// stitching step of curved_mesher.cpp.
+struct NodeKey {
+  std::array<Id, 4> id;
+  auto operator<=>(const NodeKey&) const = default;
+};
+struct NodeKeyHash {
+  std::size_t operator()(const NodeKey& k) const {
+    std::size_t h = 0;
+    for (Id x : k.id) h = h * 1000003u ^ std::hash<Id>()(x);
+    return h;
+  }
+};
+NodeKey make_key(const Id* v, const std::array<int, 4>& alpha, int corners) {
+  NodeKey key;
+  key.id.fill(editing::k_no_id);
+  int n = 0;
+  for (int j = 0; j < corners; ++j)
+    for (int m = 0; m < alpha[j]; ++m) key.id[std::size_t(n++)] = v[j];
+  std::sort(key.id.begin(), key.id.begin() + n);
+  return key;
+}
+
+using Face = std::array<Id, 3>;  // sorted
+using Edge = std::array<Id, 2>;  // sorted
+
+Face sorted_face(Id a, Id b, Id c) {
+  Face f{a, b, c};
+  std::sort(f.begin(), f.end());
+  return f;
+}
+Edge sorted_edge(Id a, Id b) { return a < b ? Edge{a, b} : Edge{b, a}; }
+
+// Energy of a cell: the mean conformal AMIPS over the order-k lattice (optimize.hpp cell_energy),
+// with the shape gradients computed once.
+struct EnergyReference {
+  int k = 1;
+  std::vector<Eigen::MatrixXd> grads;
+  Eigen::Matrix3d Winv;
+  explicit EnergyReference(int order) : k(order) {
+    const Eigen::MatrixXd xi = lagrange_reference_nodes(CellKind::tetrahedron, k);
+    if (k == 1)
+      grads.push_back(
+          lagrange_shape_gradients(CellKind::tetrahedron, 1, Eigen::Vector3d::Constant(0.25)));
+    else
+      for (int n = 0; n < int(xi.rows()); ++n)
+        grads.push_back(
+            lagrange_shape_gradients(CellKind::tetrahedron, k, Eigen::Vector3d(xi.row(n))));
+    Eigen::Matrix3d W;
+    W.col(0) = Eigen::Vector3d(1, 0, 0);
+    W.col(1) = Eigen::Vector3d(0.5, std::sqrt(3.0) / 2, 0);
+    W.col(2) = Eigen::Vector3d(0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0));
+    Winv = W.inverse();
+  }
+  double energy(const Eigen::MatrixXd& X) const {
+    double sum = 0;
+    for (const Eigen::MatrixXd& G : grads) {
+      const Eigen::Matrix3d J = (X.transpose() * G) * Winv;
+      const double det = J.determinant();
+      if (!(det > 0)) return k_inf;
+      sum += J.squaredNorm() / (3 * std::cbrt(det * det));
+    }
+    return sum / double(grads.size());
+  }
+};
+
+class CurvedEditMesh : public TetMesh {
+ public:
+  editing::Attribute<int> tag{*this, 3, 0};
+  editing::Attribute<double> energy{*this, 3, 0.0};
+  editing::Attribute<double> scaled_jacobian{*this, 3, 0.0};  // min_scaled_jacobian
+
+  int k = 1;
+  const std::vector<std::array<int, 4>>* lattice = nullptr;
+  const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
+  EnergyReference ref{1};
+  std::vector<Eigen::Vector3d> pos;                       // node positions (grows)
+  std::unordered_map<NodeKey, int, NodeKeyHash> node_of;  // current node of every key
+  std::vector<char> vertex_fixed;                         // per vertex: never removed
+  std::set<Face> curved_faces;                            // frozen faces (sorted vertices)
+  std::map<Edge, Face> curved_edge_face;                  // a curved face of each curved edge
+  CurvedEditStats* stats = nullptr;
+
+  CurvedEditMesh() = default;
+
+  Eigen::Vector3d corner(Id v) const {
+    const std::array<int, 4> alpha{k, 0, 0, 0};
+    return pos[std::size_t(node_of.at(make_key(&v, alpha, 1)))];
+  }
+
+  Eigen::MatrixXd cell_nodes(const Cell& c) const {
+    Eigen::MatrixXd X(Eigen::Index(lattice->size()), 3);
+    for (std::size_t n = 0; n < lattice->size(); ++n)
+      X.row(Eigen::Index(n)) =
+          pos[std::size_t(node_of.at(make_key(c.data(), (*lattice)[n], 4)))].transpose();
+    return X;
+  }
+
+  bool is_target(Id t, double threshold) const { return energy[t] > threshold; }
+
+ protected:
+  bool collapse_edge_before(const Tuple& t) override { return !vertex_fixed[t.vid]; }
+  bool swap_face_before(const Tuple& t) override {
+    const auto f = face_vertices(t);
+    return !curved_faces.count(sorted_face(f[0], f[1], f[2]));
+  }
+  bool swap_edge_before(const Tuple& t) override {
+    return !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
+  }
+
+  bool invariants(const OperationRecord& r) override {
+    ++stats->attempted;
+    // Faces of the cavity boundary: used by one new cell.
+    std::map<Face, int> face_uses;
+    for (Id t : r.new_cells) {
+      const Cell& c = cell(t);
+      for (int skip = 0; skip < 4; ++skip) {
+        Id f[3];
+        int n = 0;
+        for (int j = 0; j < 4; ++j)
+          if (j != skip) f[n++] = c[std::size_t(j)];
+        ++face_uses[sorted_face(f[0], f[1], f[2])];
+      }
+    }
+    auto on_cavity_boundary = [&](const std::vector<Id>& support) {
+      if (support.size() == 1) return true;
+      if (support.size() == 4) return false;
+      for (const auto& [f, uses] : face_uses) {
+        if (uses != 1) continue;
+        bool inside = true;
+        for (Id v : support) inside = inside && std::find(f.begin(), f.end(), v) != f.end();
+        if (inside) return true;
+      }
+      return false;
+    };
+
+    double before = 0, sj_before = k_inf;
+    for (Id t : r.old_cells) {
+      before = std::max(before, energy[t]);
+      sj_before = std::min(sj_before, scaled_jacobian[t]);
+    }
+
+    // The new cells' nodes, then the checks from the cheapest to the dearest, each over all new
+    // cells before the next: energy, scaled Jacobian, certificate.
+    std::map<NodeKey, Eigen::Vector3d> staged;  // new nodes shared by several new cells
+    std::vector<Eigen::MatrixXd> Xs;
+    for (Id t : r.new_cells) {
+      const Cell& c = cell(t);
+      Eigen::MatrixXd& X = Xs.emplace_back(Eigen::Index(lattice->size()), 3);
+      Eigen::Vector3d P[4];
+      for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
+      for (std::size_t n = 0; n < lattice->size(); ++n) {
+        const auto& alpha = (*lattice)[n];
+        const NodeKey key = make_key(c.data(), alpha, 4);
+        std::vector<Id> support;
+        for (int j = 0; j < 4; ++j)
+          if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
+        Eigen::Vector3d x;
+        if (on_cavity_boundary(support)) {
+          const auto it = node_of.find(key);
+          CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
+          x = pos[std::size_t(it->second)];
+        } else if (const auto it = staged.find(key); it != staged.end()) {
+          x = it->second;
+        } else {
+          x = place(c, alpha, P);
+          staged.emplace(key, x);
+        }
+        X.row(Eigen::Index(n)) = x.transpose();
+      }
+    }
+    const std::size_t nn = Xs.size();
+    std::vector<double> new_energy(nn), new_sj(nn);
+    for (std::size_t i = 0; i < nn; ++i) {
+      new_energy[i] = ref.energy(Xs[i]);
+      if (!(new_energy[i] < before * (1.0 - 1e-9))) return ++stats->rejected_energy, false;
+    }
+    for (std::size_t i = 0; i < nn; ++i) {
+      new_sj[i] = min_scaled_jacobian(k, Xs[i]);
+      if (new_sj[i] < sj_before) return ++stats->rejected_energy, false;
+    }
+    for (std::size_t i = 0; i < nn; ++i)
+      if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive)
+        return ++stats->rejected_certificate, false;
+    for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
+      energy.set(r.new_cells[i], new_energy[i]);
+      scaled_jacobian.set(r.new_cells[i], new_sj[i]);
+    }
+    for (const auto& [key, x] : staged) {
+      node_of[key] = int(pos.size());
+      pos.push_back(x);
+    }
+    return true;
+  }
+
+ private:
+  // The rule of the header for the lattice point alpha of cell c (corners at P): the Boolean sum
+  // of the blends of the curved faces and edges spanned by the node's corners on the surface
+  // (an edge counts 1 minus the number of those faces holding it, so a node on a sub-simplex gets
+  // the same from every cell).
+  Eigen::Vector3d place(const Cell& c, const std::array<int, 4>& alpha,
+                        const Eigen::Vector3d* P) const {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    for (int j = 0; j < 4; ++j) x += (double(alpha[std::size_t(j)]) / k) * P[j];
+    std::vector<int> on;
+    for (int j = 0; j < 4; ++j)
+      if (alpha[std::size_t(j)] > 0 && surface_vertex[c[std::size_t(j)]]) on.push_back(j);
+    if (on.size() < 2) return x;
+    std::vector<std::array<int, 3>> faces;
+    for (std::size_t a = 0; a < on.size(); ++a)
+      for (std::size_t b = a + 1; b < on.size(); ++b)
+        for (std::size_t d = b + 1; d < on.size(); ++d)
+          if (curved_faces.count(
+                  sorted_face(c[std::size_t(on[a])], c[std::size_t(on[b])], c[std::size_t(on[d])])))
+            faces.push_back({on[a], on[b], on[d]});
+    for (const auto& f : faces) x += blend(c, alpha, f.data(), 3);
+    for (std::size_t a = 0; a < on.size(); ++a)
+      for (std::size_t b = a + 1; b < on.size(); ++b) {
+        if (!curved_edge_face.count(sorted_edge(c[std::size_t(on[a])], c[std::size_t(on[b])])))
+          continue;
+        int holding = 0;
+        for (const auto& f : faces)
+          holding += std::count(f.begin(), f.end(), on[a]) && std::count(f.begin(), f.end(), on[b]);
+        if (holding == 1) continue;
+        const int pair[2] = {on[a], on[b]};
+        x += double(1 - holding) * blend(c, alpha, pair, 2);
+      }
+    return x;
+  }
+
+  // t · d_σ(normalised λ on σ) for σ = the local corners `sigma` (a curved face or edge).
+  Eigen::Vector3d blend(const Cell& c, const std::array<int, 4>& alpha, const int* sigma,
+                        int count) const {
+    int share = 0;
+    for (int i = 0; i < count; ++i) share += alpha[std::size_t(sigma[i])];
+    if (share == 0) return Eigen::Vector3d::Zero();
+    const double t = double(share) / k;
+    // The curved face carrying σ, its corners sorted; barycentric weights on them.
+    Face f;
+    if (count == 3) {
+      f = sorted_face(c[std::size_t(sigma[0])], c[std::size_t(sigma[1])], c[std::size_t(sigma[2])]);
+    } else {
+      f = curved_edge_face.at(sorted_edge(c[std::size_t(sigma[0])], c[std::size_t(sigma[1])]));
+    }
+    Eigen::Vector3d mu = Eigen::Vector3d::Zero();  // on f's sorted corners
+    for (int i = 0; i < count; ++i) {
+      const Id v = c[std::size_t(sigma[i])];
+      const int at = int(std::find(f.begin(), f.end(), v) - f.begin());
+      mu[at] = double(alpha[std::size_t(sigma[i])]) / share;
+    }
+    const Eigen::VectorXd N =
+        lagrange_shape_values(CellKind::triangle, k, Eigen::Vector3d(mu[1], mu[2], 0));
+    Eigen::Vector3d patch = Eigen::Vector3d::Zero(), linear = Eigen::Vector3d::Zero();
+    for (std::size_t n = 0; n < tri_lattice->size(); ++n)
+      patch += N[Eigen::Index(n)] *
+               pos[std::size_t(node_of.at(make_key(f.data(), (*tri_lattice)[n], 3)))];
+    for (int i = 0; i < 3; ++i) linear += mu[i] * corner(f[std::size_t(i)]);
+    return t * (patch - linear);
+  }
+
+ public:
+  std::vector<char> surface_vertex;  // per vertex: on the frozen surface
+};
+
+}  // namespace
+
+CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& frozen,
+                                  const CurvedEditOptions& options, const ProgressFn& progress) {
+  Stopwatch watch;
+  CurvedEditResult result;
+  CurvedEditStats& stats = result.stats;
+  if (mesh.kind != CellKind::tetrahedron)
+    throw InputError("edit_curved_mesh: needs a tetrahedral mesh");
+  CF_VERIFY(frozen.size() == std::size_t(mesh.num_nodes()), "edit_curved_mesh: frozen size");
+  const int k = mesh.order, nc = mesh.num_cells();
+  const auto& lattice = lagrange_lattice(CellKind::tetrahedron, k);
+  std::array<int, 4> corner_row{};
+  for (std::size_t n = 0; n < lattice.size(); ++n)
+    for (int j = 0; j < 4; ++j)
+      if (lattice[n][std::size_t(j)] == k) corner_row[std::size_t(j)] = int(n);
+
+  // Vertices: the corner nodes, numbered densely.
+  std::vector<int> vertex_of(std::size_t(mesh.num_nodes()), -1), node_of_vertex;
+  for (int c = 0; c < nc; ++c)
+    for (int j = 0; j < 4; ++j) {
+      const int node = mesh.cells(c, corner_row[std::size_t(j)]);
+      if (vertex_of[std::size_t(node)] < 0) {
+        vertex_of[std::size_t(node)] = int(node_of_vertex.size());
+        node_of_vertex.push_back(node);
+      }
+    }
+  std::vector<TetMesh::Cell> cells(static_cast<std::size_t>(nc));
+  for (int c = 0; c < nc; ++c)
+    for (int j = 0; j < 4; ++j)
+      cells[std::size_t(c)][std::size_t(j)] =
+          Id(vertex_of[std::size_t(mesh.cells(c, corner_row[std::size_t(j)]))]);
+
+  CurvedEditMesh m;
+  m.k = k;
+  m.lattice = &lattice;
+  m.tri_lattice = &lagrange_lattice(CellKind::triangle, k);
+  m.ref = EnergyReference(k);
+  m.stats = &stats;
+  m.initialize(node_of_vertex.size(), cells);
+  m.pos.resize(std::size_t(mesh.num_nodes()));
+  for (int n = 0; n < mesh.num_nodes(); ++n) m.pos[std::size_t(n)] = mesh.nodes.row(n).transpose();
+  for (int c = 0; c < nc; ++c)
+    for (std::size_t n = 0; n < lattice.size(); ++n) {
+      const NodeKey key = make_key(cells[std::size_t(c)].data(), lattice[n], 4);
+      const int node = mesh.cells(c, Eigen::Index(n));
+      const auto [it, inserted] = m.node_of.emplace(key, node);
+      if (!inserted && it->second != node)
+        throw MeshingError("edit_curved_mesh: cell " + std::to_string(c) +
+                           " has a second node for one lattice point (node " +
+                           std::to_string(node) + " and " + std::to_string(it->second) + ")");
+    }
+
+  // Fixed vertices: on the frozen surface or on a boundary face. Curved faces: every node
+  // frozen. The boundary faces are never touched by the engine's operations on interior
+  // vertices, faces and edges, and the frozen surface is protected by the before hooks.
+  const std::size_t nv = node_of_vertex.size();
+  m.vertex_fixed.assign(nv, 0);
+  m.surface_vertex.assign(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v)
+    if (frozen[std::size_t(node_of_vertex[v])]) m.vertex_fixed[v] = m.surface_vertex[v] = 1;
+  const auto& tri = *m.tri_lattice;
+  for (int c = 0; c < nc; ++c) {
+    const auto& cv = cells[std::size_t(c)];
+    for (int skip = 0; skip < 4; ++skip) {
+      Id f[3];
+      int n = 0;
+      for (int j = 0; j < 4; ++j)
+        if (j != skip) f[n++] = cv[std::size_t(j)];
+      const Face sf = sorted_face(f[0], f[1], f[2]);
+      if (m.is_boundary_facet(std::span<const Id>(sf.data(), 3)))
+        for (Id v : sf) m.vertex_fixed[v] = 1;
+      bool curved = true;
+      for (const auto& alpha : tri) {
+        const int node = m.node_of.at(make_key(sf.data(), alpha, 3));
+        curved = curved && frozen[std::size_t(node)];
+      }
+      if (!curved) continue;
+      m.curved_faces.insert(sf);
+      for (int a = 0; a < 3; ++a)
+        for (int b = a + 1; b < 3; ++b)
+          m.curved_edge_face.emplace(sorted_edge(sf[std::size_t(a)], sf[std::size_t(b)]), sf);
+    }
+  }
+
+  for (int c = 0; c < nc; ++c) {
+    m.tag.set(Id(c), mesh.cell_tags.size() == nc ? mesh.cell_tags[c] : 0);
+    const Eigen::MatrixXd X = m.cell_nodes(cells[std::size_t(c)]);
+    m.energy.set(Id(c), m.ref.energy(X));
+    m.scaled_jacobian.set(Id(c), min_scaled_jacobian(k, X));
+  }
+  auto summarize = [&](double& mean, double& max, int& targets) {
+    mean = max = 0;
+    targets = 0;
+    const auto live = m.live_cells();
+    for (Id t : live) {
+      mean += m.energy[t] / double(std::max<std::size_t>(live.size(), 1));
+      max = std::max(max, m.energy[t]);
+      if (m.energy[t] > options.energy) ++targets;
+    }
+  };
+  stats.cells_before = nc;
+  summarize(stats.mean_energy_before, stats.max_energy_before, stats.targets_before);
+
+  using Pass = editing::ExecutePass<TetMesh>;
+  auto target_work = [&](const std::vector<Id>& tets, bool collapse) {
+    std::vector<Pass::Work> work;
+    for (Id t : tets) {
+      if (m.is_cell_removed(t) || !m.is_target(t, options.energy)) continue;
+      if (collapse) {
+        // Every edge of the cell, from both ends (the removed vertex is the tuple's).
+        for (int le = 0; le < 6; ++le)
+          for (int end = 0; end < 2; ++end) {
+            const auto loc = TetMesh::local_simplex(1, le);
+            const Id a = m.cell(t)[std::size_t(loc[std::size_t(end)])];
+            const Id b = m.cell(t)[std::size_t(loc[std::size_t(1 - end)])];
+            if (m.vertex_fixed[a]) continue;
+            if (auto e = m.edge_tuple(a, b)) {
+              if (e->vid != a) e = m.switch_vertex(*e);
+              work.emplace_back("collapse", *e);
+            }
+          }
+      } else {
+        for (const auto& f : m.faces_of_tets({t})) work.emplace_back("swap23", f);
+        for (const auto& e : m.edges_of_tets({t})) {
+          work.emplace_back("swap32", e);
+          work.emplace_back("swap44", e);
+          work.emplace_back("swap44", m.switch_face(e));
+        }
+      }
+    }
+    return work;
+  };
+  auto run = [&](bool collapse) {
+    Pass pass;
+    pass.num_threads = 1;
+    if (collapse) {
+      pass.operations["collapse"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
+        return mm.collapse_edge(t);
+      };
+    } else {
+      pass.operations["swap23"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
+        return mm.swap_face_23(t);
+      };
+      pass.operations["swap32"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
+        return mm.swap_edge_32(t);
+      };
+      pass.operations["swap44"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
+        return mm.swap_edge_44(t);
+      };
+    }
+    // Worst cells first; a queued entry whose cell is no longer a target is dropped.
+    pass.priority = [&m](const TetMesh&, const std::string&, const TetMesh::Tuple& t) {
+      return m.energy[t.tid];
+    };
+    pass.should_process = [&m, &options](const TetMesh&, const Pass::Work& w, double) {
+      return !m.is_cell_removed(w.second.tid) && m.is_target(w.second.tid, options.energy);
+    };
+    pass.renew_neighbor_tuples = [&](const TetMesh&, const std::string&, const TetMesh::Tuple&) {
+      return target_work(m.operation_record().new_cells, collapse);
+    };
+    const auto s = pass.run(m, target_work(m.live_cells(), collapse));
+    stats.rejected_topology += (long long)(s.rejected_topology);
+    return (long long)(s.succeeded);
+  };
+
+  for (int p = 0; p < options.passes; ++p) {
+    if (progress) progress("optimize: curved edits", double(p) / options.passes);
+    long long done = 0;
+    if (options.collapses) {
+      const long long c = run(true);
+      stats.collapses += c;
+      done += c;
+    }
+    if (options.flips) {
+      const long long f = run(false);
+      stats.flips += f;
+      done += f;
+    }
+    ++stats.passes;
+    if (done == 0) break;
+  }
+  if (progress) progress("optimize: curved edits", 1.0);
+  summarize(stats.mean_energy_after, stats.max_energy_after, stats.targets_after);
+
+  // Back to a LagrangeMesh: the original nodes still used keep their order, new nodes follow.
+  const auto live = m.live_cells();
+  std::vector<int> new_id(m.pos.size(), -1);
+  Eigen::MatrixXi new_cells(Eigen::Index(live.size()), Eigen::Index(lattice.size()));
+  Eigen::VectorXi new_tags(Eigen::Index(live.size()));
+  for (std::size_t i = 0; i < live.size(); ++i) {
+    const auto& cv = m.cell(live[i]);
+    for (std::size_t n = 0; n < lattice.size(); ++n)
+      new_cells(Eigen::Index(i), Eigen::Index(n)) =
+          m.node_of.at(make_key(cv.data(), lattice[n], 4));
+    new_tags[Eigen::Index(i)] = m.tag[live[i]];
+  }
+  for (int n = 0; n < mesh.num_nodes(); ++n)
+    if (frozen[std::size_t(n)]) new_id[std::size_t(n)] = 0;  // kept even if unused
+  for (Eigen::Index i = 0; i < new_cells.size(); ++i) new_id[std::size_t(new_cells.data()[i])] = 0;
+  int count = 0;
+  for (auto& id : new_id)
+    if (id == 0) id = count++;
+  Eigen::MatrixXd nodes(count, 3);
+  for (std::size_t n = 0; n < m.pos.size(); ++n)
+    if (new_id[n] >= 0) nodes.row(new_id[n]) = m.pos[n].transpose();
+  for (Eigen::Index i = 0; i < new_cells.size(); ++i)
+    new_cells.data()[i] = new_id[std::size_t(new_cells.data()[i])];
+  result.node_map.assign(new_id.begin(), new_id.begin() + mesh.num_nodes());
+  mesh.nodes = std::move(nodes);
+  mesh.cells = std::move(new_cells);
+  if (mesh.cell_tags.size() > 0) mesh.cell_tags = std::move(new_tags);
+  stats.cells_after = mesh.num_cells();
+  stats.seconds = watch.seconds();
+  return result;
+}
+
+}  // namespace curvefem::meshing::curved

@@ -1,0 +1,66 @@
+// Connectivity edits of a stitched order-k tet mesh (issue 21's quality stage): edge collapses
+// and 2-3 / 3-2 / 4-4 flips of curved tets, on the editing engine (editing/tet_mesh.hpp), driven
+// by the curved AMIPS energy of optimize.hpp and certified like the smoothing.
+//
+// What is kept: every node of the frozen surface (the curved boundary, or with an exterior the
+// curved interface) and every face of the mesh boundary, so the boundary and the boundary map do
+// not change; the slab layer need not keep its prism structure. An operation replaces a cavity
+// of cells by new cells with the same cavity boundary. Nodes on that boundary keep their
+// positions (they are shared with the cells around the cavity); a node strictly inside it is
+// placed by the slab rule generalised (slab_nodes.hpp): its linear point plus, for each curved
+// simplex σ (a face or an edge of the frozen surface) spanned by the node's corners, t · d_σ(λ
+// restricted to σ, normalised), t = the node's share of σ's corners and d_σ the patch displacement
+// — as a Boolean sum: faces count once, an edge 1 minus the number of those faces holding it. The
+// rule only depends on the node's own multiset of corners, so neighbouring cells agree on every
+// node; with one curved face it is the stitching's full-shear slab rule.
+//
+// An operation is kept only if every new cell is certified positive (certify_tet_jacobian), the
+// worst energy of the new cells is below the worst energy of the cells they replace, and their
+// worst sampled scaled Jacobian (min_scaled_jacobian) is not below that of the replaced cells, so
+// certified meshes stay certified and the worst cell of a cavity only gets better. The edits run on
+// one thread (deterministic).
+#pragma once
+
+#include <vector>
+
+#include "meshing/core/lagrange_mesh.hpp"
+#include "meshing/core/progress.hpp"
+
+namespace curvefem::meshing::curved {
+
+struct CurvedEditOptions {
+  int passes = 2;       // rounds of (collapses, flips); 0: off
+  double energy = 4.0;  // cells above this mean energy (optimize.hpp cell_energy) are targets
+  bool collapses = true;
+  bool flips = true;
+};
+
+struct CurvedEditStats {
+  int passes = 0;
+  long long collapses = 0, flips = 0;
+  long long attempted = 0;             // operations the engine carried out before the checks
+  long long rejected_certificate = 0;  // a new cell not certified positive
+  long long rejected_energy = 0;       // the worst energy did not drop, or the scaled Jacobian did
+  long long rejected_topology = 0;     // link condition, boundary, existing edge or face
+  int cells_before = 0, cells_after = 0;
+  int targets_before = 0, targets_after = 0;  // cells above `energy`
+  double max_energy_before = 0, max_energy_after = 0;
+  double mean_energy_before = 0, mean_energy_after = 0;
+  double seconds = 0;
+};
+
+struct CurvedEditResult {
+  CurvedEditStats stats;
+  // New id of every node of the input mesh (-1: no longer used); frozen nodes always keep one.
+  std::vector<int> node_map;
+};
+
+/// Edits `mesh` (order-k tets, every cell certified positive) in place. `frozen`: per node, 1 for
+/// the nodes that must not move or disappear (the curved surface); the nodes of boundary faces
+/// are kept too. Nodes are renumbered (result.node_map); cell_tags follow the cells they came
+/// from. Throws MeshingError if the mesh is not conforming (two nodes for one lattice point).
+CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& frozen,
+                                  const CurvedEditOptions& options = {},
+                                  const ProgressFn& progress = {});
+
+}  // namespace curvefem::meshing::curved
