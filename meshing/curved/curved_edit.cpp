@@ -14,6 +14,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/curved/optimize.hpp"
 #include "meshing/editing/scheduler.hpp"
 #include "meshing/editing/tet_mesh.hpp"
 
@@ -59,39 +60,6 @@ Face sorted_face(Id a, Id b, Id c) {
 }
 Edge sorted_edge(Id a, Id b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
-// Energy of a cell: the mean conformal AMIPS over the order-k lattice (optimize.hpp cell_energy),
-// with the shape gradients computed once.
-struct EnergyReference {
-  int k = 1;
-  std::vector<Eigen::MatrixXd> grads;
-  Eigen::Matrix3d Winv;
-  explicit EnergyReference(int order) : k(order) {
-    const Eigen::MatrixXd xi = lagrange_reference_nodes(CellKind::tetrahedron, k);
-    if (k == 1)
-      grads.push_back(
-          lagrange_shape_gradients(CellKind::tetrahedron, 1, Eigen::Vector3d::Constant(0.25)));
-    else
-      for (int n = 0; n < int(xi.rows()); ++n)
-        grads.push_back(
-            lagrange_shape_gradients(CellKind::tetrahedron, k, Eigen::Vector3d(xi.row(n))));
-    Eigen::Matrix3d W;
-    W.col(0) = Eigen::Vector3d(1, 0, 0);
-    W.col(1) = Eigen::Vector3d(0.5, std::sqrt(3.0) / 2, 0);
-    W.col(2) = Eigen::Vector3d(0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0));
-    Winv = W.inverse();
-  }
-  double energy(const Eigen::MatrixXd& X) const {
-    double sum = 0;
-    for (const Eigen::MatrixXd& G : grads) {
-      const Eigen::Matrix3d J = (X.transpose() * G) * Winv;
-      const double det = J.determinant();
-      if (!(det > 0)) return k_inf;
-      sum += J.squaredNorm() / (3 * std::cbrt(det * det));
-    }
-    return sum / double(grads.size());
-  }
-};
-
 class CurvedEditMesh : public TetMesh {
  public:
   editing::Attribute<int> tag{*this, 3, 0};
@@ -101,7 +69,6 @@ class CurvedEditMesh : public TetMesh {
   int k = 1;
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
-  EnergyReference ref{1};
   std::vector<Eigen::Vector3d> pos;                       // node positions (grows)
   std::unordered_map<NodeKey, int, NodeKeyHash> node_of;  // current node of every key
   std::vector<char> vertex_fixed;                         // per vertex: never removed
@@ -200,7 +167,7 @@ class CurvedEditMesh : public TetMesh {
     const std::size_t nn = Xs.size();
     std::vector<double> new_energy(nn), new_sj(nn);
     for (std::size_t i = 0; i < nn; ++i) {
-      new_energy[i] = ref.energy(Xs[i]);
+      new_energy[i] = cell_energy(k, Xs[i]);
       if (!(new_energy[i] < before * (1.0 - 1e-9))) return ++stats->rejected_energy, false;
     }
     for (std::size_t i = 0; i < nn; ++i) {
@@ -327,7 +294,6 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   m.k = k;
   m.lattice = &lattice;
   m.tri_lattice = &lagrange_lattice(CellKind::triangle, k);
-  m.ref = EnergyReference(k);
   m.stats = &stats;
   m.initialize(node_of_vertex.size(), cells);
   m.pos.resize(std::size_t(mesh.num_nodes()));
@@ -378,7 +344,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   for (int c = 0; c < nc; ++c) {
     m.tag.set(Id(c), mesh.cell_tags.size() == nc ? mesh.cell_tags[c] : 0);
     const Eigen::MatrixXd X = m.cell_nodes(cells[std::size_t(c)]);
-    m.energy.set(Id(c), m.ref.energy(X));
+    m.energy.set(Id(c), cell_energy(k, X));
     m.scaled_jacobian.set(Id(c), min_scaled_jacobian(k, X));
   }
   auto summarize = [&](double& mean, double& max, int& targets) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <functional>
@@ -138,7 +139,10 @@ double energy_of(const Reference& ref, const Eigen::MatrixXd& X, double* point_m
 }  // namespace
 
 double cell_energy(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
-  const Reference ref(order);
+  CF_VERIFY(order >= 1 && order <= k_max_order, "cell_energy: order outside 1..4");
+  static const std::array<Reference, 4> refs = {Reference(1), Reference(2), Reference(3),
+                                                Reference(4)};
+  const Reference& ref = refs[std::size_t(order - 1)];
   CF_VERIFY(nodes.rows() == ref.nn && nodes.cols() == 3, "cell_energy: wrong node matrix");
   return energy_of(ref, nodes);
 }

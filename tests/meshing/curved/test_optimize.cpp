@@ -58,6 +58,18 @@ int centre_node(const LagrangeMesh& m) {
   return m.cells(0, 0);
 }
 
+// Every node of every cell is the linear interpolant of the cell's corners.
+void expect_straight(const LagrangeMesh& m) {
+  const auto& lattice = curvefem::lagrange_lattice(CellKind::tetrahedron, m.order);
+  for (int cell = 0; cell < m.num_cells(); ++cell)
+    for (std::size_t n = 0; n < lattice.size(); ++n) {
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int j = 0; j < 4; ++j)
+        x += double(lattice[n][j]) / m.order * m.nodes.row(m.cells(cell, j)).transpose();
+      EXPECT_LT((x - m.nodes.row(m.cells(cell, Eigen::Index(n))).transpose()).norm(), 1e-12);
+    }
+}
+
 bool all_certified(const LagrangeMesh& m) {
   for (int c = 0; c < m.num_cells(); ++c) {
     Eigen::MatrixXd X(m.cells.cols(), 3);
@@ -104,14 +116,7 @@ TEST(Optimize, OffCentreVertexOfAnOctahedronReturnsToTheCentreAtEveryOrder) {
       if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12)
         EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
     // Straight tets stay straight: every edge midpoint-type node is the linear interpolant.
-    const auto& lattice = curvefem::lagrange_lattice(CellKind::tetrahedron, k);
-    for (int cell = 0; cell < m.num_cells(); ++cell)
-      for (std::size_t n = 0; n < lattice.size(); ++n) {
-        Eigen::Vector3d x = Eigen::Vector3d::Zero();
-        for (int j = 0; j < 4; ++j)
-          x += double(lattice[n][j]) / k * m.nodes.row(m.cells(cell, j)).transpose();
-        EXPECT_LT((x - m.nodes.row(m.cells(cell, Eigen::Index(n))).transpose()).norm(), 1e-12);
-      }
+    expect_straight(m);
   }
 }
 
@@ -291,14 +296,7 @@ TEST(CurvedEdit, ANearlyFlatCentreIsCollapsedAwayAtEveryOrder) {
       ASSERT_GE(r.node_map[std::size_t(i)], 0) << "node " << i;
       EXPECT_EQ(m.nodes.row(r.node_map[std::size_t(i)]), before.nodes.row(i));
     }
-    const auto& lattice = curvefem::lagrange_lattice(CellKind::tetrahedron, k);
-    for (int cell = 0; cell < m.num_cells(); ++cell)
-      for (std::size_t n = 0; n < lattice.size(); ++n) {
-        Eigen::Vector3d x = Eigen::Vector3d::Zero();
-        for (int j = 0; j < 4; ++j)
-          x += double(lattice[n][j]) / k * m.nodes.row(m.cells(cell, j)).transpose();
-        EXPECT_LT((x - m.nodes.row(m.cells(cell, Eigen::Index(n))).transpose()).norm(), 1e-12);
-      }
+    expect_straight(m);
   }
 }
 
