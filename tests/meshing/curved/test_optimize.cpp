@@ -300,7 +300,7 @@ TEST(CurvedEdit, ANearlyFlatCentreIsCollapsedAwayAtEveryOrder) {
   }
 }
 
-TEST(CurvedEdit, NewNodesFollowTheCurvedBoundaryAndTheBoundaryIsKept) {
+TEST(CurvedEdit, OnACurvedOctahedronTheBoundaryIsKeptAndNewCellsAreCertified) {
   // The octahedron's faces bulge out halfway to the unit sphere (frozen); its inside stays
   // straight, its centre off the middle.
   for (int k = 2; k <= 4; ++k) {
