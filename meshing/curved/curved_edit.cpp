@@ -14,6 +14,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/curved/node_key.hpp"
 #include "meshing/curved/optimize.hpp"
 #include "meshing/editing/scheduler.hpp"
 #include "meshing/editing/tet_mesh.hpp"
@@ -27,28 +28,8 @@ using editing::TetMesh;
 
 constexpr double k_inf = std::numeric_limits<double>::infinity();
 
-// A node is the multiset of the vertex ids it is a lattice point of (sorted, padded), as in the
-// stitching step of curved_mesher.cpp.
-struct NodeKey {
-  std::array<Id, 4> id;
-  auto operator<=>(const NodeKey&) const = default;
-};
-struct NodeKeyHash {
-  std::size_t operator()(const NodeKey& k) const {
-    std::size_t h = 0;
-    for (Id x : k.id) h = h * 1000003u ^ std::hash<Id>()(x);
-    return h;
-  }
-};
-NodeKey make_key(const Id* v, const std::array<int, 4>& alpha, int corners) {
-  NodeKey key;
-  key.id.fill(editing::k_no_id);
-  int n = 0;
-  for (int j = 0; j < corners; ++j)
-    for (int m = 0; m < alpha[j]; ++m) key.id[std::size_t(n++)] = v[j];
-  std::sort(key.id.begin(), key.id.begin() + n);
-  return key;
-}
+using NodeKey = curved::NodeKey<Id>;
+using NodeKeyHash = curved::NodeKeyHash<Id>;
 
 using Face = std::array<Id, 3>;  // sorted
 using Edge = std::array<Id, 2>;  // sorted
@@ -80,14 +61,14 @@ class CurvedEditMesh : public TetMesh {
 
   Eigen::Vector3d corner(Id v) const {
     const std::array<int, 4> alpha{k, 0, 0, 0};
-    return pos[std::size_t(node_of.at(make_key(&v, alpha, 1)))];
+    return pos[std::size_t(node_of.at(make_node_key(&v, alpha, 1)))];
   }
 
   Eigen::MatrixXd cell_nodes(const Cell& c) const {
     Eigen::MatrixXd X(Eigen::Index(lattice->size()), 3);
     for (std::size_t n = 0; n < lattice->size(); ++n)
       X.row(Eigen::Index(n)) =
-          pos[std::size_t(node_of.at(make_key(c.data(), (*lattice)[n], 4)))].transpose();
+          pos[std::size_t(node_of.at(make_node_key(c.data(), (*lattice)[n], 4)))].transpose();
     return X;
   }
 
@@ -146,7 +127,7 @@ class CurvedEditMesh : public TetMesh {
       for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
       for (std::size_t n = 0; n < lattice->size(); ++n) {
         const auto& alpha = (*lattice)[n];
-        const NodeKey key = make_key(c.data(), alpha, 4);
+        const NodeKey key = make_node_key(c.data(), alpha, 4);
         std::vector<Id> support;
         for (int j = 0; j < 4; ++j)
           if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
@@ -248,7 +229,7 @@ class CurvedEditMesh : public TetMesh {
     Eigen::Vector3d patch = Eigen::Vector3d::Zero(), linear = Eigen::Vector3d::Zero();
     for (std::size_t n = 0; n < tri_lattice->size(); ++n)
       patch += N[Eigen::Index(n)] *
-               pos[std::size_t(node_of.at(make_key(f.data(), (*tri_lattice)[n], 3)))];
+               pos[std::size_t(node_of.at(make_node_key(f.data(), (*tri_lattice)[n], 3)))];
     for (int i = 0; i < 3; ++i) linear += mu[i] * corner(f[std::size_t(i)]);
     return t * (patch - linear);
   }
@@ -258,6 +239,21 @@ class CurvedEditMesh : public TetMesh {
 };
 
 }  // namespace
+
+void accumulate(CurvedEditStats& total, const CurvedEditStats& next) {
+  total.passes += next.passes;
+  total.collapses += next.collapses;
+  total.flips += next.flips;
+  total.attempted += next.attempted;
+  total.rejected_certificate += next.rejected_certificate;
+  total.rejected_energy += next.rejected_energy;
+  total.rejected_topology += next.rejected_topology;
+  total.cells_after = next.cells_after;
+  total.targets_after = next.targets_after;
+  total.max_energy_after = next.max_energy_after;
+  total.mean_energy_after = next.mean_energy_after;
+  total.seconds += next.seconds;
+}
 
 CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& frozen,
                                   const CurvedEditOptions& options, const ProgressFn& progress) {
@@ -300,7 +296,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   for (int n = 0; n < mesh.num_nodes(); ++n) m.pos[std::size_t(n)] = mesh.nodes.row(n).transpose();
   for (int c = 0; c < nc; ++c)
     for (std::size_t n = 0; n < lattice.size(); ++n) {
-      const NodeKey key = make_key(cells[std::size_t(c)].data(), lattice[n], 4);
+      const auto key = make_node_key(cells[std::size_t(c)].data(), lattice[n], 4);
       const int node = mesh.cells(c, Eigen::Index(n));
       const auto [it, inserted] = m.node_of.emplace(key, node);
       if (!inserted && it->second != node)
@@ -330,7 +326,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
         for (Id v : sf) m.vertex_fixed[v] = 1;
       bool curved = true;
       for (const auto& alpha : tri) {
-        const int node = m.node_of.at(make_key(sf.data(), alpha, 3));
+        const int node = m.node_of.at(make_node_key(sf.data(), alpha, 3));
         curved = curved && frozen[std::size_t(node)];
       }
       if (!curved) continue;
@@ -450,7 +446,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     const auto& cv = m.cell(live[i]);
     for (std::size_t n = 0; n < lattice.size(); ++n)
       new_cells(Eigen::Index(i), Eigen::Index(n)) =
-          m.node_of.at(make_key(cv.data(), lattice[n], 4));
+          m.node_of.at(make_node_key(cv.data(), lattice[n], 4));
     new_tags[Eigen::Index(i)] = m.tag[live[i]];
   }
   for (int n = 0; n < mesh.num_nodes(); ++n)

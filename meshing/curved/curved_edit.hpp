@@ -55,6 +55,10 @@ struct CurvedEditResult {
   std::vector<int> node_map;
 };
 
+/// `total` followed by the run `next` on the same mesh: counts and seconds add, the "after"
+/// values are next's, the "before" values stay total's.
+void accumulate(CurvedEditStats& total, const CurvedEditStats& next);
+
 /// Edits `mesh` (order-k tets, every cell certified positive) in place. `frozen`: per node, 1 for
 /// the nodes that must not move or disappear (the curved surface); the nodes of boundary faces
 /// are kept too. Nodes are renumbered (result.node_map); cell_tags follow the cells they came

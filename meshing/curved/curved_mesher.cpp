@@ -23,6 +23,7 @@
 #include "meshing/curved/curved_edit.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/curved/node_key.hpp"
 #include "meshing/curved/slab_nodes.hpp"
 #include "meshing/editing/algorithms/tet_flips.hpp"
 #include "meshing/shell/bevel.hpp"
@@ -40,28 +41,8 @@ namespace {
 
 namespace sh = meshing::shell;
 
-// A node is identified by the multiset of global corner ids it is a lattice point of (each id
-// repeated by its multi-index entry): the same point of the same sub-simplex in any cell.
-struct NodeKey {
-  std::array<int, 4> id;
-  bool operator==(const NodeKey&) const = default;
-};
-struct NodeKeyHash {
-  std::size_t operator()(const NodeKey& k) const {
-    std::size_t h = 0;
-    for (int x : k.id) h = h * 1000003u ^ std::hash<int>()(x);
-    return h;
-  }
-};
-NodeKey make_key(const int* gid, const std::array<int, 4>& alpha, int corners) {
-  NodeKey key;
-  key.id.fill(INT_MAX);
-  int n = 0;
-  for (int j = 0; j < corners; ++j)
-    for (int m = 0; m < alpha[j]; ++m) key.id[n++] = gid[j];
-  std::sort(key.id.begin(), key.id.begin() + n);
-  return key;
-}
+using NodeKey = curved::NodeKey<int>;
+using NodeKeyHash = curved::NodeKeyHash<int>;
 
 struct Owned {
   int vertex;
@@ -1199,7 +1180,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   auto add_tet = [&](const TetNodes& t, int tag) {
     std::vector<int> row(tet_lattice.size());
     for (std::size_t n = 0; n < tet_lattice.size(); ++n) {
-      const NodeKey key = make_key(t.gid.data(), tet_lattice[n], 4);
+      const NodeKey key = make_node_key(t.gid.data(), tet_lattice[n], 4);
       auto [it, inserted] = node_id.try_emplace(key, int(nodes.size()));
       if (inserted) nodes.push_back(t.nodes.row(Eigen::Index(n)).transpose());
       row[n] = it->second;
@@ -1271,7 +1252,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     const int gid[3] = {b.gid_mid(b.rotated(f, 0)), b.gid_mid(b.rotated(f, 1)),
                         b.gid_mid(b.rotated(f, 2))};
     for (std::size_t n = 0; n < tri_lattice.size(); ++n) {
-      const auto it = node_id.find(make_key(gid, tri_lattice[n], 3));
+      const auto it = node_id.find(make_node_key(gid, tri_lattice[n], 3));
       CF_VERIFY(it != node_id.end(), "stitch: a boundary node of coarse face " + std::to_string(f) +
                                          " belongs to no tet");
       if (local_of[it->second] < 0) {
@@ -1338,24 +1319,11 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     if (options.optimize.edits.passes <= 0) return;
     const CurvedEditResult edited =
         edit_curved_mesh(out.mesh, frozen_nodes(), options.optimize.edits, progress);
-    const CurvedEditStats& e = edited.stats;
-    if (!edited_once) {
-      edits = e;
-      edited_once = true;
-    } else {
-      edits.passes += e.passes;
-      edits.collapses += e.collapses;
-      edits.flips += e.flips;
-      edits.attempted += e.attempted;
-      edits.rejected_certificate += e.rejected_certificate;
-      edits.rejected_energy += e.rejected_energy;
-      edits.rejected_topology += e.rejected_topology;
-      edits.cells_after = e.cells_after;
-      edits.targets_after = e.targets_after;
-      edits.max_energy_after = e.max_energy_after;
-      edits.mean_energy_after = e.mean_energy_after;
-      edits.seconds += e.seconds;
-    }
+    if (edited_once)
+      accumulate(edits, edited.stats);
+    else
+      edits = edited.stats;
+    edited_once = true;
     for (Eigen::Index i = 0; i < map.boundary_node_to_volume.size(); ++i)
       map.boundary_node_to_volume[i] = edited.node_map[std::size_t(map.boundary_node_to_volume[i])];
     stats.nodes = out.mesh.num_nodes();

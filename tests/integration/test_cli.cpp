@@ -165,12 +165,19 @@ TEST(Cli, MeshThenValidateAndDetectTampering) {
   const std::string in = (dir / "sphere.obj").string(), out_dir = (dir / "m").string();
   std::string out;
   ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
-                                  " --order 3 --eps 0.01 --no-features --threads 2",
+                                  " --order 3 --eps 0.01 --no-features --threads 2"
+                                  " --optimize-edit-energy 1.5",
                               &out),
             0)
       << out;
   const auto j = read_json(dir / "m" / "report.json");
   EXPECT_EQ(j["input_faces"], 1280);
+  // The curved edits (no target at the default energy 4 on this sphere: its worst cell is 2.5)
+  // report what they did, and the validated mesh is theirs.
+  const auto& edits = j["optimize"]["curved_edits"];
+  EXPECT_GT(edits["collapses"].get<long>() + edits["flips"].get<long>(), 0) << edits.dump();
+  EXPECT_LT(edits["targets"]["after"].get<int>(), edits["targets"]["before"].get<int>());
+  EXPECT_EQ(edits["tets"]["after"], j["validation"]["tets"]);
   EXPECT_EQ(j["order"], 3);
   EXPECT_TRUE(j["min_jacobian_certified"].get<bool>());
   EXPECT_EQ(j["boundary_self_intersections"], 0);
