@@ -196,6 +196,14 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
 
   std::vector<double> energy(nc), point_energy(nc);
   for (int c = 0; c < nc; ++c) energy[c] = energy_of(ref, cell_nodes(mesh, c), &point_energy[c]);
+  // Sampled min scaled Jacobian per cell, computed when a move first needs it (NaN: not yet).
+  // Only the cells of the visited star are touched, so parallel visits stay disjoint.
+  std::vector<double> cell_sj(std::size_t(nc), std::numeric_limits<double>::quiet_NaN());
+  auto sj_of = [&](int c) {
+    if (std::isnan(cell_sj[std::size_t(c)]))
+      cell_sj[std::size_t(c)] = min_scaled_jacobian(k, cell_nodes(mesh, c));
+    return cell_sj[std::size_t(c)];
+  };
   auto summarize = [&](double& mean, double& max) {
     mean = max = 0;
     for (double e : energy) {
@@ -310,16 +318,21 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     auto restore = [&] {
       for (std::size_t i = 0; i < moved.size(); ++i) mesh.nodes.row(moved[i].first) = saved[i];
     };
+    double sj_before = k_inf;
+    for (const auto& [c, local] : star[v]) sj_before = std::min(sj_before, sj_of(c));
+    const double sj_floor = std::min(sj_before, options.scaled_jacobian_floor);
+    std::vector<double> sj_after(star[v].size());
     bool accepted = false;
     for (int attempt = 0; attempt < 4; ++attempt) {
       for (std::size_t i = 0; i < moved.size(); ++i)
         mesh.nodes.row(moved[i].first) = saved[i] + (moved[i].second / k) * delta.transpose();
       accepted = true;
-      for (const auto& [c, local] : star[v])
-        if (certify_tet_jacobian(k, cell_nodes(mesh, c)).verdict != JacobianVerdict::positive) {
-          accepted = false;
-          break;
-        }
+      for (std::size_t i = 0; i < star[v].size() && accepted; ++i) {
+        const Eigen::MatrixXd X = cell_nodes(mesh, star[v][i].first);
+        sj_after[i] = min_scaled_jacobian(k, X);
+        accepted = sj_after[i] >= sj_floor &&
+                   certify_tet_jacobian(k, X).verdict == JacobianVerdict::positive;
+      }
       if (accepted) break;
       ++rejected;
       restore();
@@ -332,8 +345,11 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         break;
     }
     if (!accepted) return false;
-    for (const auto& [c, local] : star[v])
+    for (std::size_t i = 0; i < star[v].size(); ++i) {
+      const int c = star[v][i].first;
       energy[c] = energy_of(ref, cell_nodes(mesh, c), &point_energy[c]);
+      cell_sj[std::size_t(c)] = sj_after[i];
+    }
     return true;
   };
 

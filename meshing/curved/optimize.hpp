@@ -47,6 +47,9 @@ struct OptimizeOptions {
   // Jacobian 5.3e-4 with the guard everywhere, 6.7e-3 with it lifted above 50; the geometry-order
   // matrix has no such cells and its errors are unchanged).
   double node_free_energy = 50;
+  // A move may not take the star's worst sampled scaled Jacobian (min_scaled_jacobian) below
+  // min(its value before, this floor): the energy alone let moves create the mesh's worst cells.
+  double scaled_jacobian_floor = 0.05;
   // Collapses and flips of the stitched curved mesh before the smoothing (curved_edit.hpp; run by
   // the curved mesher, not by optimize_vertices).
   CurvedEditOptions edits;
