@@ -32,6 +32,7 @@
 #include "meshing/shell/shell_geometry.hpp"
 #include "meshing/shell/shell_intersection.hpp"
 #include "meshing/shell/simplify.hpp"
+#include "meshing/shell/thin_refine.hpp"
 #include "meshing/shell/verify.hpp"
 #include "meshing/tetfill/tetfill.hpp"
 
@@ -647,6 +648,7 @@ struct CoarseState {
   bool repair = false;  // the next attempt repairs the coarse shell
   sh::BeveledShell beveled;
   sh::ShellStats shell_stats;
+  sh::ThinRefineStats thin_stats;
   std::vector<Eigen::Vector3d> points, point_bary;
   std::vector<int> point_faces, point_input_face;
   sh::Shell shell;
@@ -692,11 +694,31 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     // bevel.hpp): from here on the shell works on `surface`, the input refined without moving
     // it, whose vertices 0..#V-1 are the input's; the map and the returned shell refer to the
     // input again.
-    st.beveled = sh::build_beveled_shell(input, shell_options, st.shell_stats, {}, progress);
+    // Thin parts first (meshing/shell/thin_refine.hpp): input edges much longer than the object
+    // is thick there are bisected, so the coarsening's thickness guard has vertices to keep.
+    sh::ThinRefineOptions thin;
+    thin.max_edge_per_thickness = options.thin_refine_ratio;
+    thin.kept_edges = options.feature_edges;
+    const sh::BeveledSurface refined = sh::refine_thin_parts(input, thin, st.thin_stats);
+    if (refined.refined()) {
+      st.beveled =
+          sh::build_beveled_shell(refined.mesh, shell_options, st.shell_stats, {}, progress);
+      st.beveled.surface = sh::compose(refined, std::move(st.beveled.surface));
+      st.shell_stats.input_vertices = input.num_vertices();
+      st.shell_stats.input_faces = input.num_faces();
+    } else {
+      st.beveled = sh::build_beveled_shell(input, shell_options, st.shell_stats, {}, progress);
+    }
   }
   const sh::BeveledShell& beveled = st.beveled;
   const SurfaceMesh& surface = beveled.surface.mesh;
   stats.beveled_faces = beveled.stats.beveled_faces;
+  stats.thin_refined_faces = st.thin_stats.refined_faces;
+  stats.thin_splits = st.thin_stats.splits;
+  stats.thin_edges_before = st.thin_stats.thin_edges_before;
+  stats.thin_edges_after = st.thin_stats.thin_edges_after;
+  stats.thin_max_ratio_before = st.thin_stats.max_ratio_before;
+  stats.thin_max_ratio_after = st.thin_stats.max_ratio_after;
   stats.singular_vertices = st.shell_stats.singular_vertices;
   stats.shell_faces = int(beveled.shell.F.rows());
   if (built_now) stats.stage_seconds.emplace_back("shell", watch.seconds());
@@ -1360,13 +1382,20 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   return out;
 }
 
-}  // namespace
-
-CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
-                             CurvedMeshStats& stats, const ProgressFn& progress) {
+// The attempts of the curved-aware coarsening; `thin_refined` receives the input faces the thin
+// refinement refined (0 when it refined nothing), also when an attempt throws.
+CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions& options,
+                               CurvedMeshStats& stats, const ProgressFn& progress,
+                               int& thin_refined) {
   const bool curved = options.curved_coarsening && options.order >= 2 &&
                       options.curved_linear_factor > 1 && options.curved_attempts > 0;
-  if (!curved) return build_attempt(input, options, {}, false, stats, progress);
+  CoarseState state;
+  struct Report {
+    const CoarseState& state;
+    int& out;
+    ~Report() { out = state.thin_stats.refined_faces; }
+  } report{state, thin_refined};
+  if (!curved) return build_attempt(input, options, {}, false, stats, progress, &state);
   // Curved-aware attempts, each keeping more input vertices under the linear bound; the last
   // resort is the linear bound everywhere (whose α = 0 fallback always meets ε).
   std::vector<char> strict;
@@ -1374,7 +1403,6 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
   int last_misses = INT_MAX;
   bool give_up = false, widened = false;
   std::vector<int> above_base;  // from every discarded attempt
-  CoarseState state;
   for (int attempt = 1;; ++attempt) {
     const bool relaxed = !give_up && attempt <= options.curved_attempts;
     state.repair = options.curved_repair && relaxed && attempt > 1;
@@ -1428,6 +1456,27 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
                         : std::to_string(missed.vertices.size()) +
                               " input vertices near them keep the linear bound next");
     }
+  }
+}
+
+}  // namespace
+
+CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
+                             CurvedMeshStats& stats, const ProgressFn& progress) {
+  int thin_refined = 0;
+  try {
+    return build_with_attempts(input, options, stats, progress, thin_refined);
+  } catch (const MeshingError& e) {
+    if (thin_refined == 0) throw;
+    // The refined surface's shell could not be meshed (seen on a plate 0.1 ε thick: the slab
+    // layer's inner surface stayed self-intersecting): the unrefined input, as before.
+    log::warn("mesh: on the thin-refined input (", thin_refined, " input faces refined) ", e.what(),
+              "; meshing the input without the thin refinement");
+    CurvedMeshOptions plain = options;
+    plain.thin_refine_ratio = 0;
+    CurvedMesh out = build_with_attempts(input, plain, stats, progress, thin_refined);
+    stats.thin_fallback = e.what();
+    return out;
   }
 }
 

@@ -78,6 +78,10 @@ struct CurvedMeshOptions {
   // coarse edge longer than this many times the object's local thickness at its ends, so slab
   // tets in thin parts (plates, knife edges, thin limbs) are not flatter than that.
   double max_edge_per_thickness = 8;
+  // Thin-part refinement of the input before the shell (meshing/shell/thin_refine.hpp; 0: off):
+  // input edges longer than this many times the local thickness are bisected (same surface), so
+  // the guard above has vertices to keep where the input itself is too coarse (a CAD plate).
+  double thin_refine_ratio = 8;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.
@@ -139,6 +143,13 @@ struct CurvedMeshStats {
   int input_vertices = 0, input_faces = 0, feature_edges = 0, frozen_vertices = 0;
   int singular_vertices = 0;
   int beveled_faces = 0;  // input faces refined by topological beveling (0: not needed)
+  // Thin-part refinement (CurvedMeshOptions::thin_refine_ratio): input faces refined, bisections,
+  // input edges above the ratio and the worst edge / thickness, before and after.
+  int thin_refined_faces = 0, thin_splits = 0, thin_edges_before = 0, thin_edges_after = 0;
+  double thin_max_ratio_before = 0, thin_max_ratio_after = 0;
+  // Non-empty: meshing the thin-refined input failed with this error, and the mesh is that of the
+  // unrefined input (the counts above are then 0).
+  std::string thin_fallback;
   int shell_faces = 0, coarse_faces = 0;
   // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness
   // (the smaller half-pillar per vertex) relative to the longest bbox edge.

@@ -50,6 +50,7 @@ struct MeshArgs {
        linear_coarsening = false, no_curved_repair = false;
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
+  double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
@@ -176,6 +177,11 @@ void register_mesh(CLI::App& app) {
                   "coarsening keeps every coarse edge at most this many times the object's local "
                   "thickness at its ends (thin parts get flat slab tets otherwise; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--thin-refine", args->thin_refine_ratio,
+                  "before the shell, bisect input edges longer than this many times the object's "
+                  "local thickness (same surface; where the input itself is too coarse for "
+                  "--max-edge-per-thickness to help, e.g. a CAD plate; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
                 "(meshing/curved/README.md, step 7; off: the full shear)");
@@ -222,6 +228,7 @@ void register_mesh(CLI::App& app) {
       options.constraint_points = read_constraint_file(args->constraints);
     options.shell_split_mips = args->split_mips;
     options.max_edge_per_thickness = args->max_edge_per_thickness;
+    options.thin_refine_ratio = args->thin_refine_ratio;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {
@@ -320,6 +327,15 @@ void register_mesh(CLI::App& app) {
            }()}}},
         {"singular_vertices", stats.singular_vertices},
         {"beveled_faces", stats.beveled_faces},
+        {"thin_refinement",
+         {{"ratio", options.thin_refine_ratio},
+          {"refined_input_faces", stats.thin_refined_faces},
+          {"bisections", stats.thin_splits},
+          {"thin_edges_before", stats.thin_edges_before},
+          {"thin_edges_after", stats.thin_edges_after},
+          {"max_ratio_before", stats.thin_max_ratio_before},
+          {"max_ratio_after", stats.thin_max_ratio_after},
+          {"fallback", stats.thin_fallback}}},
         {"shell_section_verified", stats.shell_section_verified},
         {"shell_non_section_prisms", stats.shell_non_section_prisms},
         {"faces_fully_curved", stats.faces_fully_curved},

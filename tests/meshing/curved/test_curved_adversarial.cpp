@@ -155,3 +155,43 @@ TEST(CurvedAdversarial, AMissIsRepairedOnTheCoarseShellWithoutCoarseningAgain) {
               m.stats.repair_splits, again.coarse_faces);
   EXPECT_LE(m.stats.coarse_faces, 1.05 * again.coarse_faces);
 }
+
+TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFirst) {
+  // A 1 x 0.02 x 0.02 bar, 4 x 4 quads per side: its sides are needle triangles 0.25 long,
+  // 12-18 times the bar's thickness, and the thickness guard can only refuse collapses, not add
+  // vertices. The thin-part refinement bisects the input's thin edges (not its 12 feature
+  // edges) before the shell. Measured (K = 3, 2026-12-02): without it 181 tets, min scaled
+  // Jacobian 5.6e-4, 154 tets (85%) below 0.01, max MIPS 3.5e4; with it (112 bisections of 128
+  // input faces) 72 tets, 9.0e-3, 16 below 0.01, max MIPS 2.4e3.
+  const SurfaceMesh input = make_adversarial("box_thin_long");
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.eps_rel = 0.01;
+  o.threads = 1;
+  o.feature_edges = cv::detect_feature_edges(input, 60.0);
+  ASSERT_GT(o.thin_refine_ratio, 0);  // on by default
+  cv::CurvedMeshStats with_stats, without_stats;
+  const cv::CurvedMesh with = cv::build_curved_mesh(input, o, with_stats);
+  o.thin_refine_ratio = 0;
+  const cv::CurvedMesh without = cv::build_curved_mesh(input, o, without_stats);
+  const cv::CurvedValidation a = cv::validate_curved_mesh(with.mesh, with.map, input);
+  const cv::CurvedValidation b = cv::validate_curved_mesh(without.mesh, without.map, input);
+  std::printf(
+      "refined (%d bisections, %d input faces): %d tets, min SJ %.3g, %d below 0.01, max MIPS "
+      "%.3g; without: %d tets, min SJ %.3g, %d below 0.01, max MIPS %.3g\n",
+      with_stats.thin_splits, with_stats.thin_refined_faces, a.tets, a.min_scaled_jacobian,
+      a.tets_sj_below_1e2, a.max_mips, b.tets, b.min_scaled_jacobian, b.tets_sj_below_1e2,
+      b.max_mips);
+  EXPECT_TRUE(a.valid(0.01));
+  EXPECT_TRUE(b.valid(0.01));
+  EXPECT_GT(with_stats.thin_splits, 50);
+  EXPECT_GT(with_stats.thin_edges_before, with_stats.thin_edges_after);
+  EXPECT_TRUE(with_stats.thin_fallback.empty());
+  EXPECT_EQ(without_stats.thin_splits, 0);
+  EXPECT_EQ(a.feature_edges, 48);  // the feature chains still hold: none was bisected
+  EXPECT_EQ(a.features_off_edges, 0);
+  // What the refinement buys.
+  EXPECT_GT(a.min_scaled_jacobian, 5 * b.min_scaled_jacobian);
+  EXPECT_LT(a.tets_sj_below_1e2 * 3, b.tets_sj_below_1e2);
+  EXPECT_LT(a.max_mips * 5, b.max_mips);
+}

@@ -1,0 +1,281 @@
+#include "meshing/shell/thin_refine.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <unordered_map>
+
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+#include "meshing/core/timer.hpp"
+#include "meshing/shell/shell_intersection.hpp"
+
+namespace curvefem::meshing::shell {
+namespace {
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
+
+struct Refiner {
+  const SurfaceMesh& input;
+  const InputSurfaceIndex index;
+  std::vector<Eigen::Vector3d> V;
+  std::vector<std::array<int, 3>> F;
+  std::vector<int> parent;
+  std::vector<Eigen::Matrix3d> W;  // column k: corner k in the parent face
+  std::vector<double> T;           // per vertex
+  std::unordered_map<std::uint64_t, std::vector<int>> edge_faces;
+
+  explicit Refiner(const SurfaceMesh& in) : input(in), index(in.V, in.F) {}
+
+  Eigen::Vector3d area_normal(int f) const {
+    const auto& t = F[std::size_t(f)];
+    return (V[std::size_t(t[1])] - V[std::size_t(t[0])])
+        .cross(V[std::size_t(t[2])] - V[std::size_t(t[0])]);
+  }
+
+  double thickness(const Eigen::Vector3d& x, const Eigen::Vector3d& n,
+                   const std::vector<int>& ignore) const {
+    if (!(n.norm() > 0)) return HUGE_VAL;
+    return index.ray_distance(x, -n.normalized(), ignore);
+  }
+
+  // Thickness at the point x of edge (a, b) (faces fs): along the inward mean of the two faces'
+  // normals, beyond their input faces.
+  double edge_thickness(const Eigen::Vector3d& x, const std::array<int, 2>& fs) const {
+    std::vector<int> ignore{parent[std::size_t(fs[0])], parent[std::size_t(fs[1])]};
+    if (ignore[0] == ignore[1]) ignore.pop_back();
+    std::sort(ignore.begin(), ignore.end());
+    return thickness(x, area_normal(fs[0]).normalized() + area_normal(fs[1]).normalized(), ignore);
+  }
+  // |ab| / the thickness at the midpoint of (a, b) (cached per edge: the surface never moves).
+  double ratio(int a, int b) {
+    const std::uint64_t key = edge_key(a, b);
+    auto it = mid_thickness.find(key);
+    if (it == mid_thickness.end()) {
+      const Eigen::Vector3d m = 0.5 * (V[std::size_t(a)] + V[std::size_t(b)]);
+      it = mid_thickness.emplace(key, edge_thickness(m, faces_of(a, b))).first;
+    }
+    const double len = (V[std::size_t(a)] - V[std::size_t(b)]).norm();
+    return it->second > 0 ? len / it->second : HUGE_VAL;
+  }
+  std::unordered_map<std::uint64_t, double> mid_thickness;
+
+  void add_face(int f) {
+    for (int c = 0; c < 3; ++c)
+      edge_faces[edge_key(F[std::size_t(f)][std::size_t(c)],
+                          F[std::size_t(f)][std::size_t((c + 1) % 3)])]
+          .push_back(f);
+  }
+  void remove_face(int f) {
+    for (int c = 0; c < 3; ++c) {
+      auto& list = edge_faces[edge_key(F[std::size_t(f)][std::size_t(c)],
+                                       F[std::size_t(f)][std::size_t((c + 1) % 3)])];
+      list.erase(std::find(list.begin(), list.end(), f));
+    }
+  }
+
+  // The two faces of edge (a, b) (InputError on a non-manifold edge).
+  std::array<int, 2> faces_of(int a, int b) const {
+    const auto it = edge_faces.find(edge_key(a, b));
+    if (it == edge_faces.end() || it->second.size() != 2)
+      throw InputError("thin refinement: input edge (" + std::to_string(a) + ", " +
+                       std::to_string(b) + ") does not have exactly two faces");
+    return {it->second[0], it->second[1]};
+  }
+
+  // Bisects (a, b) at its midpoint; the new faces replace fs and follow.
+  void split(int a, int b, const std::array<int, 2>& fs, std::vector<int>& touched) {
+    const int m = int(V.size());
+    V.push_back(0.5 * (V[std::size_t(a)] + V[std::size_t(b)]));
+    for (int f : fs) {
+      remove_face(f);
+      const auto t = F[std::size_t(f)];
+      int i = 0;
+      while (!((t[std::size_t(i)] == a && t[std::size_t((i + 1) % 3)] == b) ||
+               (t[std::size_t(i)] == b && t[std::size_t((i + 1) % 3)] == a)))
+        ++i;
+      const int p = t[std::size_t(i)], q = t[std::size_t((i + 1) % 3)],
+                r = t[std::size_t((i + 2) % 3)];
+      const Eigen::Matrix3d w = W[std::size_t(f)];
+      const Eigen::Vector3d wp = w.col(i), wq = w.col((i + 1) % 3), wr = w.col((i + 2) % 3),
+                            wm = 0.5 * (wp + wq);
+      const int g = int(F.size());
+      F[std::size_t(f)] = {p, m, r};
+      W[std::size_t(f)] << wp, wm, wr;
+      F.push_back({m, q, r});
+      Eigen::Matrix3d wg;
+      wg << wm, wq, wr;
+      W.push_back(wg);
+      parent.push_back(parent[std::size_t(f)]);
+      add_face(f);
+      add_face(g);
+      touched.push_back(f);
+      touched.push_back(g);
+    }
+  }
+
+  // Longest edge of face f as (a, b), and the face's worst thin ratio.
+  std::pair<std::array<int, 2>, double> longest(int f) const {
+    const auto& t = F[std::size_t(f)];
+    std::array<int, 2> best{};
+    double best_len = -1;
+    for (int c = 0; c < 3; ++c) {
+      const int a = t[std::size_t(c)], b = t[std::size_t((c + 1) % 3)];
+      const double len = (V[std::size_t(a)] - V[std::size_t(b)]).squaredNorm();
+      if (len > best_len) best_len = len, best = {a, b};
+    }
+    return {best, std::sqrt(best_len)};
+  }
+  double worst_ratio(int f) {
+    const auto& t = F[std::size_t(f)];
+    double r = 0;
+    for (int c = 0; c < 3; ++c)
+      r = std::max(r, ratio(t[std::size_t(c)], t[std::size_t((c + 1) % 3)]));
+    return r;
+  }
+
+  void count(double limit, int& thin, double& worst) {
+    thin = 0;
+    worst = 0;
+    std::vector<std::uint64_t> keys;
+    for (const auto& [key, faces] : edge_faces)
+      if (!faces.empty() && !mid_thickness.count(key)) keys.push_back(key);
+    std::vector<double> t(keys.size());
+    tbb::parallel_for(std::size_t(0), keys.size(), [&](std::size_t i) {
+      const int a = int(keys[i] >> 32), b = int(keys[i] & 0xffffffffu);
+      t[i] = edge_thickness(0.5 * (V[std::size_t(a)] + V[std::size_t(b)]), faces_of(a, b));
+    });
+    for (std::size_t i = 0; i < keys.size(); ++i) mid_thickness[keys[i]] = t[i];
+    for (const auto& [key, faces] : edge_faces) {
+      if (faces.empty()) continue;
+      const int a = int(key >> 32), b = int(key & 0xffffffffu);
+      const double r = ratio(a, b);
+      if (r > limit) ++thin;
+      if (std::isfinite(r)) worst = std::max(worst, r);
+    }
+  }
+};
+
+}  // namespace
+
+BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptions& options,
+                                 ThinRefineStats& stats) {
+  Stopwatch watch;
+  stats = {};
+  const int nv = input.num_vertices(), nf = input.num_faces();
+  BeveledSurface out = unbeveled_surface(input, ExtrusionDirections{});
+  if (!(options.max_edge_per_thickness > 0) || nf == 0) return out;
+  Refiner r(input);
+  r.V.resize(std::size_t(nv));
+  for (int v = 0; v < nv; ++v) r.V[std::size_t(v)] = input.V.row(v).transpose();
+  r.F.resize(std::size_t(nf));
+  r.parent.resize(std::size_t(nf));
+  r.W.assign(std::size_t(nf), Eigen::Matrix3d::Identity());
+  for (int f = 0; f < nf; ++f) {
+    for (int c = 0; c < 3; ++c) {
+      r.F[std::size_t(f)][std::size_t(c)] = input.F(f, c);
+    }
+    r.parent[std::size_t(f)] = f;
+    r.add_face(f);
+  }
+  const double limit = options.max_edge_per_thickness;
+  std::set<std::uint64_t> kept;
+  for (const auto& e : options.kept_edges) kept.insert(edge_key(e[0], e[1]));
+  r.count(limit, stats.thin_edges_before, stats.max_ratio_before);
+
+  for (int round = 0; round < options.max_rounds && stats.thin_edges_before > 0; ++round) {
+    std::vector<std::pair<double, int>> order;  // (-longest edge, face)
+    for (int f = 0; f < int(r.F.size()); ++f)
+      if (r.worst_ratio(f) > limit) order.emplace_back(-r.longest(f).second, f);
+    std::sort(order.begin(), order.end());
+    std::vector<char> touched_now(r.F.size() + 2 * order.size() + 2, 0);
+    int splits = 0;
+    for (const auto& [neg_len, f] : order) {
+      if (touched_now[std::size_t(f)]) continue;
+      if (int(r.F.size()) + 2 > nf + options.max_added_faces) {
+        stats.budget_reached = true;
+        break;
+      }
+      const auto [e, len] = r.longest(f);
+      const double before = r.ratio(e[0], e[1]);
+      if (!(before > limit) || kept.count(edge_key(e[0], e[1]))) continue;
+      const auto fs = r.faces_of(e[0], e[1]);
+      if (touched_now[std::size_t(fs[0])] || touched_now[std::size_t(fs[1])]) continue;
+      // The halves' ratios, at their own midpoints (cached for when they exist).
+      const Eigen::Vector3d A = r.V[std::size_t(e[0])], B = r.V[std::size_t(e[1])];
+      const double t0 = r.edge_thickness(0.75 * A + 0.25 * B, fs),
+                   t1 = r.edge_thickness(0.25 * A + 0.75 * B, fs);
+      const double half = 0.5 * len;
+      const double after = std::max(t0 > 0 ? half / t0 : HUGE_VAL, t1 > 0 ? half / t1 : HUGE_VAL);
+      if (!(after < options.min_gain * before)) continue;  // a wedge: no gain
+      const int m = int(r.V.size());
+      std::vector<int> touched;
+      r.split(e[0], e[1], fs, touched);
+      r.mid_thickness[edge_key(e[0], m)] = t0;
+      r.mid_thickness[edge_key(m, e[1])] = t1;
+      for (int t : touched) touched_now[std::size_t(t)] = 1;
+      ++splits;
+    }
+    stats.splits += splits;
+    ++stats.rounds;
+    if (splits == 0 || stats.budget_reached) break;
+  }
+  r.count(limit, stats.thin_edges_after, stats.max_ratio_after);
+
+  if (stats.splits > 0) {
+    const int n = int(r.F.size());
+    out.mesh.V.resize(Eigen::Index(r.V.size()), 3);
+    for (std::size_t v = 0; v < r.V.size(); ++v) out.mesh.V.row(Eigen::Index(v)) = r.V[v];
+    out.mesh.F.resize(n, 3);
+    if (input.has_tags()) out.mesh.tags.resize(n);
+    std::vector<int> children(std::size_t(nf), 0);
+    for (int f = 0; f < n; ++f) {
+      for (int c = 0; c < 3; ++c) out.mesh.F(f, c) = r.F[std::size_t(f)][std::size_t(c)];
+      if (input.has_tags()) out.mesh.tags[f] = input.tags[r.parent[std::size_t(f)]];
+      ++children[std::size_t(r.parent[std::size_t(f)])];
+    }
+    out.face_parent = r.parent;
+    out.corner_bary = r.W;
+    out.beveled_faces =
+        int(std::count_if(children.begin(), children.end(), [](int c) { return c > 1; }));
+    stats.refined_faces = out.beveled_faces;
+  }
+  stats.seconds = watch.seconds();
+  if (stats.thin_edges_before > 0)
+    log::info("thin refinement: ", stats.thin_edges_before, " input edges longer than ",
+              options.max_edge_per_thickness, " x the local thickness (worst ",
+              stats.max_ratio_before, "); ", stats.splits, " bisections in ", stats.rounds,
+              " rounds refined ", stats.refined_faces, " input faces; ", stats.thin_edges_after,
+              " left (worst ", stats.max_ratio_after, ")",
+              stats.budget_reached ? ", face budget reached" : "", ", ", stats.seconds, " s");
+  return out;
+}
+
+BeveledSurface compose(const BeveledSurface& inner, BeveledSurface outer) {
+  CF_VERIFY(outer.input_vertices == inner.mesh.num_vertices() &&
+                outer.input_faces == inner.mesh.num_faces(),
+            "compose: the outer refinement is not of the inner surface");
+  std::vector<int> children(std::size_t(inner.input_faces), 0);
+  for (std::size_t f = 0; f < outer.face_parent.size(); ++f) {
+    const int mid = outer.face_parent[f];
+    outer.face_parent[f] = inner.face_parent[std::size_t(mid)];
+    outer.corner_bary[f] = inner.corner_bary[std::size_t(mid)] * outer.corner_bary[f];
+    ++children[std::size_t(outer.face_parent[f])];
+  }
+  outer.input_vertices = inner.input_vertices;
+  outer.input_faces = inner.input_faces;
+  outer.beveled_faces =
+      int(std::count_if(children.begin(), children.end(), [](int c) { return c > 1; }));
+  return outer;
+}
+
+}  // namespace curvefem::meshing::shell

@@ -1,0 +1,188 @@
+// Thin-part refinement of the input (meshing/shell/thin_refine.hpp) on shapes built in code: a
+// plate whose input edges are far longer than it is thick is bisected until none is (same
+// surface, conforming, parents exact), a sphere is left as it is, a knife-edged disc (a wedge,
+// as thin at an edge's midpoint as the edge is long) is not refined forever, and compose()
+// chains two refinements.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <map>
+#include <set>
+
+#include "meshing/core/adversarial.hpp"
+#include "meshing/core/primitives.hpp"
+#include "meshing/shell/bevel.hpp"
+#include "meshing/shell/extrusion_direction.hpp"
+#include "meshing/shell/thin_refine.hpp"
+
+namespace sh = curvefem::meshing::shell;
+using curvefem::SurfaceMesh;
+
+namespace {
+
+double area(const SurfaceMesh& s, int f) {
+  const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+
+// Every directed edge once and its reverse once: closed, edge-manifold, consistently oriented.
+void expect_closed_oriented(const SurfaceMesh& s) {
+  std::map<std::pair<int, int>, int> directed;
+  for (int f = 0; f < s.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) ++directed[{s.F(f, c), s.F(f, (c + 1) % 3)}];
+  for (const auto& [e, n] : directed) {
+    ASSERT_EQ(n, 1) << "edge " << e.first << "-" << e.second;
+    ASSERT_EQ(directed.count({e.second, e.first}), 1u) << "edge " << e.first << "-" << e.second;
+  }
+}
+
+// The refined surface is the input: input vertices unchanged and first, every refined corner at
+// its barycentric place in its parent, the parents' areas split exactly among their children.
+void expect_same_surface(const SurfaceMesh& input, const sh::BeveledSurface& r) {
+  ASSERT_EQ(r.input_vertices, input.num_vertices());
+  ASSERT_EQ(r.input_faces, input.num_faces());
+  for (int v = 0; v < input.num_vertices(); ++v)
+    ASSERT_EQ(r.mesh.V.row(v), input.V.row(v)) << "input vertex " << v << " moved";
+  std::vector<double> child_area(std::size_t(input.num_faces()), 0);
+  for (int f = 0; f < r.mesh.num_faces(); ++f) {
+    const int p = r.face_parent[std::size_t(f)];
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d w = r.corner_bary[std::size_t(f)].col(c);
+      EXPECT_NEAR(w.sum(), 1.0, 1e-15);
+      EXPECT_GE(w.minCoeff(), 0.0);
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int i = 0; i < 3; ++i) x += w[i] * input.V.row(input.F(p, i)).transpose();
+      EXPECT_LE((x - r.mesh.V.row(r.mesh.F(f, c)).transpose()).norm(), 1e-15)
+          << "face " << f << " corner " << c;
+    }
+    child_area[std::size_t(p)] += area(r.mesh, f);
+  }
+  for (int p = 0; p < input.num_faces(); ++p)
+    EXPECT_NEAR(child_area[std::size_t(p)], area(input, p), 1e-14) << "input face " << p;
+}
+
+}  // namespace
+
+TEST(ThinRefine, APlateFarThinnerThanItsEdgesIsBisectedUntilNoEdgeIsThin) {
+  // 1 x 1 x 0.02, 4 x 4 quads per side: top and bottom edges 0.25 (diagonals 0.35), 12 to 18
+  // times the thickness; the guard's ratio is 8.
+  const SurfaceMesh plate = curvefem::make_box({0, 0, 0}, {1, 1, 0.02}, 4);
+  sh::ThinRefineOptions o;
+  sh::ThinRefineStats st;
+  const sh::BeveledSurface r = sh::refine_thin_parts(plate, o, st);
+  std::printf("%d thin edges (worst %.3g) -> %d (worst %.3g), %d bisections, %d rounds, %d faces\n",
+              st.thin_edges_before, st.max_ratio_before, st.thin_edges_after, st.max_ratio_after,
+              st.splits, st.rounds, r.mesh.num_faces());
+  ASSERT_TRUE(r.refined());
+  EXPECT_GT(st.thin_edges_before, 100);
+  EXPECT_GT(st.max_ratio_before, 17.0);  // a diagonal: 0.354 / 0.02
+  EXPECT_EQ(st.thin_edges_after, 0);
+  EXPECT_LE(st.max_ratio_after, 8.0);
+  EXPECT_FALSE(st.budget_reached);
+  // The top and bottom (2 x 32 faces) and the rims' 0.25-long edges are refined; each bisection
+  // adds 2 faces and 1 vertex.
+  EXPECT_EQ(r.mesh.num_faces(), plate.num_faces() + 2 * st.splits);
+  EXPECT_EQ(r.mesh.num_vertices(), plate.num_vertices() + st.splits);
+  EXPECT_EQ(st.refined_faces, r.beveled_faces);
+  EXPECT_GE(st.refined_faces, 64);
+  expect_closed_oriented(r.mesh);
+  expect_same_surface(plate, r);
+
+  // With the box's sharp edges kept (the mesher passes the feature edges): none of them is
+  // bisected, the rest still is.
+  std::map<std::pair<int, int>, std::vector<int>> faces_of;
+  for (int f = 0; f < plate.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = plate.F(f, c), b = plate.F(f, (c + 1) % 3);
+      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  auto unit_normal = [&](int f) {
+    const Eigen::Vector3d a = plate.V.row(plate.F(f, 0)), b = plate.V.row(plate.F(f, 1)),
+                          c = plate.V.row(plate.F(f, 2));
+    return Eigen::Vector3d((b - a).cross(c - a).normalized());
+  };
+  for (const auto& [e, fs] : faces_of)
+    if (unit_normal(fs[0]).dot(unit_normal(fs[1])) < 0.5)
+      o.kept_edges.push_back({e.first, e.second});
+  ASSERT_EQ(o.kept_edges.size(), 4u * 3u * 4u);  // 12 box edges of 4 segments
+  sh::ThinRefineStats kst;
+  const sh::BeveledSurface k = sh::refine_thin_parts(plate, o, kst);
+  EXPECT_GT(kst.splits, 0);
+  std::set<std::pair<int, int>> edges;
+  for (int f = 0; f < k.mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = k.mesh.F(f, c), b = k.mesh.F(f, (c + 1) % 3);
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  for (const auto& e : o.kept_edges)
+    EXPECT_TRUE(edges.count({std::min(e[0], e[1]), std::max(e[0], e[1])}))
+        << "kept edge " << e[0] << "-" << e[1] << " was bisected";
+  expect_closed_oriented(k.mesh);
+  expect_same_surface(plate, k);
+}
+
+TEST(ThinRefine, ASphereHasNoThinEdgeAndIsReturnedAsItIs) {
+  const SurfaceMesh sphere = curvefem::make_icosphere(3);
+  sh::ThinRefineStats st;
+  const sh::BeveledSurface r = sh::refine_thin_parts(sphere, {}, st);
+  EXPECT_FALSE(r.refined());
+  EXPECT_EQ(st.thin_edges_before, 0);
+  EXPECT_EQ(st.splits, 0);
+  EXPECT_EQ(r.mesh.V, sphere.V);
+  EXPECT_EQ(r.mesh.F, sphere.F);
+  // Off: nothing is measured.
+  sh::ThinRefineOptions off;
+  off.max_edge_per_thickness = 0;
+  const sh::BeveledSurface p =
+      sh::refine_thin_parts(curvefem::make_box({0, 0, 0}, {1, 1, 0.01}, 2), off, st);
+  EXPECT_FALSE(p.refined());
+  EXPECT_EQ(st.thin_edges_before, 0);
+}
+
+TEST(ThinRefine, AKnifeEdgeIsNotBisectedForever) {
+  // The disc's rim is a 0.4° wedge: an edge running into it is as thin at its midpoint as it is
+  // long, so bisecting it gains nothing (min_gain) and the refinement stops well inside the
+  // budget, with thin edges left. (Before the rule that a face's thin edge must be its longest
+  // to be bisected, the tangential edges next to the rim were halved until the 20,000-face
+  // budget ran out.)
+  const SurfaceMesh disc = curvefem::make_adversarial("knife_disc");
+  sh::ThinRefineOptions o;
+  sh::ThinRefineStats st;
+  const sh::BeveledSurface r = sh::refine_thin_parts(disc, o, st);
+  std::printf("%d thin edges -> %d, %d bisections in %d rounds\n", st.thin_edges_before,
+              st.thin_edges_after, st.splits, st.rounds);
+  EXPECT_GT(st.thin_edges_before, 0);
+  EXPECT_GT(st.thin_edges_after, 0);
+  EXPECT_FALSE(st.budget_reached);
+  EXPECT_LT(st.splits, 4 * disc.num_faces());
+  expect_closed_oriented(r.mesh);
+  expect_same_surface(disc, r);
+}
+
+TEST(ThinRefine, ComposedWithABevelTheRefinedFacesFindTheirInputFaces) {
+  const SurfaceMesh plate = curvefem::make_box({0, 0, 0}, {1, 1, 0.02}, 2);
+  sh::ThinRefineStats st;
+  const sh::BeveledSurface r = sh::refine_thin_parts(plate, {}, st);
+  ASSERT_TRUE(r.refined());
+  const auto directions = sh::extrusion_directions(r.mesh.V, r.mesh.F);
+  std::vector<char> marked(std::size_t(r.mesh.num_vertices()), 0);
+  for (int v = 0; v < r.mesh.num_vertices(); v += 3) marked[std::size_t(v)] = 1;
+  const sh::BeveledSurface beveled = sh::bevel_surface(r.mesh, directions, marked);
+  ASSERT_TRUE(beveled.refined());
+  const sh::BeveledSurface both = sh::compose(r, beveled);
+  EXPECT_EQ(both.mesh.num_faces(), beveled.mesh.num_faces());
+  EXPECT_GT(both.beveled_faces, 0);
+  EXPECT_LE(both.beveled_faces, plate.num_faces());
+  expect_closed_oriented(both.mesh);
+  expect_same_surface(plate, both);
+  // A point through the chain: (beveled face, b) -> (refined face, b') -> (input face, b'').
+  const Eigen::Vector3d b(0.2, 0.3, 0.5);
+  for (int f = 0; f < both.mesh.num_faces(); f += 7) {
+    const auto [mid_face, mid_bary] = beveled.to_input(f, b);
+    const auto [chain_face, chain_bary] = r.to_input(mid_face, mid_bary);
+    const auto [face, bary] = both.to_input(f, b);
+    EXPECT_EQ(face, chain_face);
+    EXPECT_LE((bary - chain_bary).norm(), 1e-15);
+  }
+}
