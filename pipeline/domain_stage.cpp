@@ -128,7 +128,8 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   d.report["faces_linear"] = stats.faces_linear;
   d.report["curve_refused"] = {{"certificate", stats.curve_refused_certificate},
                                {"distance", stats.curve_refused_distance},
-                               {"deferred_outer", stats.curve_deferred_outer}};
+                               {"deferred_outer", stats.curve_deferred_outer},
+                               {"deferred_undecided", stats.curve_deferred_undecided}};
   d.report["faces_recurved"] = stats.faces_recurved;
   d.report["faces_sheared"] = stats.faces_sheared;
   d.report["fiber_misses"] = stats.fiber_misses;

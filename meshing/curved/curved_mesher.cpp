@@ -981,7 +981,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   const int nf = b.nf, nv = b.nv;
   b.alpha.assign(nf, 1.0);
   b.smooth.assign(nf, options.low_degree_slabs ? 1 : 0);
-  std::vector<int> deferred_top;  // linear faces whose outer slab only thicken() can certify
+  std::vector<int> deferred_top;     // linear faces whose outer slab only thicken() can certify
+  std::vector<int> deferred_bottom;  // linear faces whose slabs the certificate left undecided
   std::vector<int> work(nf);
   for (int f = 0; f < nf; ++f) work[f] = f;
   while (!work.empty()) {
@@ -1023,6 +1024,21 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
         continue;
       }
       if (b.alpha[f] == 0) {
+        // The linear slab is positive by the shell's exact test (I1); a tet the floating-point
+        // certificate leaves undecided (a slab as thin as the shell in a near-contact: the
+        // split ring's 0.1 ε slit at K = 4) is left to thicken(), which deepens the slab and
+        // re-certifies every face or fails. A tet certified non-positive stops here.
+        bool non_positive = false;
+        for (int layer = 0; layer < (b.exterior ? 2 : 1); ++layer)
+          for (const auto& t : b.slab_tets(f, b.node_displacements(f), layer == 1))
+            non_positive = non_positive || certify_tet_jacobian(k, t.nodes).verdict ==
+                                               JacobianVerdict::non_positive;
+        if (!non_positive) {
+          deferred_bottom.push_back(f);
+          continue;
+        }
+      }
+      if (b.alpha[f] == 0) {
         std::string detail;
         for (int layer = 0; layer < (b.exterior ? 2 : 1); ++layer)
           for (const auto& t : b.slab_tets(f, b.node_displacements(f), layer == 1)) {
@@ -1053,6 +1069,9 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   std::sort(deferred_top.begin(), deferred_top.end());
   stats.curve_deferred_outer =
       int(std::unique(deferred_top.begin(), deferred_top.end()) - deferred_top.begin());
+  std::sort(deferred_bottom.begin(), deferred_bottom.end());
+  stats.curve_deferred_undecided =
+      int(std::unique(deferred_bottom.begin(), deferred_bottom.end()) - deferred_bottom.begin());
   stats.stage_seconds.emplace_back("curve", watch.seconds());
 
   // 4. Thicken the slab layer(s), then fill the inside of the inner surface (and, with an

@@ -172,6 +172,9 @@ struct CurvedMeshStats {
   // Exterior: linear faces whose outer slab (the shell's top) was not certified, left to the
   // outer surface's thickening, which certifies every face or fails.
   int curve_deferred_outer = 0;
+  // Linear faces whose slab tets the floating-point certificate left undecided (none certified
+  // non-positive; the shell's exact test says positive), left to the thickening likewise.
+  int curve_deferred_undecided = 0;
   // Faces whose α rose again once the slab layer was deepened (the counts above are final).
   int faces_recurved = 0;
   // Faces whose slab keeps the full shear t · d (slab_nodes.hpp): the low-degree slab nodes were
