@@ -117,36 +117,11 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   d.fibers = std::make_shared<const ShellFibers>(meshing::shell::fibers_of(curved.shell, d.input));
   json stages = json::object();
   for (const auto& [name, sec] : stats.stage_seconds) stages[name] = sec;
-  d.report["eps_rel"] = spec.eps;
-  d.report["order"] = spec.order;
-  d.report["feature_edges"] = stats.feature_edges;
-  d.report["coarse_faces"] = stats.coarse_faces;
-  d.report["slab_tets"] = stats.slab_tets;
-  d.report["interior_tets"] = stats.interior_tets;
-  d.report["faces_fully_curved"] = stats.faces_fully_curved;
-  d.report["faces_blended"] = stats.faces_blended;
-  d.report["faces_linear"] = stats.faces_linear;
-  d.report["curve_refused"] = {{"certificate", stats.curve_refused_certificate},
-                               {"distance", stats.curve_refused_distance},
-                               {"deferred_outer", stats.curve_deferred_outer},
-                               {"deferred_undecided", stats.curve_deferred_undecided}};
-  d.report["faces_recurved"] = stats.faces_recurved;
-  d.report["faces_sheared"] = stats.faces_sheared;
-  d.report["fiber_misses"] = stats.fiber_misses;
-  d.report["linear_max_distance_rel"] = stats.linear_max_distance_rel;
-  d.report["curved_coarsening"] = {
-      {"curved_aware", stats.curved_coarsening},  {"attempts", stats.curved_attempts},
-      {"strict_vertices", stats.strict_vertices}, {"widened", stats.curved_widened},
-      {"repairs", stats.curved_repairs},          {"repair_splits", stats.repair_splits}};
-  d.report["optimize"] = json::parse(optimize_json(stats.optimize).dump());
+  d.report.update(json::parse(pipeline::curved_mesh_stats_json(stats, options).dump()));
   d.report["stage_s"] = stages;
   if (spec.validate) {
     ctx.update("validate mesh", 0.0);
     validate_domain(d, spec.eps);
-  }
-  if (spec.exterior) {
-    d.report["outer_slab_tets"] = stats.outer_slab_tets;
-    d.report["exterior_tets"] = stats.exterior_tets;
   }
   if (spec.exterior && spec.solve_on != "both") {
     // The domain is the outside: the outer slab layer and the exterior (tags 3, 4; the whole

@@ -6,6 +6,7 @@
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/timer.hpp"
+#include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/optimize.hpp"
 
@@ -19,6 +20,12 @@ nlohmann::json timings_json(const Timings& timings);
 
 /// OptimizeStats of the curved mesher's optimization stage.
 nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s);
+
+/// What the curved mesher reports about its own run (`curvefem mesh` report.json, and
+/// "meshing" of `curvefem run`): counts per stage, coarsening, thin refinement, curving,
+/// optimization. Validation and the exterior box are the callers' (they differ in form).
+nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshStats& stats,
+                                              const meshing::curved::CurvedMeshOptions& options);
 
 /// The independent validation of a curved mesh (report.json "validation"), judged against ε.
 nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValidation& v,

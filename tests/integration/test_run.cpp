@@ -564,6 +564,16 @@ TEST(Run, AMeshDirIsReusedWithoutMeshingAndAChangedInputIsRefused) {
                                     << load << "}";
   ASSERT_EQ(run_case(dir / "again.json", dir / "again", &log), 0) << log;
   const auto a = report(dir / "first"), b = report(dir / "again");
+  // The mesher's own report is the one `curvefem mesh` writes (pipeline/report_json.hpp).
+  EXPECT_EQ(a["meshing"]["order"], 2);
+  EXPECT_EQ(a["meshing"]["thin_refinement"]["ratio"], 8.0);
+  EXPECT_EQ(a["meshing"]["thin_refinement"]["bisections"], 0);  // a sphere: nothing thin
+  EXPECT_GT(a["meshing"]["coarsening"]["collapses"].get<int>(), 0);
+  EXPECT_EQ(a["meshing"]["coarse_faces"].get<int>(), a["meshing"]["faces_fully_curved"].get<int>() +
+                                                         a["meshing"]["faces_blended"].get<int>() +
+                                                         a["meshing"]["faces_linear"].get<int>());
+  EXPECT_EQ(a["meshing"]["slab_tets"].get<int>() + a["meshing"]["interior_tets"].get<int>(),
+            a["tets"].get<int>());
   EXPECT_EQ(b["meshing"]["reused"]["mesh_dir"], (dir / "first").string());
   EXPECT_EQ(b["tets"], a["tets"]);
   EXPECT_EQ(b["dofs"], a["dofs"]);

@@ -34,7 +34,6 @@ namespace curvefem::cli {
 
 using pipeline::curved_validation_cell_fields;
 using pipeline::curved_validation_json;
-using pipeline::optimize_json;
 
 namespace {
 
@@ -264,93 +263,21 @@ void register_mesh(CLI::App& app) {
     stages["validate"] = check.seconds;
     stages["map roundtrip"] = roundtrip_seconds;
     stages["write"] = write.seconds();
-    nlohmann::ordered_json j = {
-        {"input", input_abs},
-        {"input_vertices", stats.input_vertices},
-        {"input_faces", stats.input_faces},
-        {"order", args->order},
-        {"eps_rel", args->eps},
-        {"features", feature_source},
-        {"feature_edges", stats.feature_edges},
-        {"frozen_vertices", stats.frozen_vertices},
+    nlohmann::ordered_json j = {{"input", input_abs}, {"features", feature_source}};
+    j.update(pipeline::curved_mesh_stats_json(stats, options));
+    j.update(nlohmann::ordered_json{
         {"output_tets", result.mesh.num_cells()},
-        {"slab_tets", stats.slab_tets},
-        {"thickened_vertices", stats.thickened_vertices},
-        {"interior_tets", stats.interior_tets},
+        {"output_nodes", result.mesh.num_nodes()},
+        {"output_boundary_faces", result.map.boundary.num_cells()},
         {"exterior", args->exterior},
         {"exterior_padding_rel",
          args->exterior ? nlohmann::ordered_json(args->padding) : nlohmann::ordered_json(nullptr)},
         {"exterior_box",
-         args->exterior ? nlohmann::ordered_json::array(
-                              {{stats.exterior_box_lo[0], stats.exterior_box_lo[1],
-                                stats.exterior_box_lo[2]},
-                               {stats.exterior_box_hi[0], stats.exterior_box_hi[1],
-                                stats.exterior_box_hi[2]}})
-                        : nlohmann::ordered_json(nullptr)},
-        {"outer_slab_tets", stats.outer_slab_tets},
-        {"outer_raised_vertices", stats.outer_raised_vertices},
-        {"outer_lowered_vertices", stats.outer_lowered_vertices},
-        {"exterior_tets", stats.exterior_tets},
-        {"output_nodes", result.mesh.num_nodes()},
-        {"output_boundary_faces", result.map.boundary.num_cells()},
-        {"shell_prisms", stats.shell_faces},
-        {"coarsening",
-         {{"collapses", stats.coarsen_collapses},
-          {"flips", stats.coarsen_flips},
-          {"pillar_rotations", stats.coarsen_rotations},
-          {"thickness_growths", stats.coarsen_zooms},
-          {"pans", stats.coarsen_pans},
-          {"splits", stats.coarsen_splits},
-          {"chain_collapses", stats.coarsen_chain_collapses},
-          {"curved_aware", stats.curved_coarsening},
-          {"curved_attempts", stats.curved_attempts},
-          {"strict_vertices", stats.strict_vertices},
-          {"curved_widened", stats.curved_widened},
-          {"curved_repairs", stats.curved_repairs},
-          {"repair_splits", stats.repair_splits},
-          {"repair_failures", stats.repair_failures},
-          {"snapped_vertices", stats.snapped_vertices},
-          {"chain_max_distance_rel", stats.chain_max_distance_rel},
-          {"median_half_thickness_rel", stats.coarse_median_thickness_rel},
-          {"min_half_thickness_rel", stats.coarse_min_thickness_rel},
-          {"collapses_refused",
-           [&] {
-             nlohmann::ordered_json j = nlohmann::ordered_json::object();
-             for (const auto& [why, n] : stats.coarsen_rejections) j[why] = n;
-             return j;
-           }()},
-          {"seconds",
-           [&] {
-             nlohmann::ordered_json j = nlohmann::ordered_json::object();
-             for (const auto& [name, t] : stats.coarsen_seconds) j[name] = t;
-             return j;
-           }()}}},
-        {"singular_vertices", stats.singular_vertices},
-        {"beveled_faces", stats.beveled_faces},
-        {"thin_refinement",
-         {{"ratio", options.thin_refine_ratio},
-          {"refined_input_faces", stats.thin_refined_faces},
-          {"bisections", stats.thin_splits},
-          {"thin_edges_before", stats.thin_edges_before},
-          {"thin_edges_after", stats.thin_edges_after},
-          {"max_ratio_before", stats.thin_max_ratio_before},
-          {"max_ratio_after", stats.thin_max_ratio_after},
-          {"fallback", stats.thin_fallback}}},
-        {"shell_section_verified", stats.shell_section_verified},
-        {"shell_non_section_prisms", stats.shell_non_section_prisms},
-        {"faces_fully_curved", stats.faces_fully_curved},
-        {"faces_blended", stats.faces_blended},
-        {"faces_linear", stats.faces_linear},
-        {"curve_refused",
-         {{"certificate", stats.curve_refused_certificate},
-          {"distance", stats.curve_refused_distance},
-          {"deferred_outer", stats.curve_deferred_outer},
-          {"deferred_undecided", stats.curve_deferred_undecided}}},
-        {"faces_recurved", stats.faces_recurved},
-        {"faces_sheared", stats.faces_sheared},
-        {"fiber_misses", stats.fiber_misses},
-        {"linear_max_distance_rel", stats.linear_max_distance_rel},
-        {"optimize", optimize_json(stats.optimize)},
+         args->exterior
+             ? nlohmann::ordered_json::array(
+                   {{stats.exterior_box_lo[0], stats.exterior_box_lo[1], stats.exterior_box_lo[2]},
+                    {stats.exterior_box_hi[0], stats.exterior_box_hi[1], stats.exterior_box_hi[2]}})
+             : nlohmann::ordered_json(nullptr)},
         {"max_distance_rel", check.max_distance_rel},
         {"distance_points", stats.distance_points},
         {"distance_points_max_distance_rel", check.points_max_distance_rel},
@@ -373,7 +300,7 @@ void register_mesh(CLI::App& app) {
         {"threads", args->global.threads},
         {"deterministic", !args->nondeterministic},
         {"time_s", stages},
-        {"peak_rss_mb", peak_rss_mb()}};
+        {"peak_rss_mb", peak_rss_mb()}});
     j["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), j.dump(2) + "\n");
     out.commit();
