@@ -231,13 +231,18 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
     for (std::size_t i = 0; i < bcs->size(); ++i) {
       const std::string p = pre + "/boundary_conditions/" + std::to_string(i);
       const json& b = (*bcs)[i];
-      r.only_keys(b, p, {"type", "select", "value", "components"});
+      r.only_keys(b, p, {"type", "select", "value", "components", "h", "u_inf"});
       BoundaryConditionSpec bc;
       const json* type = r.get(b, "type");
-      if (!type) fail(p + "/type", "missing (dirichlet or neumann)", r.file);
+      if (!type) fail(p + "/type", "missing (dirichlet, neumann or robin)", r.file);
       bc.type = r.string(*type, p + "/type");
-      if (bc.type != "dirichlet" && bc.type != "neumann")
-        fail(p + "/type", "'" + bc.type + "': expected dirichlet or neumann", r.file);
+      if (bc.type != "dirichlet" && bc.type != "neumann" && bc.type != "robin")
+        fail(p + "/type", "'" + bc.type + "': expected dirichlet, neumann or robin", r.file);
+      if (bc.type == "robin" && comps != 1)
+        fail(p + "/type", "robin (convective) conditions are for physics poisson", r.file);
+      for (const char* key : {"h", "u_inf"})
+        if (r.get(b, key) && bc.type != "robin")
+          fail(p + "/" + key, "only for robin conditions", r.file);
       const json* select = r.get(b, "select");
       if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
       bc.select = read_selection(r, *select, p + "/select");
@@ -256,6 +261,20 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
                "normal, and, or, not are evaluated on a dense input surface: they need "
                "meshing.method curved or dense",
                r.file);
+      }
+      if (bc.type == "robin") {
+        // −κ ∂u/∂n = h (u − u_inf): value holds u_inf.
+        if (r.get(b, "value"))
+          fail(p + "/value", "a robin condition takes h and u_inf, not value", r.file);
+        for (const char* key : {"h", "u_inf"})
+          if (!r.get(b, key))
+            fail(p + "/" + key,
+                 "missing (robin: -kappa du/dn = h (u - u_inf), e.g. \"h\": 10, \"u_inf\": 20)",
+                 r.file);
+        bc.h = r.expressions(*r.get(b, "h"), p + "/h", 1, /*normal=*/true);
+        bc.value = r.expressions(*r.get(b, "u_inf"), p + "/u_inf", 1, /*normal=*/true);
+        l.boundary_conditions.push_back(std::move(bc));
+        continue;
       }
       const json* value = r.get(b, "value");
       if (!value) fail(p + "/value", "missing", r.file);
@@ -729,7 +748,13 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     out["rhs"] = rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(rhs);
     out["boundary_conditions"] = json::array();
     for (const auto& bc : bcs) {
-      json b = {{"type", bc.type}, {"value", exprs(bc.value)}};
+      json b = {{"type", bc.type}};
+      if (bc.type == "robin") {
+        b["h"] = exprs(bc.h);
+        b["u_inf"] = exprs(bc.value);
+      } else {
+        b["value"] = exprs(bc.value);
+      }
       b["select"] = selection_json(bc.select);
       if (comps == 3 && bc.type == "dirichlet") b["components"] = bc.components;
       out["boundary_conditions"].push_back(b);

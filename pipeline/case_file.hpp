@@ -20,9 +20,10 @@ namespace curvefem::pipeline {
 using Selection = mapping::Selection;
 
 struct BoundaryConditionSpec {
-  std::string type;  ///< dirichlet | neumann
+  std::string type;  ///< dirichlet | neumann | robin
   Selection select;
-  std::vector<Expression> value;                     ///< 1 (scalar) or 3 (vector) expressions
+  std::vector<Expression> value;  ///< 1 (scalar) or 3 (vector) expressions; robin: u_inf
+  std::vector<Expression> h;      ///< robin: the coefficient h of −κ ∂u/∂n = h (u − u_inf)
   std::array<bool, 3> components{true, true, true};  ///< vector Dirichlet: which are imposed
 };
 

@@ -75,7 +75,7 @@ BoundCondition bind_on_input(const BoundaryConditionSpec& bc, const Domain& doma
   }
   // A Neumann selection, or a Dirichlet one imposed by Nitsche on faces it cuts, acts at the
   // face quadrature points the assembly uses; a nodal Dirichlet one at nodes.
-  const bool at_points = bc.type == "neumann" || weak_dirichlet;
+  const bool at_points = bc.type == "neumann" || bc.type == "robin" || weak_dirichlet;
   long long count = 0;
   fem::for_each_boundary_dof(disc.space, out.faces, out.where, [&](int) { ++count; });
   if (count == 0 && at_points)
@@ -162,6 +162,16 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
       if (bc.spec->type == "dirichlet")
         problem.dirichlet.push_back(
             {bc.faces, [e, point](const Eigen::Vector3d& x) { return e(point(x)); }, bc.where});
+      else if (bc.spec->type == "robin")
+        problem.robin.push_back(
+            {bc.faces,
+             [h = bc.spec->h[0], point](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+               return h(point(x), n);
+             },
+             [e, point](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+               return e(point(x), n);
+             },
+             bc.where});
       else
         problem.neumann.push_back({bc.faces,
                                    [e, point](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {

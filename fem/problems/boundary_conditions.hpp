@@ -46,6 +46,15 @@ struct ScalarNeumann {
   PointFilter where;
 };
 
+/// Robin (convective) condition −κ ∂u/∂n = h (u − u∞) on the selected faces: adds ∫ h u v to the
+/// bilinear form and ∫ h u∞ v to the load. h must be positive where it acts.
+struct ScalarRobin {
+  std::vector<char> faces;
+  BoundaryScalarField h;      ///< heat transfer coefficient
+  BoundaryScalarField u_inf;  ///< ambient value
+  PointFilter where;
+};
+
 /// Displacement prescribed on the components whose mask entry is true.
 struct VectorDirichlet {
   std::vector<char> faces;

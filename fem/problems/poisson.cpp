@@ -68,6 +68,35 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   }
   system.flux_integral = system.F.sum() - system.rhs_integral;
   system.K = pattern.matrix(values);
+  // Robin: ∫ h φ_a φ_b into K and ∫ h u∞ φ_a into F at the same face points (a face's DOFs all
+  // belong to its cell, so every entry is in the pattern).
+  for (const auto& bc : problem.robin) {
+    const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
+    std::vector<double> h(points.size(), 0.0), u_inf(points.size(), 0.0);
+    const std::vector<char> used =
+        evaluate_at_face_points(points, bc.where, [&](int k, const Eigen::Vector3d& x) {
+          const Eigen::Vector3d normal = points.normal.row(k).transpose();
+          h[std::size_t(k)] = bc.h(x, normal);
+          u_inf[std::size_t(k)] = bc.u_inf(x, normal);
+        });
+    for (int k = 0; k < points.size(); ++k) {
+      if (!used[k]) continue;
+      if (!(h[k] > 0))
+        throw InputError("Robin condition: the coefficient h is " + std::to_string(h[k]) + " at (" +
+                         std::to_string(points.x(k, 0)) + ", " + std::to_string(points.x(k, 1)) +
+                         ", " + std::to_string(points.x(k, 2)) + "); it must be positive");
+      const double w = h[k] * points.ds_w[k];
+      system.robin_area += points.ds_w[k];
+      const double* phi = points.basis.row(points.basis_row[k]).data();
+      const int cell = points.cell[k];
+      for (int a = 0; a < n; ++a) {
+        const int da = space.cell_dofs(cell, a);
+        system.F[da] += w * u_inf[k] * phi[a];
+        for (int b = 0; b < n; ++b)
+          system.K.coeffRef(da, space.cell_dofs(cell, b)) += w * phi[a] * phi[b];
+      }
+    }
+  }
   return system;
 }
 
@@ -140,7 +169,7 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
   result.free_dofs = space.num_dofs - constraints.num_fixed();
   result.rhs_integral = system.rhs_integral;
   result.flux_integral = system.flux_integral;
-  if (problem.dirichlet.empty()) {
+  if (problem.dirichlet.empty() && system.robin_area == 0) {
     ScopedTimer t(result.timings, "solve");
     const NullSpaceModes modes = null_space_modes(mesh, space, 1);
     result.null_space_dim = modes.size();

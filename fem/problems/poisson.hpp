@@ -1,6 +1,7 @@
-// Poisson problem −∇·(κ ∇u) = f on a curved tetrahedral mesh with strong Dirichlet and weak
-// Neumann data, continuous Lagrange elements of degree p on geometry of order k.
-// Without any Dirichlet condition (pure Neumann) u is determined up to a constant: the solution
+// Poisson problem −∇·(κ ∇u) = f on a curved tetrahedral mesh with strong Dirichlet, weak
+// Neumann and Robin (convective) data, continuous Lagrange elements of degree p on geometry of
+// order k. Without any Dirichlet or Robin condition (pure Neumann) u is determined up to a
+// constant: the solution
 // returned has mean zero, the data's compatibility ∫f + ∫g = 0 is checked (a warning with the
 // numbers otherwise) and their mean removed before the solve (fem/problems/null_space.hpp).
 #pragma once
@@ -24,6 +25,7 @@ struct PoissonProblem {
   ScalarField rhs;  ///< empty = 0
   std::vector<ScalarDirichlet> dirichlet;
   std::vector<ScalarNeumann> neumann;
+  std::vector<ScalarRobin> robin;
   int quadrature_degree = -1;  ///< -1: default_quadrature_degree(p, k, stiffness)
   /// Dirichlet faces that a condition's filter selects only in part (fem/problems/nitsche.hpp).
   PartialDirichlet partial_dirichlet = PartialDirichlet::nitsche;
@@ -41,12 +43,13 @@ struct PoissonSolution {
   double rhs_integral = 0.0, flux_integral = 0.0;  ///< ∫f and ∫g as assembled (Σ of F's parts)
 };
 
-/// Assembled stiffness K and load F (before Dirichlet elimination).
+/// Assembled stiffness K (with the Robin terms ∫ h u v) and load F (before Dirichlet elimination).
 struct AssembledSystem {
   SparseMatrix K;
   Eigen::VectorXd F;
   double rhs_integral = 0.0;   ///< Σ of F's volume part = ∫f (by quadrature)
   double flux_integral = 0.0;  ///< Σ of F's Neumann part = ∫g
+  double robin_area = 0.0;     ///< ∫ 1 over the Robin conditions' points (by quadrature)
 };
 
 AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
