@@ -90,4 +90,16 @@ inline double rate(double e_coarse, double e_fine, double h_ratio = 2.0) {
   return std::log(e_coarse / e_fine) / std::log(h_ratio);
 }
 
+/// u = exp(x/2) sin(y + z/2): −Δu = −(1/4 − 1 − 1/4) u = u (smooth, for optimal rates at every p).
+struct ExpSine {
+  static double value(const Eigen::Vector3d& x) {
+    return std::exp(0.5 * x[0]) * std::sin(x[1] + 0.5 * x[2]);
+  }
+  static Eigen::Vector3d gradient(const Eigen::Vector3d& x) {
+    const double e = std::exp(0.5 * x[0]), s = std::sin(x[1] + 0.5 * x[2]),
+                 c = std::cos(x[1] + 0.5 * x[2]);
+    return Eigen::Vector3d(0.5 * e * s, e * c, 0.5 * e * c);
+  }
+};
+
 }  // namespace curvefem::test

@@ -15,6 +15,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/io/cad_part.hpp"
+#include "tests/fem/manufactured.hpp"
 
 using namespace curvefem;
 
@@ -269,14 +270,8 @@ TEST(BoundaryTerms, PoissonRobinEverywhereReproducesQuadraticWithoutANullSpace) 
 TEST(BoundaryTerms, PoissonRobinWithAVaryingCoefficientConvergesAtOptimalRates) {
   // u = exp(x/2) sin(y + z/2), −Δu = u; Dirichlet on x = 0, Robin with h = 1 + x + y on the
   // other five sides. Rates from n = 4 → 8: L2 p + 1, H1 p (±0.25), p = 1..3.
-  auto u = [](const Eigen::Vector3d& x) {
-    return std::exp(0.5 * x[0]) * std::sin(x[1] + 0.5 * x[2]);
-  };
-  auto grad = [](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-    const double e = std::exp(0.5 * x[0]), s = std::sin(x[1] + 0.5 * x[2]),
-                 c = std::cos(x[1] + 0.5 * x[2]);
-    return Eigen::Vector3d(0.5 * e * s, e * c, 0.5 * e * c);
-  };
+  const auto u = &test::ExpSine::value;
+  const auto grad = &test::ExpSine::gradient;
   const fem::BoundaryScalarField h = [](const Eigen::Vector3d& x, const Eigen::Vector3d&) {
     return 1 + x[0] + x[1];
   };

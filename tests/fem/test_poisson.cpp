@@ -110,15 +110,9 @@ TEST(Poisson, ConvergenceRatesOnCubeWithFrankeSolution) {
 }
 
 TEST(Poisson, ConvergenceRatesOnCubeWithSmoothSolution) {
-  // u = exp(x/2) sin(y + z/2): −Δu = −(1/4 − 1 − 1/4) u = u.
-  auto u = [](const Eigen::Vector3d& x) {
-    return std::exp(0.5 * x[0]) * std::sin(x[1] + 0.5 * x[2]);
-  };
-  auto grad = [](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-    const double e = std::exp(0.5 * x[0]), s = std::sin(x[1] + 0.5 * x[2]),
-                 c = std::cos(x[1] + 0.5 * x[2]);
-    return Eigen::Vector3d(0.5 * e * s, e * c, 0.5 * e * c);
-  };
+  // u = exp(x/2) sin(y + z/2): −Δu = u.
+  const auto u = &test::ExpSine::value;
+  const auto grad = &test::ExpSine::gradient;
   for (int p = 1; p <= 4; ++p) {
     std::vector<fem::ErrorNorms> e;
     for (int n : {2, 4, 8}) e.push_back(solve_and_measure(make_cube_tets(n), p, u, grad, u));

@@ -24,12 +24,18 @@ struct Meshed {
   cv::CurvedValidation v;
 };
 
-Meshed mesh_of(const SurfaceMesh& input, int order) {
+// The CLI's defaults at order k, ε = 1%, on one thread.
+cv::CurvedMeshOptions default_options(const SurfaceMesh& input, int order) {
   cv::CurvedMeshOptions o;
   o.order = order;
   o.eps_rel = 0.01;
   o.threads = 1;
   o.feature_edges = cv::detect_feature_edges(input, 60.0);  // the CLI's default angle
+  return o;
+}
+
+Meshed mesh_of(const SurfaceMesh& input, int order) {
+  const cv::CurvedMeshOptions o = default_options(input, order);
   Meshed m;
   m.mesh = cv::build_curved_mesh(input, o, m.stats);
   m.v = cv::validate_curved_mesh(m.mesh.mesh, m.mesh.map, input);
@@ -70,11 +76,7 @@ TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) 
   // smoothing's scaled-Jacobian floor (2026-12-02): without the guard min scaled Jacobian 5.3e-3,
   // 27 tets below 0.01, max MIPS 2.8e4; with it 2.9e-2, none, 1.5e3.
   const SurfaceMesh input = make_adversarial("cylinder_flat");
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 0.01;
-  o.threads = 1;
-  o.feature_edges = cv::detect_feature_edges(input, 60.0);
+  cv::CurvedMeshOptions o = default_options(input, 3);
   ASSERT_GT(o.max_edge_per_thickness, 0);  // on by default
   cv::CurvedMeshStats with_stats, without_stats;
   const cv::CurvedMesh with = cv::build_curved_mesh(input, o, with_stats);
@@ -140,11 +142,7 @@ TEST(CurvedAdversarial, AMissIsRepairedOnTheCoarseShellWithoutCoarseningAgain) {
   EXPECT_TRUE(m.v.valid(0.01));
   EXPECT_LE(m.v.max_distance_rel, 0.01);
 
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 0.01;
-  o.threads = 1;
-  o.feature_edges = cv::detect_feature_edges(input, 60.0);
+  cv::CurvedMeshOptions o = default_options(input, 3);
   o.curved_repair = false;
   cv::CurvedMeshStats again;
   const cv::CurvedMesh r = cv::build_curved_mesh(input, o, again);
@@ -164,11 +162,7 @@ TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFir
   // Jacobian 5.6e-4, 154 tets (85%) below 0.01, max MIPS 3.5e4; with it (112 bisections of 128
   // input faces) 72 tets, 9.0e-3, 16 below 0.01, max MIPS 2.4e3.
   const SurfaceMesh input = make_adversarial("box_thin_long");
-  cv::CurvedMeshOptions o;
-  o.order = 3;
-  o.eps_rel = 0.01;
-  o.threads = 1;
-  o.feature_edges = cv::detect_feature_edges(input, 60.0);
+  cv::CurvedMeshOptions o = default_options(input, 3);
   ASSERT_GT(o.thin_refine_ratio, 0);  // on by default
   cv::CurvedMeshStats with_stats, without_stats;
   const cv::CurvedMesh with = cv::build_curved_mesh(input, o, with_stats);
@@ -205,11 +199,8 @@ TEST(CurvedAdversarial, TheThinSplitRingMeshesAtOrderFour) {
   // which deepens it and certifies it. Measured (2026-12-02): 5,186 bisections of 384 input
   // faces, 4,601 tets, min scaled Jacobian 1.25e-2, none below 0.01, max MIPS 7.4e3.
   const SurfaceMesh input = make_adversarial("split_ring_thin");
-  cv::CurvedMeshOptions o;
-  o.order = 4;
-  o.eps_rel = 0.01;
+  cv::CurvedMeshOptions o = default_options(input, 4);
   o.threads = 2;
-  o.feature_edges = cv::detect_feature_edges(input, 60.0);
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
