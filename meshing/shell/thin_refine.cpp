@@ -31,7 +31,6 @@ struct Refiner {
   std::vector<std::array<int, 3>> F;
   std::vector<int> parent;
   std::vector<Eigen::Matrix3d> W;  // column k: corner k in the parent face
-  std::vector<double> T;           // per vertex
   std::unordered_map<std::uint64_t, std::vector<int>> edge_faces;
 
   explicit Refiner(const SurfaceMesh& in) : input(in), index(in.V, in.F) {}
