@@ -34,15 +34,21 @@ cv::CurvedMeshOptions default_options(const SurfaceMesh& input, int order) {
   return o;
 }
 
-Meshed mesh_of(const SurfaceMesh& input, int order) {
-  const cv::CurvedMeshOptions o = default_options(input, order);
+// Meshes `input` with `o` and validates it; prints what the tests assert, labelled.
+Meshed mesh_with(const SurfaceMesh& input, const cv::CurvedMeshOptions& o, const char* label) {
   Meshed m;
   m.mesh = cv::build_curved_mesh(input, o, m.stats);
   m.v = cv::validate_curved_mesh(m.mesh.mesh, m.mesh.map, input);
-  std::printf("%d tets, %d singular shell vertices, min scaled Jacobian %.3g, max MIPS %.3g\n",
-              m.mesh.mesh.num_cells(), m.stats.singular_vertices, m.v.min_scaled_jacobian,
-              m.v.max_mips);
+  std::printf(
+      "%s: %d tets, %d boundary faces, %d singular shell vertices, %d thin bisections, min scaled "
+      "Jacobian %.3g, %d below 0.01, max MIPS %.3g\n",
+      label, m.v.tets, m.mesh.map.boundary.num_cells(), m.stats.singular_vertices,
+      m.stats.thin_splits, m.v.min_scaled_jacobian, m.v.tets_sj_below_1e2, m.v.max_mips);
   return m;
+}
+
+Meshed mesh_of(const SurfaceMesh& input, int order) {
+  return mesh_with(input, default_options(input, order), "defaults");
 }
 
 }  // namespace
@@ -78,17 +84,10 @@ TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) 
   const SurfaceMesh input = make_adversarial("cylinder_flat");
   cv::CurvedMeshOptions o = default_options(input, 3);
   ASSERT_GT(o.max_edge_per_thickness, 0);  // on by default
-  cv::CurvedMeshStats with_stats, without_stats;
-  const cv::CurvedMesh with = cv::build_curved_mesh(input, o, with_stats);
+  const Meshed with = mesh_with(input, o, "guard");
   o.max_edge_per_thickness = 0;
-  const cv::CurvedMesh without = cv::build_curved_mesh(input, o, without_stats);
-  const cv::CurvedValidation a = cv::validate_curved_mesh(with.mesh, with.map, input);
-  const cv::CurvedValidation b = cv::validate_curved_mesh(without.mesh, without.map, input);
-  std::printf(
-      "guard: %d faces, min SJ %.3g, %d below 0.01, max MIPS %.3g; without: %d faces, "
-      "min SJ %.3g, %d below 0.01, max MIPS %.3g\n",
-      with.map.boundary.num_cells(), a.min_scaled_jacobian, a.tets_sj_below_1e2, a.max_mips,
-      without.map.boundary.num_cells(), b.min_scaled_jacobian, b.tets_sj_below_1e2, b.max_mips);
+  const Meshed without = mesh_with(input, o, "without");
+  const cv::CurvedValidation &a = with.v, &b = without.v;
   EXPECT_TRUE(a.valid(0.01));
   EXPECT_TRUE(b.valid(0.01));
   EXPECT_GT(a.min_scaled_jacobian, 1e-2);
@@ -99,7 +98,7 @@ TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) 
   EXPECT_GT(b.tets_sj_below_1e2, 10);
   EXPECT_GT(b.max_mips, 1e4);
   long refused = -1;
-  for (const auto& [why, n] : with_stats.coarsen_rejections)
+  for (const auto& [why, n] : with.stats.coarsen_rejections)
     if (why == "thickness") refused = n;
   EXPECT_GT(refused, 0);
 }
@@ -164,18 +163,11 @@ TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFir
   const SurfaceMesh input = make_adversarial("box_thin_long");
   cv::CurvedMeshOptions o = default_options(input, 3);
   ASSERT_GT(o.thin_refine_ratio, 0);  // on by default
-  cv::CurvedMeshStats with_stats, without_stats;
-  const cv::CurvedMesh with = cv::build_curved_mesh(input, o, with_stats);
+  const Meshed with = mesh_with(input, o, "refined");
   o.thin_refine_ratio = 0;
-  const cv::CurvedMesh without = cv::build_curved_mesh(input, o, without_stats);
-  const cv::CurvedValidation a = cv::validate_curved_mesh(with.mesh, with.map, input);
-  const cv::CurvedValidation b = cv::validate_curved_mesh(without.mesh, without.map, input);
-  std::printf(
-      "refined (%d bisections, %d input faces): %d tets, min SJ %.3g, %d below 0.01, max MIPS "
-      "%.3g; without: %d tets, min SJ %.3g, %d below 0.01, max MIPS %.3g\n",
-      with_stats.thin_splits, with_stats.thin_refined_faces, a.tets, a.min_scaled_jacobian,
-      a.tets_sj_below_1e2, a.max_mips, b.tets, b.min_scaled_jacobian, b.tets_sj_below_1e2,
-      b.max_mips);
+  const Meshed without = mesh_with(input, o, "without");
+  const cv::CurvedValidation &a = with.v, &b = without.v;
+  const cv::CurvedMeshStats &with_stats = with.stats, &without_stats = without.stats;
   EXPECT_TRUE(a.valid(0.01));
   EXPECT_TRUE(b.valid(0.01));
   EXPECT_GT(with_stats.thin_splits, 50);
@@ -201,12 +193,10 @@ TEST(CurvedAdversarial, TheThinSplitRingMeshesAtOrderFour) {
   const SurfaceMesh input = make_adversarial("split_ring_thin");
   cv::CurvedMeshOptions o = default_options(input, 4);
   o.threads = 2;
-  cv::CurvedMeshStats stats;
-  const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
-  const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);
-  std::printf("%d bisections, %d deferred undecided slabs, %d tets, min SJ %.3g, max MIPS %.3g\n",
-              stats.thin_splits, stats.curve_deferred_undecided, v.tets, v.min_scaled_jacobian,
-              v.max_mips);
+  const Meshed m = mesh_with(input, o, "split ring");
+  const cv::CurvedValidation& v = m.v;
+  const cv::CurvedMeshStats& stats = m.stats;
+  std::printf("%d deferred undecided slabs\n", stats.curve_deferred_undecided);
   EXPECT_TRUE(v.valid(0.01));
   EXPECT_TRUE(stats.thin_fallback.empty());
   EXPECT_GT(stats.thin_splits, 1000);
