@@ -1,5 +1,7 @@
 #include "pipeline/report_json.hpp"
 
+#include <algorithm>
+
 namespace curvefem::pipeline {
 
 nlohmann::json check_report_json(const check::CheckReport& r) {
@@ -190,6 +192,9 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
         {"mean_d2", q.mean_d2},
         {"max_d3", q.max_d3},
         {"mean_d3", q.mean_d3}};
+  const double over_local_eps =
+      eps_rel > 0 ? std::max(v.max_scaled_distance_rel, v.points_max_scaled_distance_rel) / eps_rel
+                  : 0.0;
   return {{"valid", v.valid(eps_rel)},
           {"tets", v.tets},
           {"min_jacobian_certified", v.certified()},
@@ -228,6 +233,9 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"distance_points_max_distance_rel", v.points_max_distance_rel},
           {"distance_points_max_distance_point", v.points_max_distance_point},
           {"eps_rel", eps_rel},
+          {"eps_field", v.eps_field},
+          {"max_distance_over_local_eps", over_local_eps},
+          {"max_distance_over_local_eps_vertex", v.max_scaled_distance_vertex},
           {"feature_edges", v.feature_edges},
           {"features_off_boundary_edges", v.features_off_edges},
           {"first_feature_off", v.first_feature_off},

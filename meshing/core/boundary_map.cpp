@@ -7,6 +7,14 @@
 
 namespace curvefem {
 
+double BoundaryMap::eps_scale_at(int t, const Eigen::Vector3d& w,
+                                 const Eigen::MatrixXi& input_faces) const {
+  if (eps_scale.empty()) return 1.0;
+  double s = 0;
+  for (int c = 0; c < 3; ++c) s += w[c] * eps_scale[std::size_t(input_faces(t, c))];
+  return s;
+}
+
 Eigen::Vector3d BoundaryMap::image(int v) const {
   const int f = vertex_face[v];
   CF_VERIFY(f >= 0, "boundary map: vertex " + std::to_string(v) + " has no image");

@@ -33,6 +33,13 @@ struct BoundaryMap {
   // of each map onto one boundary edge (the validator checks it). Empty: no features.
   std::vector<std::array<int, 2>> feature_edges;
 
+  // Spatially varying ε (issue 22): empty (one ε everywhere), or #input V factors in (0, 1]: the
+  // distance bound at input vertex v is ε · eps_scale[v], and at a point inside an input face
+  // the barycentric interpolation of its corners' factors (the validator checks both).
+  std::vector<double> eps_scale;
+  /// The factor at input face t, barycentric coordinates w (1 without a field).
+  double eps_scale_at(int t, const Eigen::Vector3d& w, const Eigen::MatrixXi& input_faces) const;
+
   int num_points() const { return static_cast<int>(point_face.size()); }
   /// The image of distance point i.
   Eigen::Vector3d point_image(int i) const;

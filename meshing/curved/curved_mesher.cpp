@@ -177,7 +177,13 @@ class Builder {
     needs_full.assign(nf, 0);
     for (int f = 0; f < nf; ++f)
       for (const Owned& o : owned[f])
-        if (!((linear_mid(f, o.u, o.v) - point(o.vertex)).norm() <= eps)) needs_full[f] = 1;
+        if (!((linear_mid(f, o.u, o.v) - point(o.vertex)).norm() <= eps * scale(o.vertex)))
+          needs_full[f] = 1;
+  }
+  // Spatially varying ε: the factor of every distance point (empty: 1 everywhere).
+  const std::vector<double>* point_scale = nullptr;
+  double scale(int x) const {
+    return point_scale && !point_scale->empty() ? (*point_scale)[std::size_t(x)] : 1.0;
   }
 
   // Distance points besides the vertices of `in`: index #V + i in `owned`.
@@ -278,7 +284,7 @@ class Builder {
     const auto d = node_displacements(f);
     for (const Owned& o : owned[f])
       if (!((linear_mid(f, o.u, o.v) + patch_displacement(d, k, o.u, o.v) - point(o.vertex))
-                .norm() <= eps))
+                .norm() <= eps * scale(o.vertex)))
         return false;
     return true;
   }
@@ -792,6 +798,40 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   st.built = true;
   stats.distance_points = int(points.size());
 
+  // Spatially varying ε (CurvedMeshOptions::eps_scale): the factor at every distance point of the
+  // shell, in the simplification's numbering (the refined surface's vertices, then the extra
+  // points), interpolated linearly over the input face each one lies in.
+  std::vector<double> point_scale;
+  if (!options.eps_scale.empty()) {
+    if (int(options.eps_scale.size()) != input.num_vertices())
+      throw InputError("mesh: the eps field has " + std::to_string(options.eps_scale.size()) +
+                       " values for " + std::to_string(input.num_vertices()) + " input vertices");
+    for (int v = 0; v < input.num_vertices(); ++v)
+      if (!(options.eps_scale[std::size_t(v)] > 0 && options.eps_scale[std::size_t(v)] <= 1))
+        throw InputError("mesh: the eps field at input vertex " + std::to_string(v) + " is " +
+                         std::to_string(options.eps_scale[std::size_t(v)] * options.eps_rel) +
+                         ", not in (0, eps]");
+    auto at_input = [&](int t, const Eigen::Vector3d& w) {
+      double s = 0;
+      for (int c = 0; c < 3; ++c) s += w[c] * options.eps_scale[std::size_t(input.F(t, c))];
+      return s;
+    };
+    const int nv = surface.num_vertices();
+    point_scale.assign(std::size_t(nv) + points.size(), -1.0);
+    for (int v = 0; v < input.num_vertices(); ++v)
+      point_scale[std::size_t(v)] = options.eps_scale[std::size_t(v)];
+    for (int t = 0; t < surface.num_faces(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        const int v = surface.F(t, c);
+        if (point_scale[std::size_t(v)] > 0) continue;
+        const auto [face, w] = beveled.surface.to_input(t, Eigen::Vector3d::Unit(c));
+        point_scale[std::size_t(v)] = at_input(face, w);
+      }
+    for (std::size_t i = 0; i < points.size(); ++i)
+      point_scale[std::size_t(nv) + i] = at_input(point_input_face[i], point_bary[i]);
+    for (double& s : point_scale) s = std::clamp(s, 1e-300, 1.0);  // unreferenced vertices
+  }
+
   // 2. Coarsen under the distance bound.
   watch = Stopwatch();
   sh::SimplifyOptions simplify_options;
@@ -805,6 +845,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.split_mips = options.shell_split_mips;
   simplify_options.extra_points = points;
   simplify_options.extra_point_faces = point_faces;
+  simplify_options.distance_scale = point_scale;
   simplify_options.rotate = options.shell_rotate;
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.frozen_input_vertices = frozen;
@@ -974,6 +1015,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   b.recurve = options.recurve;
   b.low_degree = options.low_degree_slabs;
   b.extra = points;
+  b.point_scale = &point_scale;
   b.compute_targets(progress);
   b.locate_input(progress);
   if (relaxed) b.find_needs_full(eps);
@@ -1314,6 +1356,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     map.boundary_node_to_volume[Eigen::Index(i)] = volume_of[i];
   }
   map.feature_edges = options.feature_edges;
+  map.eps_scale = options.eps_scale;
   map.vertex_face = Eigen::VectorXi::Constant(input.num_vertices(), -1);
   map.vertex_uv = Eigen::MatrixXd::Zero(input.num_vertices(), 2);
   const int np = int(points.size());

@@ -58,6 +58,11 @@ struct CurvedMeshOptions {
   // boundary map (distance_points) and re-checked by the validator.
   std::vector<Eigen::Vector3d> constraint_points;
   int eps_samples = 0;
+  // Spatially varying ε (issue 22): empty, or one factor in (0, 1] per input vertex; the bound at
+  // input vertex v is eps_rel · eps_scale[v] (bbox-relative), at a point inside an input face the
+  // linear interpolation of its corners' bounds. The coarsening, the curving and the validator
+  // (through BoundaryMap::eps_scale) all use it.
+  std::vector<double> eps_scale;
   int simplify_rounds = 5;
   // Depth of the slab layer below the curved surface, relative to the mean coarse edge length at
   // each vertex (0: keep the shell's base, whose thin slabs make needle tets).

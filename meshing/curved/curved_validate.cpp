@@ -10,6 +10,7 @@
 #include <set>
 
 #include "meshing/check/self_intersections.hpp"
+#include "meshing/core/error.hpp"
 #include "meshing/curved/element_distortion.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 
@@ -215,6 +216,11 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
   // Distance bound and local orientation of φ.
   {
     const double unit = bbox_longest_edge(input.V);
+    r.eps_field = !map.eps_scale.empty();
+    if (r.eps_field && int(map.eps_scale.size()) != input.num_vertices())
+      throw InputError("validate: the map's eps_scale has " + std::to_string(map.eps_scale.size()) +
+                       " entries for an input of " + std::to_string(input.num_vertices()) +
+                       " vertices");
     std::vector<char> referenced(input.num_vertices(), 0);
     for (int f = 0; f < input.num_faces(); ++f)
       for (int c = 0; c < 3; ++c) referenced[input.F(f, c)] = 1;
@@ -228,6 +234,11 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
       if (d > r.max_distance_rel) {
         r.max_distance_rel = d;
         r.max_distance_vertex = v;
+      }
+      const double scaled = r.eps_field ? d / map.eps_scale[std::size_t(v)] : d;
+      if (scaled > r.max_scaled_distance_rel) {
+        r.max_scaled_distance_rel = scaled;
+        r.max_scaled_distance_vertex = v;
       }
     }
     // Distance points: the input point from its input face and barycentric coordinates (its
@@ -247,6 +258,9 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         r.points_max_distance_rel = d;
         r.points_max_distance_point = i;
       }
+      r.points_max_scaled_distance_rel =
+          std::max(r.points_max_scaled_distance_rel,
+                   d / map.eps_scale_at(t, map.point_bary.row(i).transpose(), input.F));
     }
     if (r.unmapped_vertices == 0 && map.num_input_vertices() >= input.num_vertices())
       for (int f = 0; f < input.num_faces(); ++f) {

@@ -56,6 +56,12 @@ struct CurvedValidation {
   int unmapped_vertices = 0;
   double max_distance_rel = 0;
   int max_distance_vertex = -1;
+  // Against the map's spatially varying ε (BoundaryMap::eps_scale): the largest distance divided
+  // by the point's factor, so valid(ε) holds when every point is within ε · its factor. Equal
+  // to max_distance_rel / points_max_distance_rel without a field.
+  bool eps_field = false;
+  double max_scaled_distance_rel = 0, points_max_scaled_distance_rel = 0;
+  int max_scaled_distance_vertex = -1;
   // Distance points of the map (constraint points, samples): how many, the largest distance from
   // the input point to its image (relative), where, and ids that do not name an input face.
   int distance_points = 0, bad_distance_points = 0;
@@ -71,9 +77,9 @@ struct CurvedValidation {
            exterior_faces_off_box == 0;
   }
   bool valid(double eps_rel) const {
-    return certified() && boundary_ok() && unmapped_vertices == 0 && max_distance_rel <= eps_rel &&
-           bad_distance_points == 0 && points_max_distance_rel <= eps_rel &&
-           features_off_edges == 0;
+    return certified() && boundary_ok() && unmapped_vertices == 0 &&
+           max_scaled_distance_rel <= eps_rel && bad_distance_points == 0 &&
+           points_max_scaled_distance_rel <= eps_rel && features_off_edges == 0;
   }
 };
 

@@ -57,6 +57,7 @@ void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& ma
   j["vertex_face"] = std::move(vf);
   j["vertex_uv"] = std::move(uv);
   if (!map.feature_edges.empty()) j["feature_edges"] = map.feature_edges;
+  if (!map.eps_scale.empty()) j["eps_scale"] = map.eps_scale;
   if (map.num_points() > 0) {
     auto in_face = nlohmann::ordered_json::array(), bary = nlohmann::ordered_json::array(),
          face = nlohmann::ordered_json::array(), puv = nlohmann::ordered_json::array();
@@ -166,6 +167,16 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
     }
     if (j.contains("feature_edges"))
       map.feature_edges = j.at("feature_edges").get<std::vector<std::array<int, 2>>>();
+    if (j.contains("eps_scale")) {
+      map.eps_scale = j.at("eps_scale").get<std::vector<double>>();
+      if (map.eps_scale.size() != vf.size())
+        throw InputError(path.string() + ": eps_scale has " + std::to_string(map.eps_scale.size()) +
+                         " entries for " + std::to_string(vf.size()) + " input vertices");
+      for (std::size_t v = 0; v < map.eps_scale.size(); ++v)
+        if (!(map.eps_scale[v] > 0 && map.eps_scale[v] <= 1))
+          throw InputError(path.string() + ": eps_scale of input vertex " + std::to_string(v) +
+                           " is not in (0, 1]");
+    }
     if (j.contains("distance_points")) {
       const auto& pts = j.at("distance_points");
       const auto& in_face = pts.at("input_face");

@@ -50,6 +50,12 @@ class ShellMesh : public TriMesh {
     return x < nv ? Eigen::Vector3d(input->V().row(x).transpose()) : (*extra_points)[x - nv];
   }
   bool is_input_vertex(int x) const { return x < int(input->V().rows()); }
+  // SimplifyOptions::distance_scale: every distance of point x is measured in units of its own
+  // bound, d / scale(x), so every comparison with a bound below stays a comparison of numbers.
+  const std::vector<double>* distance_scale = nullptr;
+  double scale(int x) const {
+    return distance_scale && !distance_scale->empty() ? (*distance_scale)[std::size_t(x)] : 1.0;
+  }
   const InputSurfaceIndex* input = nullptr;
   // Feature chains (SimplifyOptions::collapse_chains). A coarse feature edge carries the input
   // vertices strictly inside it, in order from its end on the smaller input vertex id; they are
@@ -170,15 +176,17 @@ class ShellMesh : public TriMesh {
     return after <= before;
   }
 
-  // Prism coordinates of x in face f and the distance to the linear middle triangle there.
-  std::optional<double> owned_distance(Id f, const Eigen::Vector3d& x) const {
+  // Prism coordinates of distance point x in face f and its scaled distance to the linear middle
+  // triangle there.
+  std::optional<double> owned_distance(Id f, int x) const {
     const auto q = owned_place(f, x);
     if (!q) return std::nullopt;
     return (*q)[2];
   }
-  // (u, v) of x in face f (rotated to its smallest id) and the distance to the linear middle
-  // triangle there.
-  std::optional<Eigen::Vector3d> owned_place(Id f, const Eigen::Vector3d& x) const {
+  // (u, v) of distance point x in face f (rotated to its smallest id) and the distance to the
+  // linear middle triangle there, divided by scale(x).
+  std::optional<Eigen::Vector3d> owned_place(Id f, int point) const {
+    const Eigen::Vector3d x = distance_point(point);
     const Cell& c = cell(f);
     const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
     std::array<Eigen::Vector3d, 3> b, m, t;
@@ -192,7 +200,7 @@ class ShellMesh : public TriMesh {
     const int r = min_rotation(F);
     const Eigen::Vector3d p =
         (1 - q->u - q->v) * m[r] + q->u * m[(r + 1) % 3] + q->v * m[(r + 2) % 3];
-    return Eigen::Vector3d(q->u, q->v, (p - x).norm());
+    return Eigen::Vector3d(q->u, q->v, (p - x).norm() / scale(point));
   }
 
   // The curved-aware bound. A face is *needed* when it owns a point farther than max_distance
@@ -272,7 +280,7 @@ class ShellMesh : public TriMesh {
           lagrange_shape_values(CellKind::triangle, curved_order, Eigen::Vector3d(q[0], q[1], 0));
       Eigen::Vector3d p = Eigen::Vector3d::Zero();
       for (std::size_t n = 0; n < node.size(); ++n) p += phi[Eigen::Index(n)] * node[n];
-      if (!((p - distance_point(owned[f][j])).norm() <= bound)) return false;
+      if (!((p - distance_point(owned[f][j])).norm() / scale(owned[f][j]) <= bound)) return false;
     }
     return true;
   }
@@ -379,10 +387,9 @@ class ShellMesh : public TriMesh {
     for (std::size_t j = 0; j < points.size(); ++j) {
       const int x = points[j];
       if (!on_chain.empty() && is_input_vertex(x) && on_chain[std::size_t(x)]) continue;
-      const Eigen::Vector3d p = distance_point(x);
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
-        const auto q = owned_place(r.new_cells[i], p);
+        const auto q = owned_place(r.new_cells[i], x);
         if (!q) continue;
         // Repair mode: a violating point may stay beyond the bound, no farther than the
         // farthest one was.
@@ -561,7 +568,8 @@ class ShellMesh : public TriMesh {
     }
     for (std::size_t i = 0; i < at.size(); ++i) {
       const Eigen::Vector3d q = W + at[i] * (U - W);
-      if ((input->V().row(pending.path[i]).transpose() - q).norm() > max_distance) {
+      if ((input->V().row(pending.path[i]).transpose() - q).norm() / scale(pending.path[i]) >
+          max_distance) {
         note(distance);
         return false;
       }
@@ -971,6 +979,18 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   m.reference = &index;
   m.section_cos = options.section_cos;
   m.max_distance = options.max_distance;
+  if (!options.distance_scale.empty()) {
+    const std::size_t np = std::size_t(input.num_vertices()) + options.extra_points.size();
+    if (options.distance_scale.size() != np)
+      throw MeshingError("simplify: distance_scale has " +
+                         std::to_string(options.distance_scale.size()) + " entries for " +
+                         std::to_string(np) + " distance points");
+    for (std::size_t x = 0; x < np; ++x)
+      if (!(options.distance_scale[x] > 0 && options.distance_scale[x] <= 1))
+        throw MeshingError("simplify: distance_scale of point " + std::to_string(x) +
+                           " is not in (0, 1]");
+    m.distance_scale = &options.distance_scale;
+  }
   m.max_mips = options.max_mips;
   if (options.curved_order >= 2) {
     if (!(options.max_distance > 0))
@@ -1054,7 +1074,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
         if (x < 0 || x >= np)
           throw MeshingError("simplify: owned point " + std::to_string(x) + " of shell face " +
                              std::to_string(f) + " is not an input vertex or extra point");
-        const auto q = m.owned_place(Id(f), m.distance_point(x));
+        const auto q = m.owned_place(Id(f), x);
         where.push_back(q ? *q : Eigen::Vector3d(0, 0, HUGE_VAL));
       }
       m.owned.set(Id(f), options.owned_points[std::size_t(f)]);
@@ -1081,7 +1101,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
       if (f < 0 || f >= nf)
         throw MeshingError("simplify: extra distance point " + std::to_string(i) +
                            " names shell face " + std::to_string(f) + ", not a face");
-      const Eigen::Vector3d& p = options.extra_points[i];
+      const int p = input.num_vertices() + int(i);
       int home = -1;
       if (const auto d = m.owned_distance(Id(f), p); d && *d <= m.max_distance) home = f;
       for (int k = 0; k < 3 && home < 0; ++k)
@@ -1100,7 +1120,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
       m.owned.set(Id(f), own[f]);
       std::vector<Eigen::Vector3d> where;
       for (int x : own[f]) {
-        const auto q = m.owned_place(Id(f), m.distance_point(x));
+        const auto q = m.owned_place(Id(f), x);
         where.push_back(q ? *q : Eigen::Vector3d(0, 0, HUGE_VAL));
       }
       m.place.set(Id(f), where);
@@ -1404,7 +1424,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (std::size_t f = 0; f < faces.size(); ++f) {
       stats.owned_points[f] = m.owned[Id(f)];
       for (int x : m.owned[Id(f)]) {
-        const auto d = m.owned_distance(Id(f), m.distance_point(x));
+        const auto d = m.owned_distance(Id(f), x);
         stats.max_distance = std::max(stats.max_distance, d ? *d : HUGE_VAL);
         stats.violating_points += m.violating(x, d ? *d : HUGE_VAL);
       }

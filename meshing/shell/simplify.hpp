@@ -44,6 +44,11 @@ struct SimplifyOptions {
   // it (within the bound of that face's middle triangle). Owned and re-homed like input vertices.
   std::vector<Eigen::Vector3d> extra_points;
   std::vector<int> extra_point_faces;
+  // Spatially varying bound (issue 22): empty, or one factor in (0, 1] per distance point (the
+  // input vertices, then the extra points). Point x's bounds are max_distance ·
+  // distance_scale[x] (and likewise the curved-aware relaxed_distance and curved_distance);
+  // SimplifyStats::max_distance is then the largest distance / distance_scale.
+  std::vector<double> distance_scale;
   // #input vertices or empty: input vertices whose middle vertex must never be collapsed away
   // (feature vertices, user constraints).
   std::vector<char> frozen_input_vertices;
@@ -142,7 +147,8 @@ struct SimplifyStats {
   } collapse_rejections;
   // The smaller half-pillar per live non-singular vertex at the end (absolute lengths).
   double min_half_thickness = 0, median_half_thickness = 0, max_half_thickness = 0;
-  double max_distance = 0;  // max |x - mid(u, v)| over owned points at the end (if bounded)
+  double max_distance =
+      0;  // max |x - mid(u, v)| / distance_scale(x) over owned points (if bounded)
   // With max_distance: per output face, the points its prism owns (input vertex x, or extra
   // point x - #input V), the input of a later repair (SimplifyOptions::owned_points).
   std::vector<std::vector<int>> owned_points;

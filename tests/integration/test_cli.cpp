@@ -350,6 +350,46 @@ TEST(Cli, MeshWithDistancePointsWritesAndValidatesThem) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
 
+TEST(Cli, MeshWithAnEpsFieldSavesItAndTheValidatorChecksIt) {
+  const auto dir = test::scratch_dir("cli_mesh_eps_field");
+  const SurfaceMesh sphere = make_icosphere(3);  // 1280 faces
+  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  const std::string in = (dir / "sphere.obj").string(), out_dir = (dir / "m").string();
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
+                                  " --order 2 --eps 0.01 --threads 2 --eps-field \"z > 0 ? 0.003 "
+                                  ": 1\"",
+                              &out),
+            0)
+      << out;
+  const auto j = read_json(dir / "m" / "report.json");
+  EXPECT_EQ(j["eps_field"], "z > 0 ? 0.003 : 1");
+  EXPECT_TRUE(j["validation"]["eps_field"].get<bool>());
+  EXPECT_LE(j["validation"]["max_distance_over_local_eps"].get<double>(), 1.0);
+  EXPECT_TRUE(j["valid"].get<bool>());
+  // min(eps, 1) = eps where z <= 0: factor 1; 0.3 where z > 0.
+  auto map = read_json(dir / "m" / "boundary_map.json");
+  ASSERT_EQ(map["eps_scale"].size(), std::size_t(sphere.num_vertices()));
+  for (int v = 0; v < sphere.num_vertices(); ++v)
+    EXPECT_DOUBLE_EQ(map["eps_scale"][std::size_t(v)].get<double>(), sphere.V(v, 2) > 0 ? 0.3 : 1)
+        << v;
+  ASSERT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 0) << out;
+  EXPECT_NE(out.find("eps field up to 0.01"), std::string::npos) << out;
+  // The validator reads the field back: a tenth of ε everywhere fails it.
+  for (auto& s : map["eps_scale"]) s = 0.1;
+  { std::ofstream(dir / "m" / "boundary_map.json") << map.dump(); }
+  EXPECT_EQ(test::run_command(cli() + " validate " + out_dir, &out), 3) << out;
+  EXPECT_NE(out.find("EXCEEDS the local eps"), std::string::npos) << out;
+  // A field that is not positive somewhere: exit 2 naming the vertex, nothing written.
+  EXPECT_EQ(
+      test::run_command(
+          cli() + " mesh -q " + in + " -o " + (dir / "x").string() + " --eps-field \"x\"", &out),
+      2)
+      << out;
+  EXPECT_NE(out.find("at input vertex"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x"));
+}
+
 TEST(Cli, GenerateWritesTheAdversarialSurfacesAndRefusesUnknownNames) {
   const auto dir = test::scratch_dir("cli_generate");
   std::string out;

@@ -244,6 +244,8 @@ int round_trip(const char* name, const SurfaceMesh& input, const cv::CurvedMeshO
   EXPECT_TRUE(same_bits(m.point_face, cm.map.point_face));
   EXPECT_TRUE(same_bits(m.point_uv, cm.map.point_uv));
   EXPECT_EQ(m.feature_edges, cm.map.feature_edges);
+  EXPECT_EQ(m.eps_scale, cm.map.eps_scale);
+  EXPECT_EQ(m.eps_scale.size(), o.eps_scale.size());
   EXPECT_TRUE(saved.fibers.has_value());
   if (!saved.fibers) return 0;
   EXPECT_TRUE(identical(*saved.fibers, fibers));
@@ -291,10 +293,12 @@ TEST(BoundaryMapFile, RoundTripsTheMapAndFibersBitForBitAndPhiInverseExactly) {
   const SurfaceMesh cylinder = make_cylinder(32, 4, 3, 1.0);
   o.feature_edges = cv::detect_feature_edges(cylinder, 60);
   EXPECT_EQ(round_trip("cylinder", cylinder, o), cylinder.num_vertices() + 500);
-  // Distance points.
+  // Distance points, and a spatially varying ε (half of it where z > 0).
   const SurfaceMesh sphere = make_icosphere(2);
   o.feature_edges.clear();
   o.eps_samples = 2;
+  for (int v = 0; v < sphere.num_vertices(); ++v)
+    o.eps_scale.push_back(sphere.V(v, 2) > 0 ? 0.5 : 1.0);
   EXPECT_EQ(round_trip("sphere", sphere, o), sphere.num_vertices() + 500);
 }
 

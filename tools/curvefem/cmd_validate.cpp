@@ -105,15 +105,22 @@ void register_validate(CLI::App& app) {
       std::printf("  boundary embedded    %s (%d self-intersections at %d per edge)\n",
                   v.boundary_self_intersections == 0 ? "yes" : "NO", v.boundary_self_intersections,
                   v.subdivision);
-      std::printf("  distance             max %.4g (eps %.4g) at input vertex %d%s\n",
-                  v.max_distance_rel, eps, v.max_distance_vertex,
-                  v.max_distance_rel <= eps ? "" : "  EXCEEDS eps");
+      if (v.eps_field)
+        std::printf(
+            "  distance             max %.4g (eps field up to %.4g); max distance / local eps "
+            "%.4g at input vertex %d%s\n",
+            v.max_distance_rel, eps, v.max_scaled_distance_rel / eps, v.max_scaled_distance_vertex,
+            v.max_scaled_distance_rel <= eps ? "" : "  EXCEEDS the local eps");
+      else
+        std::printf("  distance             max %.4g (eps %.4g) at input vertex %d%s\n",
+                    v.max_distance_rel, eps, v.max_distance_vertex,
+                    v.max_distance_rel <= eps ? "" : "  EXCEEDS eps");
       if (v.distance_points > 0)
         std::printf("  distance points      %d, max %.4g at point %d%s\n", v.distance_points,
                     v.points_max_distance_rel, v.points_max_distance_point,
-                    v.bad_distance_points > 0          ? "  BAD INPUT FACE IDS"
-                    : v.points_max_distance_rel <= eps ? ""
-                                                       : "  EXCEEDS eps");
+                    v.bad_distance_points > 0                 ? "  BAD INPUT FACE IDS"
+                    : v.points_max_scaled_distance_rel <= eps ? ""
+                                                              : "  EXCEEDS eps");
       std::printf("  unmapped vertices    %d\n", v.unmapped_vertices);
       if (v.feature_edges > 0)
         std::printf(

@@ -548,6 +548,68 @@ TEST(CurvedMesher, ConstraintPointsAreEnforcedAndCheckedByTheValidator) {
   }
 }
 
+// Spatially varying ε (issue 22): the bound at each input vertex is ε times its factor; the
+// coarsening, the curving and the validator all honour it.
+TEST(CurvedMesher, ASpatiallyVaryingEpsIsHonouredAtEveryVertexAndCheckedByTheValidator) {
+  const SurfaceMesh sphere = curvefem::make_icosphere(4);  // 5120 faces
+  const double eps = 0.01, unit = curvefem::bbox_longest_edge(sphere.V);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.eps_rel = eps;
+  o.threads = 2;
+  cv::CurvedMeshStats uniform_stats;
+  const cv::CurvedMesh uniform = cv::build_curved_mesh(sphere, o, uniform_stats);
+  // A quarter of ε where x < 0.
+  o.eps_scale.resize(std::size_t(sphere.num_vertices()));
+  for (int v = 0; v < sphere.num_vertices(); ++v)
+    o.eps_scale[std::size_t(v)] = sphere.V(v, 0) < 0 ? 0.25 : 1.0;
+  cv::CurvedMeshStats stats;
+  const cv::CurvedMesh m = cv::build_curved_mesh(sphere, o, stats);
+  const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, sphere);
+  EXPECT_TRUE(check.valid(eps));
+  EXPECT_TRUE(check.eps_field);
+  // Every vertex within its own bound, computed here from φ directly.
+  double worst_ratio = 0;
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    const double d = (m.map.image(v) - sphere.V.row(v).transpose()).norm() / unit;
+    worst_ratio = std::max(worst_ratio, d / (eps * o.eps_scale[std::size_t(v)]));
+  }
+  EXPECT_LE(worst_ratio, 1.0);
+  EXPECT_NEAR(worst_ratio * eps, check.max_scaled_distance_rel, 1e-12);
+  // Boundary faces by side (centroid of the corners): more on the fine side, about as many as
+  // the uniform mesh on the other.
+  auto by_side = [](const curvefem::LagrangeMesh& b) {
+    std::array<int, 2> n{0, 0};
+    for (int f = 0; f < b.num_cells(); ++f) {
+      double x = 0;
+      for (int c = 0; c < 3; ++c) x += b.nodes(b.cells(f, c), 0);
+      ++n[x < 0 ? 0 : 1];
+    }
+    return n;
+  };
+  const auto u = by_side(uniform.map.boundary), f = by_side(m.map.boundary);
+  std::printf("boundary faces x < 0 / x >= 0: uniform %d / %d, field %d / %d\n", u[0], u[1], f[0],
+              f[1]);
+  EXPECT_GT(f[0], 2 * u[0]);
+  EXPECT_LT(f[1], 1.5 * u[1]);
+  // The uniform mesh under the field's bounds fails the validator, at a vertex with x < 0.
+  curvefem::BoundaryMap claimed = uniform.map;
+  claimed.eps_scale = o.eps_scale;
+  const cv::CurvedValidation bad = cv::validate_curved_mesh(uniform.mesh, claimed, sphere);
+  EXPECT_FALSE(bad.valid(eps));
+  ASSERT_GE(bad.max_scaled_distance_vertex, 0);
+  EXPECT_LT(sphere.V(bad.max_scaled_distance_vertex, 0), 0);
+  EXPECT_NEAR(bad.max_distance_rel,
+              cv::validate_curved_mesh(uniform.mesh, uniform.map, sphere).max_distance_rel, 1e-15);
+  // Factors outside (0, 1] or of the wrong count are input errors.
+  o.eps_scale[7] = 0;
+  EXPECT_THROW((void)cv::build_curved_mesh(sphere, o, stats), curvefem::InputError);
+  o.eps_scale.pop_back();
+  EXPECT_THROW((void)cv::build_curved_mesh(sphere, o, stats), curvefem::InputError);
+  claimed.eps_scale.pop_back();
+  EXPECT_THROW((void)cv::validate_curved_mesh(uniform.mesh, claimed, sphere), curvefem::InputError);
+}
+
 // The curved-aware bound in the coarsening itself: every input vertex is re-checked against the
 // order-3 patch of its coarse face built here through ShellProjection (P_T at the lattice nodes),
 // not through the coarsening's own fiber walk.
