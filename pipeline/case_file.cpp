@@ -447,9 +447,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
 
   if (const json* m = r.get(j, "meshing")) {
     r.only_keys(*m, "/meshing",
-                {"method", "order", "eps", "thickness", "thickness_per_edge", "eps_samples",
-                 "feature_chains", "curved_coarsening", "validate", "deterministic", "exterior",
-                 "padding", "solve_on"});
+                {"method", "order", "eps", "eps_field", "thickness", "thickness_per_edge",
+                 "eps_samples", "feature_chains", "curved_coarsening", "validate", "deterministic",
+                 "exterior", "padding", "solve_on"});
     if (mesh_dir)
       for (const auto& [key, value] : m->items())
         if (key != "method" && key != "validate")
@@ -470,14 +470,20 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
            "\"" + c.method +
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
-    for (const char* key : {"order", "eps", "thickness", "thickness_per_edge", "eps_samples",
-                            "feature_chains", "curved_coarsening", "validate", "deterministic"})
+    for (const char* key :
+         {"order", "eps", "eps_field", "thickness", "thickness_per_edge", "eps_samples",
+          "feature_chains", "curved_coarsening", "validate", "deterministic"})
       if (r.get(*m, key) && c.method != "curved")
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
     if (const json* v = r.get(*m, "eps")) {
       c.eps = r.number(*v, "/meshing/eps");
       if (!(c.eps > 0 && c.eps <= 0.5)) fail("/meshing/eps", "must be in (0, 0.5]", r.file);
+    }
+    if (const json* v = r.get(*m, "eps_field")) {
+      c.eps_field = r.string(*v, "/meshing/eps_field");
+      if (c.eps_field.empty()) fail("/meshing/eps_field", "an empty expression", r.file);
+      (void)Expression(c.eps_field, "/meshing/eps_field");  // syntax errors name the key
     }
     if (const json* v = r.get(*m, "thickness")) {
       c.thickness = r.number(*v, "/meshing/thickness");
@@ -710,6 +716,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   } else if (c.method == "curved") {
     res["meshing"]["order"] = c.order;
     res["meshing"]["eps"] = c.eps;
+    if (!c.eps_field.empty()) res["meshing"]["eps_field"] = c.eps_field;
     res["meshing"]["thickness"] = c.thickness;
     res["meshing"]["thickness_per_edge"] = c.thickness_per_edge;
     res["meshing"]["eps_samples"] = c.eps_samples;

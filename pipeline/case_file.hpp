@@ -68,8 +68,9 @@ struct CaseSpec {
   double thickness_per_edge = 1.0;  ///< curved: initial cap × each vertex's mean edge (0: off)
   bool feature_chains = true;     ///< curved: coarsen along feature chains (snapped reference copy)
   bool curved_coarsening = true;  ///< curved: distance bound on the curved patch (order >= 2)
-  int eps_samples = 0;   ///< curved: ε also at the degree-L lattice points of every input face
-  bool validate = true;  ///< curved: independent validation of the mesh (report.json)
+  std::string eps_field;  ///< curved: spatially varying ε, an expression of x, y, z ("" off)
+  int eps_samples = 0;    ///< curved: ε also at the degree-L lattice points of every input face
+  bool validate = true;   ///< curved: independent validation of the mesh (report.json)
   bool deterministic = true;  ///< curved: single-threaded coarsening, bit-identical output
   /// curved | dense: solve outside the surface, out to its bounding box padded by `padding` ×
   /// the longest bbox edge (the inside is not part of the domain).

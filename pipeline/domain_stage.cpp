@@ -17,6 +17,7 @@
 #include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/fibers_of.hpp"
 #include "meshing/tetfill/tetfill.hpp"
+#include "pipeline/eps_field.hpp"
 #include "pipeline/mesh_dir.hpp"
 #include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
@@ -103,6 +104,9 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   options.thickness_rel = spec.thickness;
   options.thickness_per_edge = spec.thickness_per_edge;
   options.eps_samples = spec.eps_samples;
+  if (!spec.eps_field.empty())
+    options.eps_scale =
+        eps_scale_from_expression(d.input, spec.eps_field, spec.eps, "/meshing/eps_field");
   options.feature_chains = spec.feature_chains;
   options.curved_coarsening = spec.curved_coarsening;
   options.threads = ctx.threads;

@@ -488,6 +488,51 @@ TEST(Run, RobinConditionsSelectedOnTheInputOfACurvedMesh) {
   EXPECT_LT(e_r, 1e-2 * robin["l2_norm_exact"].get<double>());
 }
 
+// meshing.eps_field: a finer bound on the upper half, checked by the run's validation.
+TEST(Run, AnEpsFieldRefinesWhereItIsSmallerAndIsValidatedPerVertex) {
+  const auto dir = test::scratch_dir("run_eps_field");
+  auto run = [&](const std::string& name, const std::string& field) {
+    const auto file = write_case(dir, R"J({
+      "geometry": {"builtin_surface": {"shape": "sphere", "level": 3}, "features": "none"},
+      "meshing": {"method": "curved", "order": 2, "eps": 0.02)J" +
+                                          field + R"J(},
+      "physics": {"type": "poisson"}, "discretization": {"degree": 2},
+      "rhs": "-6", "boundary_conditions": [
+        {"type": "dirichlet", "select": {"all": true}, "value": "x*x + y*y + z*z"}],
+      "exact": "x*x + y*y + z*z"})J");
+    std::string log;
+    EXPECT_EQ(run_case(file, dir / name, &log), 0) << log;
+    return report(dir / name);
+  };
+  const auto plain = run("plain", "");
+  const auto field = run("field", R"J(, "eps_field": "z > 0 ? 0.004 : 1")J");
+  EXPECT_TRUE(field["mesh_valid"].get<bool>());
+  const auto& v = field["meshing"]["validation"];
+  EXPECT_TRUE(v["eps_field"].get<bool>());
+  EXPECT_LE(v["max_distance_over_local_eps"].get<double>(), 1.0);
+  EXPECT_GT(field["meshing"]["coarse_faces"].get<int>(),
+            plain["meshing"]["coarse_faces"].get<int>() * 3 / 2);
+  std::printf("coarse faces: eps 0.02 everywhere %d, 0.004 where z > 0 %d\n",
+              plain["meshing"]["coarse_faces"].get<int>(),
+              field["meshing"]["coarse_faces"].get<int>());
+  std::ifstream in(dir / "field" / "resolved_case.json");
+  const auto resolved = nlohmann::json::parse(in);
+  EXPECT_EQ(resolved["meshing"]["eps_field"], "z > 0 ? 0.004 : 1");
+  // An expression with a normal, or one that is not positive: exit 2 naming the key.
+  for (const char* bad : {"nx", "z"}) {
+    const auto file = write_case(dir, std::string(R"J({
+      "geometry": {"builtin_surface": {"shape": "sphere", "level": 2}, "features": "none"},
+      "meshing": {"method": "curved", "eps_field": ")J") +
+                                          bad + R"J("},
+      "physics": {"type": "poisson"}, "rhs": "1",
+      "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "0"}]})J");
+    std::string log;
+    EXPECT_EQ(run_case(file, dir / "bad", &log), 2) << bad << ": " << log;
+    EXPECT_NE(log.find("/meshing/eps_field"), std::string::npos) << log;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+  }
+}
+
 // Traction-only linear elasticity: u = (x², yz, xy) plus the rigid motion (1 + z, 2, −x), in P2,
 // with its constant body force and the traction σ(u) n on every side (E = 1, ν = 0.3). The
 // errors are modulo a rigid motion and vanish; the load is balanced.
