@@ -35,13 +35,24 @@ ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
                            const Solution& solution, const StageContext& ctx) {
   ErrorResult out;
   out.report = json::object();
-  if (spec.exact.empty()) return out;
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "errors");
   ctx.update("errors", 0.0);
   const LagrangeMesh& mesh = disc.mesh;
   const fem::FunctionSpace& space = disc.space;
   const int c = solution.components;
+  // The a-posteriori estimate needs no exact solution.
+  const fem::RecoveryEstimate estimate =
+      fem::estimate_gradient_recovery(mesh, space, solution.u, c);
+  out.cell_estimate = estimate.cell_eta;
+  out.report["error_estimate"] = {
+      {"method",
+       "gradient recovery (Zienkiewicz-Zhu: grad u_h averaged at the DOF points, volume-weighted, "
+       "interpolated in the same space); estimates the h1_semi_error of the discretization, not "
+       "the geometric error of eps; fem/problems/error_estimate.hpp"},
+      {"h1_semi", estimate.eta},
+      {"max_cell", estimate.cell_eta.size() > 0 ? estimate.cell_eta.maxCoeff() : 0.0}};
+  if (spec.exact.empty()) return out;
   const auto exact = spec.exact;
   const fem::ExactValue value = [exact](const Eigen::Vector3d& x, double* v) {
     for (std::size_t i = 0; i < exact.size(); ++i) v[i] = exact[i](x);
@@ -87,6 +98,7 @@ ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
   out.report["h1_semi_error"] = e.h1_semi;
   out.report["h1_error"] = std::sqrt(e.l2 * e.l2 + e.h1_semi * e.h1_semi);
   out.report["l2_norm_exact"] = e.l2_exact;
+  out.report["error_estimate"]["effectivity"] = e.h1_semi > 0 ? estimate.eta / e.h1_semi : 0.0;
   out.report["h1_semi_norm_exact"] = e.h1_semi_exact;
   out.report["exact_gradient"] =
       spec.exact_gradient.empty()
@@ -274,6 +286,13 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
         MeshFields own;
         own.point_data = volume_fields(spec, disc, out_space, l);
         own.cell_data = quality;
+        if (l.errors.cell_estimate.size() == mesh.num_cells()) {
+          const Eigen::VectorXd& eta = l.errors.cell_estimate;
+          Field f{"error_indicator", 1, std::vector<double>(eta.data(), eta.data() + eta.size())};
+          own.cell_data.push_back(f);
+          f.name = suffixed(f.name, l.load);
+          all.cell_data.push_back(std::move(f));
+        }
         for (Field f : own.point_data) {
           f.name = suffixed(f.name, l.load);
           all.point_data.push_back(std::move(f));

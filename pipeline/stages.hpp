@@ -28,6 +28,7 @@
 
 #include "fem/problems/boundary_conditions.hpp"
 #include "fem/problems/elasticity.hpp"
+#include "fem/problems/error_estimate.hpp"
 #include "fem/problems/error_norms.hpp"
 #include "fem/solvers/linear_solver.hpp"
 #include "fem/space/function_space.hpp"
@@ -157,7 +158,10 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
 struct ErrorResult {
   /// The exact solution as compared (u + the null-space mode r when u_h is determined up to it).
   fem::ExactValue exact_value;
-  nlohmann::json report;  ///< l2_error, h1_semi_error, ... (empty without an exact solution)
+  nlohmann::json report;  ///< l2_error, h1_semi_error, ..., error_estimate
+  /// The gradient-recovery indicator η_K per cell (fem/problems/error_estimate.hpp), computed
+  /// with or without an exact solution; volume.vtu's cell field error_indicator.
+  Eigen::VectorXd cell_estimate;
 };
 
 /// Errors of u_h against the load case's exact solution (an empty result without one).

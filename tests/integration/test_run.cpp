@@ -2,6 +2,7 @@
 #include <gmsh.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -46,6 +47,21 @@ TEST(Run, BallPoissonP3OnCurvedMesh) {
   EXPECT_EQ(vtu.mesh.order, 3);
   ASSERT_EQ(vtu.fields.point_data.size(), 3u);  // u, exact, error
   EXPECT_EQ(vtu.fields.point_data[0].name, "u");
+  // The gradient-recovery estimate of the H1-semi error, and its indicator per cell.
+  const double eta = r["error_estimate"]["h1_semi"].get<double>();
+  const double effectivity = r["error_estimate"]["effectivity"].get<double>();
+  std::printf("H1-semi error %.3e, estimate %.3e, effectivity %.3f\n",
+              r["h1_semi_error"].get<double>(), eta, effectivity);
+  EXPECT_NEAR(effectivity, eta / r["h1_semi_error"].get<double>(), 1e-12);
+  EXPECT_GT(effectivity, 0.3);
+  EXPECT_LT(effectivity, 3.0);
+  const auto indicator = std::find_if(vtu.fields.cell_data.begin(), vtu.fields.cell_data.end(),
+                                      [](const auto& f) { return f.name == "error_indicator"; });
+  ASSERT_NE(indicator, vtu.fields.cell_data.end());
+  ASSERT_EQ(int(indicator->values.size()), vtu.mesh.num_cells());
+  double sum = 0;
+  for (double v : indicator->values) sum += v * v;
+  EXPECT_NEAR(std::sqrt(sum), eta, 1e-9 * eta);
   EXPECT_TRUE(std::filesystem::exists(out / "resolved_case.json"));
   EXPECT_FALSE(std::filesystem::exists(out / "open_in_paraview.py"));  // only with --paraview
 }

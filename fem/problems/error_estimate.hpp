@@ -1,0 +1,31 @@
+// A posteriori estimate of the discretization error by gradient recovery (Zienkiewicz–Zhu, nodal
+// averaging; issue 22). The gradient of u_h is evaluated at every DOF point of every cell (the
+// reference lattice of degree p mapped by the cell's order-k geometry) and averaged over the
+// cells sharing the DOF, weighted by their volumes; interpolated in the same Lagrange space it is
+// the recovered gradient G(u_h), continuous where ∇u_h jumps. The indicator of cell K is
+//   η_K = ‖G(u_h) − ∇u_h‖_L2(K)   (all components of a vector field together),
+// and η = (Σ_K η_K²)^{1/2} estimates ‖∇(u − u_h)‖_L2, the H1-semi error compute_errors reports.
+// It needs no exact solution, no rhs and no second derivatives, so it works on curved cells of
+// any order and for every physics; what it measures is the smoothness of ∇u_h, so it misses
+// error that leaves ∇u_h smooth (a wrong boundary value, the geometric error of ε).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "fem/space/function_space.hpp"
+#include "meshing/core/lagrange_mesh.hpp"
+
+namespace curvefem::fem {
+
+struct RecoveryEstimate {
+  Eigen::VectorXd cell_eta;  ///< η_K per cell
+  double eta = 0.0;          ///< (Σ η_K²)^{1/2}
+};
+
+/// u: components values per DOF (DOF-major), as compute_errors takes it. quadrature_degree < 0:
+/// default_quadrature_degree(p, k, error).
+RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                            const Eigen::VectorXd& u, int components,
+                                            int quadrature_degree = -1);
+
+}  // namespace curvefem::fem
