@@ -148,6 +148,7 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
        {{"passes", s.edits.passes},
         {"collapses", s.edits.collapses},
         {"flips", s.edits.flips},
+        {"splits", s.edits.splits},
         {"attempted", s.edits.attempted},
         {"rejected",
          {{"certificate", s.edits.rejected_certificate},

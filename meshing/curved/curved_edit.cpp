@@ -52,7 +52,8 @@ class CurvedEditMesh : public TetMesh {
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
   std::vector<Eigen::Vector3d> pos;                       // node positions (grows)
   std::unordered_map<NodeKey, int, NodeKeyHash> node_of;  // current node of every key
-  std::vector<char> vertex_fixed;                         // per vertex: never removed
+  editing::Attribute<char> vertex_fixed{*this, 0, 0};     // per vertex: never removed
+  editing::Attribute<char> surface_vertex{*this, 0, 0};   // per vertex: on the frozen surface
   std::set<Face> curved_faces;                            // frozen faces (sorted vertices)
   std::map<Edge, Face> curved_edge_face;                  // a curved face of each curved edge
   CurvedEditStats* stats = nullptr;
@@ -60,6 +61,7 @@ class CurvedEditMesh : public TetMesh {
   CurvedEditMesh() = default;
 
   Eigen::Vector3d corner(Id v) const {
+    if (v == split_vertex) return split_x;
     const std::array<int, 4> alpha{k, 0, 0, 0};
     return pos[std::size_t(node_of.at(make_node_key(&v, alpha, 1)))];
   }
@@ -73,6 +75,9 @@ class CurvedEditMesh : public TetMesh {
   }
 
   bool is_target(Id t, double threshold) const { return energy[t] > threshold; }
+  bool is_split_target(Id t, double threshold, double flat) const {
+    return energy[t] > threshold && scaled_jacobian[t] < flat;
+  }
 
  protected:
   bool collapse_edge_before(const Tuple& t) override { return !vertex_fixed[t.vid]; }
@@ -82,6 +87,10 @@ class CurvedEditMesh : public TetMesh {
   }
   bool swap_edge_before(const Tuple& t) override {
     return !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
+  }
+  // Splits: interior edges only (neither on a boundary face nor on the frozen surface).
+  bool split_edge_before(const Tuple& t) override {
+    return !is_boundary_edge(t) && !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
   }
 
   bool invariants(const OperationRecord& r) override {
@@ -120,40 +129,109 @@ class CurvedEditMesh : public TetMesh {
     // cells before the next: energy, scaled Jacobian, certificate.
     std::map<NodeKey, Eigen::Vector3d> staged;  // new nodes shared by several new cells
     std::vector<Eigen::MatrixXd> Xs;
-    for (Id t : r.new_cells) {
-      const Cell& c = cell(t);
-      Eigen::MatrixXd& X = Xs.emplace_back(Eigen::Index(lattice->size()), 3);
-      Eigen::Vector3d P[4];
-      for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
-      for (std::size_t n = 0; n < lattice->size(); ++n) {
-        const auto& alpha = (*lattice)[n];
-        const NodeKey key = make_node_key(c.data(), alpha, 4);
-        std::vector<Id> support;
-        for (int j = 0; j < 4; ++j)
-          if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
-        Eigen::Vector3d x;
-        if (on_cavity_boundary(support)) {
-          const auto it = node_of.find(key);
-          CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
-          x = pos[std::size_t(it->second)];
-        } else if (const auto it = staged.find(key); it != staged.end()) {
-          x = it->second;
-        } else {
-          x = place(c, alpha, P);
-          staged.emplace(key, x);
+    auto build = [&]() {
+      staged.clear();
+      Xs.clear();
+      for (Id t : r.new_cells) {
+        const Cell& c = cell(t);
+        Eigen::MatrixXd& X = Xs.emplace_back(Eigen::Index(lattice->size()), 3);
+        Eigen::Vector3d P[4];
+        for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
+        for (std::size_t n = 0; n < lattice->size(); ++n) {
+          const auto& alpha = (*lattice)[n];
+          const NodeKey key = make_node_key(c.data(), alpha, 4);
+          std::vector<Id> support;
+          for (int j = 0; j < 4; ++j)
+            if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
+          Eigen::Vector3d x;
+          if (support.size() == 1 && support[0] == split_vertex) {
+            x = split_x;
+            staged.emplace(key, x);
+          } else if (on_cavity_boundary(support)) {
+            const auto it = node_of.find(key);
+            CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
+            x = pos[std::size_t(it->second)];
+          } else if (const auto it = staged.find(key); it != staged.end()) {
+            x = it->second;
+          } else {
+            x = place(c, alpha, P);
+            staged.emplace(key, x);
+          }
+          X.row(Eigen::Index(n)) = x.transpose();
         }
-        X.row(Eigen::Index(n)) = x.transpose();
+      }
+    };
+    struct ClearSplit {
+      CurvedEditMesh* m;
+      ~ClearSplit() { m->split_vertex = editing::k_no_id; }
+    } clear_split{this};
+    if (r.new_vertex != editing::k_no_id) {
+      // A split: the new corner starts at the old edge's midpoint (on its curve) and moves to
+      // where the worst energy of the new cells' straight tets (their corners) is lowest
+      // (pattern search, steps halving from a quarter of the edge down to 1/64 of it); the
+      // curved cells are built once, at the end.
+      split_vertex = r.new_vertex;
+      split_x = edge_midpoint(r.old_cells.front(), r.v0, r.v1);
+      const double len = (corner(r.v0) - corner(r.v1)).norm();
+      std::vector<Eigen::Matrix<double, 4, 3>> corners(r.new_cells.size());
+      std::vector<int> moving(r.new_cells.size(), -1);
+      for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
+        const Cell& c = cell(r.new_cells[i]);
+        for (int j = 0; j < 4; ++j) {
+          if (c[std::size_t(j)] == split_vertex) moving[i] = j;
+          corners[i].row(j) = corner(c[std::size_t(j)]).transpose();
+        }
+        CF_VERIFY(moving[i] >= 0, "curved edit: a split's new cell lacks the new vertex");
+      }
+      auto worst = [&]() {
+        double e = 0;
+        for (std::size_t i = 0; i < corners.size(); ++i) {
+          corners[i].row(moving[i]) = split_x.transpose();
+          e = std::max(e, cell_energy(1, corners[i]));
+        }
+        return e;
+      };
+      double best = worst();
+      for (double h = 0.25 * len; h >= len / 64;) {
+        const Eigen::Vector3d at = split_x;
+        Eigen::Vector3d to = at;
+        double to_e = best;
+        for (int d = 0; d < 6; ++d) {
+          split_x = at + (d % 2 ? -h : h) * Eigen::Vector3d::Unit(d / 2);
+          const double e = worst();
+          if (e < to_e) to_e = e, to = split_x;
+        }
+        split_x = to;
+        if (to_e < best) {
+          best = to_e;
+        } else {
+          h /= 2;
+        }
       }
     }
+    build();
     const std::size_t nn = Xs.size();
     std::vector<double> new_energy(nn), new_sj(nn);
     for (std::size_t i = 0; i < nn; ++i) {
       new_energy[i] = cell_energy(k, Xs[i]);
       if (!(new_energy[i] < before * (1.0 - 1e-9))) return ++stats->rejected_energy, false;
     }
+    // A split adds cells, so it must also raise the cavity's worst scaled Jacobian.
+    const double sj_needed =
+        r.new_vertex != editing::k_no_id ? sj_before * (1 + split_sj_gain) : sj_before;
     for (std::size_t i = 0; i < nn; ++i) {
       new_sj[i] = min_scaled_jacobian(k, Xs[i]);
-      if (new_sj[i] < sj_before) return ++stats->rejected_energy, false;
+      if (!(new_sj[i] >= sj_needed)) return ++stats->rejected_energy, false;
+    }
+    // ... and not raise its worst curved MIPS (the quality goal's measure, which the conformal
+    // energy above weighs differently: a split that trades a flat cell for a needle passes
+    // that one).
+    if (r.new_vertex != editing::k_no_id) {
+      double mips_before = 0, mips_after = 0;
+      for (Id t : r.old_cells)
+        mips_before = std::max(mips_before, curved_mips(k, cell_nodes(cell(t))));
+      for (const auto& X : Xs) mips_after = std::max(mips_after, curved_mips(k, X));
+      if (!(mips_after <= mips_before)) return ++stats->rejected_energy, false;
     }
     for (std::size_t i = 0; i < nn; ++i)
       if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive)
@@ -168,6 +246,10 @@ class CurvedEditMesh : public TetMesh {
     }
     return true;
   }
+
+  double split_sj_gain = 0.5;
+  Id split_vertex = editing::k_no_id;  // the corner a split is placing (not yet in node_of)
+  Eigen::Vector3d split_x = Eigen::Vector3d::Zero();
 
  private:
   // The rule of the header for the lattice point alpha of cell c (corners at P): the Boolean sum
@@ -204,6 +286,18 @@ class CurvedEditMesh : public TetMesh {
     return x;
   }
 
+  // The point of old cell t's map at the middle of its edge (a, b).
+  Eigen::Vector3d edge_midpoint(Id t, Id a, Id b) const {
+    const Cell& c = cell(t);
+    Eigen::Vector4d lambda = Eigen::Vector4d::Zero();
+    for (int j = 0; j < 4; ++j)
+      if (c[std::size_t(j)] == a || c[std::size_t(j)] == b) lambda[j] = 0.5;
+    const Eigen::VectorXd N = lagrange_shape_values(
+        CellKind::tetrahedron, k, Eigen::Vector3d(lambda[1], lambda[2], lambda[3]));
+    const Eigen::MatrixXd X = cell_nodes(c);
+    return (N.transpose() * X).transpose();
+  }
+
   // t · d_σ(normalised λ on σ) for σ = the local corners `sigma` (a curved face or edge).
   Eigen::Vector3d blend(const Cell& c, const std::array<int, 4>& alpha, const int* sigma,
                         int count) const {
@@ -233,9 +327,6 @@ class CurvedEditMesh : public TetMesh {
     for (int i = 0; i < 3; ++i) linear += mu[i] * corner(f[std::size_t(i)]);
     return t * (patch - linear);
   }
-
- public:
-  std::vector<char> surface_vertex;  // per vertex: on the frozen surface
 };
 
 }  // namespace
@@ -244,6 +335,7 @@ void accumulate(CurvedEditStats& total, const CurvedEditStats& next) {
   total.passes += next.passes;
   total.collapses += next.collapses;
   total.flips += next.flips;
+  total.splits += next.splits;
   total.attempted += next.attempted;
   total.rejected_certificate += next.rejected_certificate;
   total.rejected_energy += next.rejected_energy;
@@ -309,10 +401,11 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   // frozen. The boundary faces are never touched by the engine's operations on interior
   // vertices, faces and edges, and the frozen surface is protected by the before hooks.
   const std::size_t nv = node_of_vertex.size();
-  m.vertex_fixed.assign(nv, 0);
-  m.surface_vertex.assign(nv, 0);
   for (std::size_t v = 0; v < nv; ++v)
-    if (frozen[std::size_t(node_of_vertex[v])]) m.vertex_fixed[v] = m.surface_vertex[v] = 1;
+    if (frozen[std::size_t(node_of_vertex[v])]) {
+      m.vertex_fixed.set(v, 1);
+      m.surface_vertex.set(v, 1);
+    }
   const auto& tri = *m.tri_lattice;
   for (int c = 0; c < nc; ++c) {
     const auto& cv = cells[std::size_t(c)];
@@ -323,7 +416,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
         if (j != skip) f[n++] = cv[std::size_t(j)];
       const Face sf = sorted_face(f[0], f[1], f[2]);
       if (m.is_boundary_facet(std::span<const Id>(sf.data(), 3)))
-        for (Id v : sf) m.vertex_fixed[v] = 1;
+        for (Id v : sf) m.vertex_fixed.set(v, 1);
       bool curved = true;
       for (const auto& alpha : tri) {
         const int node = m.node_of.at(make_node_key(sf.data(), alpha, 3));
@@ -357,11 +450,26 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   summarize(stats.mean_energy_before, stats.max_energy_before, stats.targets_before);
 
   using Pass = editing::ExecutePass<TetMesh>;
-  auto target_work = [&](const std::vector<Id>& tets, bool collapse) {
+  enum class Mode { collapse, flip, split };
+  auto wanted = [&](Id t, Mode mode) {
+    if (m.is_cell_removed(t)) return false;
+    return mode == Mode::split ? m.is_split_target(t, options.energy, options.split_scaled_jacobian)
+                               : m.is_target(t, options.energy);
+  };
+  auto target_work = [&](const std::vector<Id>& tets, Mode mode) {
     std::vector<Pass::Work> work;
     for (Id t : tets) {
-      if (m.is_cell_removed(t) || !m.is_target(t, options.energy)) continue;
-      if (collapse) {
+      if (!wanted(t, mode)) continue;
+      if (mode == Mode::split) {
+        // Its interior edges, longest first (the queue orders by the cell's energy only, so
+        // the order among one cell's edges is this one).
+        std::vector<std::pair<double, TetMesh::Tuple>> edges;
+        for (const auto& e : m.edges_of_tets({t}))
+          edges.emplace_back((m.corner(e.vid) - m.corner(m.other_vertex(e))).norm(), e);
+        std::stable_sort(edges.begin(), edges.end(),
+                         [](const auto& x, const auto& y) { return x.first > y.first; });
+        for (const auto& [len, e] : edges) work.emplace_back("split", e);
+      } else if (mode == Mode::collapse) {
         // Every edge of the cell, from both ends (the removed vertex is the tuple's).
         for (int le = 0; le < 6; ++le)
           for (int end = 0; end < 2; ++end) {
@@ -385,10 +493,18 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     }
     return work;
   };
-  auto run = [&](bool collapse) {
+  auto run = [&](Mode mode) {
     Pass pass;
     pass.num_threads = 1;
-    if (collapse) {
+    long long split_budget = (long long)(options.max_split_share * double(m.live_cells().size()));
+    if (mode == Mode::split) {
+      pass.operations["split"] = [&split_budget](TetMesh& mm, const TetMesh::Tuple& t) {
+        if (split_budget <= 0) return std::optional<TetMesh::Tuple>();
+        auto done = mm.split_edge(t);
+        if (done) --split_budget;
+        return done;
+      };
+    } else if (mode == Mode::collapse) {
       pass.operations["collapse"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
         return mm.collapse_edge(t);
       };
@@ -407,13 +523,13 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     pass.priority = [&m](const TetMesh&, const std::string&, const TetMesh::Tuple& t) {
       return m.energy[t.tid];
     };
-    pass.should_process = [&m, &options](const TetMesh&, const Pass::Work& w, double) {
-      return !m.is_cell_removed(w.second.tid) && m.is_target(w.second.tid, options.energy);
+    pass.should_process = [&wanted, mode](const TetMesh&, const Pass::Work& w, double) {
+      return wanted(w.second.tid, mode);
     };
     pass.renew_neighbor_tuples = [&](const TetMesh&, const std::string&, const TetMesh::Tuple&) {
-      return target_work(m.operation_record().new_cells, collapse);
+      return target_work(m.operation_record().new_cells, mode);
     };
-    const auto s = pass.run(m, target_work(m.live_cells(), collapse));
+    const auto s = pass.run(m, target_work(m.live_cells(), mode));
     stats.rejected_topology += (long long)(s.rejected_topology);
     return (long long)(s.succeeded);
   };
@@ -422,14 +538,19 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     if (progress) progress("optimize: curved edits", double(p) / options.passes);
     long long done = 0;
     if (options.collapses) {
-      const long long c = run(true);
+      const long long c = run(Mode::collapse);
       stats.collapses += c;
       done += c;
     }
     if (options.flips) {
-      const long long f = run(false);
+      const long long f = run(Mode::flip);
       stats.flips += f;
       done += f;
+    }
+    if (options.splits) {
+      const long long sp = run(Mode::split);
+      stats.splits += sp;
+      done += sp;
     }
     ++stats.passes;
     if (done == 0) break;

@@ -33,11 +33,25 @@ struct CurvedEditOptions {
   double energy = 4.0;  // cells above this mean energy (optimize.hpp cell_energy) are targets
   bool collapses = true;
   bool flips = true;
+  // Edge splits of flat cells (after the flips of each pass): an edge of a target cell whose
+  // sampled scaled Jacobian is below split_scaled_jacobian, not on the mesh boundary nor on the
+  // frozen surface, gets a new corner placed where the worst energy of the new cells' straight
+  // tets is lowest (pattern search from the edge's midpoint on its curve), kept under the checks
+  // of every operation and two more, since it adds cells: the cavity's worst scaled Jacobian must
+  // rise by half (×1.5) and its worst curved MIPS must not grow. A split alone cannot unflatten
+  // the flat cell's own children (each keeps a face of it); what it gives is a vertex the later
+  // flips, collapses and the smoothing can use where all four corners were fixed.
+  // Off by default: measured on the dev meshes (meshing/curved/README.md, step 8) it helps the
+  // CAD parts a little and doubles the edits' time.
+  bool splits = false;
+  double split_scaled_jacobian = 0.01;
+  // At most this share of the cells at the start of a pass is split in that pass.
+  double max_split_share = 0.2;
 };
 
 struct CurvedEditStats {
   int passes = 0;
-  long long collapses = 0, flips = 0;
+  long long collapses = 0, flips = 0, splits = 0;
   long long attempted = 0;             // operations the engine carried out before the checks
   long long rejected_certificate = 0;  // a new cell not certified positive
   long long rejected_energy = 0;       // the worst energy did not drop, or the scaled Jacobian did

@@ -56,6 +56,7 @@ struct MeshArgs {
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
   double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
+  bool optimize_edit_splits = meshing::curved::CurvedEditOptions{}.splits;
   double optimize_node_energy = meshing::curved::OptimizeOptions{}.node_energy;
   double padding = 0.25;
   GlobalOptions global;
@@ -143,6 +144,9 @@ void register_mesh(CLI::App& app) {
                   "rounds of edge collapses and 2-3/3-2/4-4 flips of the curved tets before the "
                   "smoothing (default 2; 0: off)")
       ->check(CLI::Range(0, 100));
+  sub->add_flag("--optimize-edit-splits", args->optimize_edit_splits,
+                "the curved edits also split interior edges of cells with a scaled Jacobian below "
+                "0.01 (kept when the cavity's worst scaled Jacobian rises by half)");
   sub->add_option("--optimize-edit-energy", args->optimize_edit_energy,
                   "curved edits: only cells whose mean conformal AMIPS energy exceeds E are "
                   "targets (default 4)")
@@ -221,6 +225,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.node_energy = args->optimize_node_energy;
     options.optimize.edits.passes = args->optimize_edit_passes;
     options.optimize.edits.energy = args->optimize_edit_energy;
+    options.optimize.edits.splits = args->optimize_edit_splits;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.low_degree_slabs = args->low_degree_slabs;

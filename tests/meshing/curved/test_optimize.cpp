@@ -300,6 +300,43 @@ TEST(CurvedEdit, ANearlyFlatCentreIsCollapsedAwayAtEveryOrder) {
   }
 }
 
+double mesh_min_scaled_jacobian(const LagrangeMesh& m) {
+  double worst = 1;
+  for (int c = 0; c < m.num_cells(); ++c) {
+    Eigen::MatrixXd X(m.cells.cols(), 3);
+    for (Eigen::Index n = 0; n < m.cells.cols(); ++n) X.row(n) = m.nodes.row(m.cells(c, n));
+    worst = std::min(worst, cv::min_scaled_jacobian(m.order, X));
+  }
+  return worst;
+}
+
+TEST(CurvedEdit, ASplitIsRefusedWhereItCannotUnflattenTheCell) {
+  // The centre sits 0.006 from the face x + y + z = 1 and is frozen, so no collapse can take it
+  // away (flips and collapses are off here). Any split of its three free edges leaves two
+  // children in the thin wedge between the planes of x y z and of the centre with two of them:
+  // both stay flat, the cavity's worst scaled Jacobian cannot rise by half, and every split is
+  // refused — the mesh is returned unchanged.
+  for (int k = 1; k <= 4; ++k) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    LagrangeMesh m = octahedron(Eigen::Vector3d(0.33, 0.33, 0.33), k);
+    ASSERT_TRUE(all_certified(m));
+    const LagrangeMesh before = m;
+    std::vector<char> frozen(std::size_t(m.num_nodes()), 0);
+    frozen[std::size_t(centre_node(m))] = 1;
+    ASSERT_LT(mesh_min_scaled_jacobian(m), 0.01);  // a split target
+    cv::CurvedEditOptions o;
+    o.energy = 1.5;
+    o.collapses = o.flips = false;
+    o.splits = true;
+    const cv::CurvedEditResult r = cv::edit_curved_mesh(m, frozen, o);
+    EXPECT_EQ(r.stats.splits, 0);
+    EXPECT_GT(r.stats.rejected_energy, 0);  // tried, refused by the scaled-Jacobian gain
+    EXPECT_EQ(m.num_cells(), 8);
+    EXPECT_EQ(m.nodes, before.nodes);
+    EXPECT_EQ(m.cells, before.cells);
+  }
+}
+
 TEST(CurvedEdit, OnACurvedOctahedronTheBoundaryIsKeptAndNewCellsAreCertified) {
   // The octahedron's faces bulge out halfway to the unit sphere (frozen); its inside stays
   // straight, its centre off the middle.
