@@ -581,7 +581,14 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (c.kappa.empty() && c.physics == "poisson") c.kappa = Expression("1", "/physics/kappa");
 
   if (const json* d = r.get(j, "discretization")) {
-    r.only_keys(*d, "/discretization", {"degree", "quadrature", "partial_dirichlet", "geometry"});
+    r.only_keys(*d, "/discretization",
+                {"degree", "quadrature", "partial_dirichlet", "geometry", "target_error"});
+    if (const json* v = r.get(*d, "target_error")) {
+      c.target_error = r.number(*v, "/discretization/target_error");
+      if (!(c.target_error > 0 && c.target_error < 1))
+        fail("/discretization/target_error",
+             "must be in (0, 1): the relative H1-semi error estimate to reach", r.file);
+    }
     if (const json* v = r.get(*d, "geometry")) {
       c.geometry = r.string(*v, "/discretization/geometry");
       if (c.geometry != "iso" && c.geometry != "mesh")
@@ -747,6 +754,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                            {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
                            {"partial_dirichlet", c.partial_dirichlet},
                            {"geometry", c.geometry}};
+  if (c.target_error > 0) res["discretization"]["target_error"] = c.target_error;
   const int comps = c.components();
   auto write_load = [&](json& out, const std::vector<Expression>& rhs,
                         const std::vector<BoundaryConditionSpec>& bcs,

@@ -88,6 +88,9 @@ struct CaseSpec {
   std::optional<double> E_inside, nu_inside;
   int load_steps = 1;  ///< neo_hookean
   int degree = 1;
+  /// > 0: adaptive p (issue 22): from `degree` up to 4 on the same mesh until the relative
+  /// gradient-recovery estimate η / ‖∇u_h‖ of every load case is at most this.
+  double target_error = 0;
   int quadrature = -1;  ///< -1 = default
   /// Dirichlet faces a selection covers in part: "nitsche" (weakly; Poisson's default, linear
   /// elasticity on request) or "nodal" (the DOFs the selection covers are fixed; elasticity's

@@ -51,6 +51,7 @@ ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
        "interpolated in the same space); estimates the h1_semi_error of the discretization, not "
        "the geometric error of eps; fem/problems/error_estimate.hpp"},
       {"h1_semi", estimate.eta},
+      {"relative", estimate.gradient_norm > 0 ? estimate.eta / estimate.gradient_norm : 0.0},
       {"max_cell", estimate.cell_eta.size() > 0 ? estimate.cell_eta.maxCoeff() : 0.0}};
   if (spec.exact.empty()) return out;
   const auto exact = spec.exact;

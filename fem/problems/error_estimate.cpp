@@ -66,6 +66,7 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
 
   RecoveryEstimate out;
   out.cell_eta.resize(nc);
+  Eigen::VectorXd cell_grad(nc);
   tbb::parallel_for(0, nc, [&](int cell) {
     CellGeometry g;
     geometry.evaluate(cell, g);
@@ -74,7 +75,7 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
       for (int i = 0; i < c; ++i) U(a, i) = u[space.cell_dofs(cell, a) * c + i];
       R.row(a) = recovered.row(space.cell_dofs(cell, a));
     }
-    double s = 0;
+    double s = 0, gs = 0;
     for (int q = 0; q < geometry.num_points(); ++q) {
       const Eigen::MatrixXd G = U.transpose() * (basis.gradients[q] * g.jacobian_inv[q]);  // c × 3
       const Eigen::RowVectorXd r = basis.values.row(q) * R;  // 1 × 3c
@@ -82,11 +83,14 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
         for (int d = 0; d < 3; ++d) {
           const double e = r[3 * i + d] - G(i, d);
           s += g.det_w[q] * e * e;
+          gs += g.det_w[q] * G(i, d) * G(i, d);
         }
     }
     out.cell_eta[cell] = std::sqrt(s);
+    cell_grad[cell] = gs;
   });
   out.eta = out.cell_eta.norm();
+  out.gradient_norm = std::sqrt(cell_grad.sum());
   return out;
 }
 

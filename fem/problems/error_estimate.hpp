@@ -20,6 +20,7 @@ namespace curvefem::fem {
 struct RecoveryEstimate {
   Eigen::VectorXd cell_eta;  ///< η_K per cell
   double eta = 0.0;          ///< (Σ η_K²)^{1/2}
+  double gradient_norm = 0;  ///< ‖∇u_h‖_L2, for the relative estimate η / ‖∇u_h‖
 };
 
 /// u: components values per DOF (DOF-major), as compute_errors takes it. quadrature_degree < 0:
