@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/LU>
 #include <cmath>
 
 #include "fem/assembly/element_geometry.hpp"
@@ -39,10 +40,14 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
   Eigen::VectorXd volume(nc);
   Eigen::MatrixXd grad(Eigen::Index(nc) * n, 3 * c);
   tbb::parallel_for(0, nc, [&](int cell) {
-    CellGeometry g, gn;
-    geometry.evaluate(cell, g);
+    CellGeometry gn;
     at_nodes.evaluate(cell, gn);
-    volume[cell] = g.det_w.sum();
+    // The weight: the volume of the straight tet on the corners (only a weight).
+    Eigen::Matrix3d E;
+    for (int d = 0; d < 3; ++d)
+      E.col(d) = (mesh.nodes.row(mesh.cells(cell, d + 1)) - mesh.nodes.row(mesh.cells(cell, 0)))
+                     .transpose();
+    volume[cell] = std::abs(E.determinant()) / 6;
     Eigen::MatrixXd U(n, c);
     for (int a = 0; a < n; ++a)
       for (int i = 0; i < c; ++i) U(a, i) = u[space.cell_dofs(cell, a) * c + i];
@@ -76,9 +81,12 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
       R.row(a) = recovered.row(space.cell_dofs(cell, a));
     }
     double s = 0, gs = 0;
+    Eigen::MatrixXd physical(n, 3), G(c, 3);
+    Eigen::RowVectorXd r(3 * c);
     for (int q = 0; q < geometry.num_points(); ++q) {
-      const Eigen::MatrixXd G = U.transpose() * (basis.gradients[q] * g.jacobian_inv[q]);  // c × 3
-      const Eigen::RowVectorXd r = basis.values.row(q) * R;  // 1 × 3c
+      physical.noalias() = basis.gradients[q] * g.jacobian_inv[q];
+      G.noalias() = U.transpose() * physical;  // c × 3
+      r.noalias() = basis.values.row(q) * R;   // 1 × 3c
       for (int i = 0; i < c; ++i)
         for (int d = 0; d < 3; ++d) {
           const double e = r[3 * i + d] - G(i, d);
