@@ -80,7 +80,7 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
     x = singular ? solve_pinned(A, rhs, options.null_space, out, options.factorization_cache.get())
                  : solve_cholmod(A, rhs, out, options.factorization_cache.get());
   else
-    x = solve_petsc_cg(A, rhs, options, Q, out);
+    x = solve_petsc_cg(A, rhs, options, Q, out, options.factorization_cache.get());
   const double bn = rhs.norm();
   out.relative_residual = (rhs - A * x).norm() / (bn > 0 ? bn : 1.0);
   log::info("linear solve (", out.method, singular ? ", singular" : "", "): ", A.rows(),

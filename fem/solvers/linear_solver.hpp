@@ -25,10 +25,11 @@
 
 namespace curvefem::fem {
 
-/// A CHOLMOD factorization kept between direct solves (load cases of one run): the next matrix
-/// handed to solve_cholmod with the cache is checked against the factorized one bit for bit
-/// (sizes, pattern and values); the factor is reused when they are identical and recomputed (and
-/// kept) otherwise. Not thread-safe: one cache per sequence of solves.
+/// A CHOLMOD factorization — or, for CG, the PETSc KSP with its GAMG hierarchy — kept between
+/// solves (load cases of one run): the next matrix handed to the same engine with the cache is
+/// checked against the kept one bit for bit (sizes, pattern and values); the factor / set-up is
+/// reused when they are identical and recomputed (and kept) otherwise. Not thread-safe: one cache
+/// per sequence of solves.
 class FactorizationCache {
  public:
   FactorizationCache();
@@ -86,9 +87,18 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
 // Engines (linear_solver_cholmod.cpp, linear_solver_petsc.cpp).
 Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
                               LinearSolveInfo& info, FactorizationCache* cache = nullptr);
-/// null_space: an orthonormal basis of ker A (#rows x m) or empty.
+/// null_space: an orthonormal basis of ker A (#rows x m) or empty. With a cache, a KSP set up
+/// for an identical matrix (bit for bit) with the same null space, near-nullspace, tolerance,
+/// iteration limit and block size is reused, GAMG's hierarchy included (info.reused_factorization).
 Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                                const LinearSolverOptions& options,
-                               const Eigen::MatrixXd& null_space, LinearSolveInfo& info);
+                               const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
+                               FactorizationCache* cache = nullptr);
+
+// Shared by the engines: same sizes, pattern and values, bit for bit (both compressed); the
+// cache's PETSc slot and counters.
+bool identical_matrices(const SparseMatrix& a, const SparseMatrix& b);
+std::shared_ptr<void>& petsc_cache_slot(FactorizationCache& cache);
+void count_cache_use(FactorizationCache& cache, bool reused);
 
 }  // namespace curvefem::fem

@@ -15,17 +15,22 @@ struct FactorizationCache::Impl {
   SparseMatrix matrix;  // compressed copy of the factorized matrix
   std::unique_ptr<Llt> llt;
   int factorizations = 0, reuses = 0;
+  // CG + GAMG: the KSP set up for an earlier matrix (linear_solver_petsc.cpp), kept with what it
+  // was set up for; type-erased so this file needs no PETSc header.
+  std::shared_ptr<void> ksp;
 };
+
+std::shared_ptr<void>& petsc_cache_slot(FactorizationCache& cache) { return cache.impl().ksp; }
+void count_cache_use(FactorizationCache& cache, bool reused) {
+  ++(reused ? cache.impl().reuses : cache.impl().factorizations);
+}
 
 FactorizationCache::FactorizationCache() : m_impl(std::make_unique<Impl>()) {}
 FactorizationCache::~FactorizationCache() = default;
 int FactorizationCache::factorizations() const { return m_impl->factorizations; }
 int FactorizationCache::reuses() const { return m_impl->reuses; }
 
-namespace {
-
-/// Same sizes, pattern and values, bit for bit (both compressed).
-bool identical(const SparseMatrix& a, const SparseMatrix& b) {
+bool identical_matrices(const SparseMatrix& a, const SparseMatrix& b) {
   if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros()) return false;
   const auto n = std::size_t(a.nonZeros());
   return std::memcmp(a.outerIndexPtr(), b.outerIndexPtr(),
@@ -33,8 +38,6 @@ bool identical(const SparseMatrix& a, const SparseMatrix& b) {
          std::memcmp(a.innerIndexPtr(), b.innerIndexPtr(), sizeof(int) * n) == 0 &&
          std::memcmp(a.valuePtr(), b.valuePtr(), sizeof(double) * n) == 0;
 }
-
-}  // namespace
 
 Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
                               LinearSolveInfo& info, FactorizationCache* cache) {
@@ -47,7 +50,7 @@ Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
     SparseMatrix compressed = A;
     compressed.makeCompressed();
     FactorizationCache::Impl& c = cache->impl();
-    if (c.llt && identical(c.matrix, compressed)) {  // only successful factors are kept
+    if (c.llt && identical_matrices(c.matrix, compressed)) {  // only successful factors are kept
       ++c.reuses;
       info.reused_factorization = true;
       llt = c.llt.get();

@@ -76,9 +76,103 @@ PetscErrorCode record_residual(KSP, PetscInt, PetscReal norm, void* ctx) {
 
 }  // namespace
 
+namespace {
+
+/// A KSP (CG + GAMG) set up for one matrix, with what it was set up for: load cases with the same
+/// matrix and options reuse it (FactorizationCache), GAMG's hierarchy included.
+struct KspState {
+  SparseMatrix matrix;  // compressed copy (the key, with the options below)
+  Eigen::MatrixXd null_space, coordinates, vectors;
+  double rtol = 0;
+  int max_iterations = 0, block_size = 1;
+  std::string near_nullspace;
+  // MatCreateSeqAIJWithArrays keeps pointers to these.
+  std::vector<PetscInt> row_ptr, col;
+  std::vector<PetscScalar> val;
+  Mat M = nullptr;
+  KSP ksp = nullptr;
+  KspState() = default;
+  KspState(const KspState&) = delete;
+  KspState& operator=(const KspState&) = delete;
+  ~KspState() {
+    if (ksp) KSPDestroy(&ksp);
+    if (M) MatDestroy(&M);
+  }
+  bool serves(const SparseMatrix& A, const Eigen::MatrixXd& ns, const Eigen::MatrixXd& xyz,
+              const Eigen::MatrixXd& vec, const LinearSolverOptions& o) const {
+    auto same = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+      return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
+    };
+    return rtol == o.rtol && max_iterations == o.max_iterations && block_size == o.block_size &&
+           same(null_space, ns) && same(coordinates, xyz) && same(vectors, vec) &&
+           identical_matrices(matrix, A);
+  }
+};
+
+std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSolverOptions& options,
+                                 const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& vectors,
+                                 const Eigen::MatrixXd& null_space) {
+  auto st = std::make_shared<KspState>();
+  st->matrix = compressed;
+  st->null_space = null_space;
+  st->coordinates = coordinates;
+  st->vectors = vectors;
+  st->rtol = options.rtol;
+  st->max_iterations = options.max_iterations;
+  st->block_size = options.block_size;
+  const SparseMatrix& A = st->matrix;
+  const PetscInt n = static_cast<PetscInt>(A.rows());
+  // CSR from the column-major symmetric matrix: rows of A = columns of A (symmetric).
+  st->row_ptr.assign(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
+  st->col.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  st->val.assign(A.valuePtr(), A.valuePtr() + A.nonZeros());
+  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, st->row_ptr.data(), st->col.data(),
+                                  st->val.data(), &st->M),
+        "MatCreateSeqAIJWithArrays");
+  Mat M = st->M;
+  if (options.block_size > 1) check(MatSetBlockSize(M, options.block_size), "MatSetBlockSize");
+  check(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
+  if (null_space.cols() == 0) check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  st->near_nullspace = "default";
+  if (coordinates.size() > 0 || vectors.size() > 0) {
+    MatNullSpace near;
+    if (coordinates.size() > 0) {
+      near = rigid_body_modes(coordinates);
+      st->near_nullspace = "rigid-body modes";
+    } else {
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(vectors);
+      near = null_space_of(qr.householderQ() * Eigen::MatrixXd::Identity(n, vectors.cols()));
+      st->near_nullspace = "vectors";
+    }
+    check(MatSetNearNullSpace(M, near), "MatSetNearNullSpace");
+    MatNullSpaceDestroy(&near);
+  }
+  if (null_space.cols() > 0) {
+    MatNullSpace kernel = null_space_of(null_space);
+    check(MatSetNullSpace(M, kernel), "MatSetNullSpace");
+    MatNullSpaceDestroy(&kernel);
+  }
+  PC pc;
+  check(KSPCreate(PETSC_COMM_SELF, &st->ksp), "KSPCreate");
+  check(KSPSetOperators(st->ksp, M, M), "KSPSetOperators");
+  check(KSPSetType(st->ksp, KSPCG), "KSPSetType");
+  check(KSPGetPC(st->ksp, &pc), "KSPGetPC");
+  check(PCSetType(pc, PCGAMG), "PCSetType");
+  check(
+      KSPSetTolerances(st->ksp, options.rtol, PETSC_DEFAULT, PETSC_DEFAULT, options.max_iterations),
+      "KSPSetTolerances");
+  // PETSc's options database ($PETSC_OPTIONS, e.g. "-pc_type hypre") may override the defaults.
+  check(KSPSetFromOptions(st->ksp), "KSPSetFromOptions");
+  check(KSPSetUp(st->ksp), "KSPSetUp");
+  return st;
+}
+
+}  // namespace
+
 Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                                const LinearSolverOptions& options,
-                               const Eigen::MatrixXd& null_space, LinearSolveInfo& info) {
+                               const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
+                               FactorizationCache* cache) {
   ensure_petsc();
   info.method = "petsc-cg-gamg";
   Stopwatch watch;
@@ -96,75 +190,53 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
   if (use_vectors && options.near_nullspace_vectors.rows() != A.rows())
     throw InputError("near-nullspace: " + std::to_string(options.near_nullspace_vectors.rows()) +
                      " rows of vectors for " + std::to_string(A.rows()) + " unknowns");
-  // CSR from the column-major symmetric matrix: rows of A = columns of A (symmetric).
-  std::vector<PetscInt> row_ptr(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
-  std::vector<PetscInt> col(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-  std::vector<PetscScalar> val(A.valuePtr(), A.valuePtr() + A.nonZeros());
-  Mat M;
-  Vec x, rhs;
-  KSP ksp;
-  PC pc;
-  check(
-      MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_ptr.data(), col.data(), val.data(), &M),
-      "MatCreateSeqAIJWithArrays");
-  if (options.block_size > 1) check(MatSetBlockSize(M, options.block_size), "MatSetBlockSize");
-  check(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
-  if (null_space.cols() == 0) check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
-  info.near_nullspace = "default";
-  if (use_coordinates || use_vectors) {
-    MatNullSpace near;
-    if (use_coordinates) {
-      near = rigid_body_modes(coordinates);
-      info.near_nullspace = "rigid-body modes";
+  const Eigen::MatrixXd xyz = use_coordinates ? coordinates : Eigen::MatrixXd();
+  const Eigen::MatrixXd vec = use_vectors ? options.near_nullspace_vectors : Eigen::MatrixXd();
+  SparseMatrix compressed = A;
+  compressed.makeCompressed();
+  std::shared_ptr<KspState> st;
+  if (cache) {
+    auto& slot = petsc_cache_slot(*cache);
+    auto kept = std::static_pointer_cast<KspState>(slot);
+    if (kept && kept->serves(compressed, null_space, xyz, vec, options)) {
+      st = kept;
+      info.reused_factorization = true;
     } else {
-      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(options.near_nullspace_vectors);
-      near = null_space_of(qr.householderQ() *
-                           Eigen::MatrixXd::Identity(n, options.near_nullspace_vectors.cols()));
-      info.near_nullspace = "vectors";
+      slot.reset();
+      st = set_up(compressed, options, xyz, vec, null_space);
+      slot = st;
     }
-    check(MatSetNearNullSpace(M, near), "MatSetNearNullSpace");
-    MatNullSpaceDestroy(&near);
+    count_cache_use(*cache, info.reused_factorization);
+  } else {
+    st = set_up(compressed, options, xyz, vec, null_space);
   }
-  if (null_space.cols() > 0) {
-    MatNullSpace kernel = null_space_of(null_space);
-    check(MatSetNullSpace(M, kernel), "MatSetNullSpace");
-    MatNullSpaceDestroy(&kernel);
-  }
+  info.near_nullspace = st->near_nullspace;
+  info.setup_s = watch.seconds();
+  watch.reset();
+  Vec x, rhs;
   check(VecCreateSeq(PETSC_COMM_SELF, n, &x), "VecCreateSeq");
   check(VecDuplicate(x, &rhs), "VecDuplicate");
   PetscScalar* r;
   check(VecGetArray(rhs, &r), "VecGetArray");
   for (PetscInt i = 0; i < n; ++i) r[i] = b[i];
   check(VecRestoreArray(rhs, &r), "VecRestoreArray");
-  check(KSPCreate(PETSC_COMM_SELF, &ksp), "KSPCreate");
-  check(KSPSetOperators(ksp, M, M), "KSPSetOperators");
-  check(KSPSetType(ksp, KSPCG), "KSPSetType");
-  check(KSPGetPC(ksp, &pc), "KSPGetPC");
-  check(PCSetType(pc, PCGAMG), "PCSetType");
-  check(KSPSetTolerances(ksp, options.rtol, PETSC_DEFAULT, PETSC_DEFAULT, options.max_iterations),
-        "KSPSetTolerances");
-  check(KSPMonitorSet(ksp, record_residual, &info.residual_history, nullptr), "KSPMonitorSet");
-  // PETSc's options database ($PETSC_OPTIONS, e.g. "-pc_type hypre") may override the defaults.
-  check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
-  check(KSPSetUp(ksp), "KSPSetUp");
-  info.setup_s = watch.seconds();
-  watch.reset();
-  check(KSPSolve(ksp, rhs, x), "KSPSolve");
+  check(KSPMonitorCancel(st->ksp), "KSPMonitorCancel");
+  check(KSPMonitorSet(st->ksp, record_residual, &info.residual_history, nullptr), "KSPMonitorSet");
+  check(KSPSolve(st->ksp, rhs, x), "KSPSolve");
+  check(KSPMonitorCancel(st->ksp), "KSPMonitorCancel");
   info.solve_s = watch.seconds();
   KSPConvergedReason reason;
   PetscInt its;
-  KSPGetConvergedReason(ksp, &reason);
-  KSPGetIterationNumber(ksp, &its);
+  KSPGetConvergedReason(st->ksp, &reason);
+  KSPGetIterationNumber(st->ksp, &its);
   info.iterations = static_cast<int>(its);
   Eigen::VectorXd result(n);
   const PetscScalar* xs;
   VecGetArrayRead(x, &xs);
   for (PetscInt i = 0; i < n; ++i) result[i] = xs[i];
   VecRestoreArrayRead(x, &xs);
-  KSPDestroy(&ksp);
   VecDestroy(&x);
   VecDestroy(&rhs);
-  MatDestroy(&M);
   if (reason < 0) {
     std::ostringstream s;
     s << "CG + GAMG did not converge (PETSc reason " << static_cast<int>(reason) << ") after "

@@ -136,3 +136,44 @@ TEST(NearNullspace, SingularSystemDirectAndCgAgreeUpToTheKernel) {
   y.array() -= y.mean();
   EXPECT_LT((x - y).norm(), 1e-8 * x.norm());
 }
+
+TEST(NearNullspace, CgReusesItsSetUpForAnIdenticalMatrixThroughTheCache) {
+  // The 1-D Laplacian with one end fixed (SPD); two right-hand sides, then a changed matrix.
+  const int n = 200;
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (int i = 0; i < n; ++i) {
+    t.emplace_back(i, i, i == 0 ? 3.0 : 2.0);
+    if (i + 1 < n) {
+      t.emplace_back(i, i + 1, -1.0);
+      t.emplace_back(i + 1, i, -1.0);
+    }
+  }
+  fem::SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  fem::LinearSolverOptions o;
+  o.type = "cg";
+  o.rtol = 1e-12;
+  o.factorization_cache = std::make_shared<fem::FactorizationCache>();
+  const Eigen::VectorXd b1 = Eigen::VectorXd::Ones(n), b2 = Eigen::VectorXd::LinSpaced(n, 0, 1);
+  fem::LinearSolveInfo i1, i2, i3;
+  const Eigen::VectorXd x1 = fem::solve_spd(A, b1, o, &i1);
+  const Eigen::VectorXd x2 = fem::solve_spd(A, b2, o, &i2);
+  EXPECT_FALSE(i1.reused_factorization);
+  EXPECT_TRUE(i2.reused_factorization);
+  EXPECT_LT(i1.relative_residual, 1e-9);
+  EXPECT_LT(i2.relative_residual, 1e-9);
+  EXPECT_GT(i2.iterations, 0);
+  EXPECT_FALSE(i2.residual_history.empty());
+  // The same answer as without the cache.
+  fem::LinearSolverOptions plain = o;
+  plain.factorization_cache = nullptr;
+  EXPECT_LT((fem::solve_spd(A, b2, plain) - x2).norm(), 1e-12 * x2.norm());
+  // A changed matrix is set up again.
+  fem::SparseMatrix B = A;
+  B.coeffRef(5, 5) += 1.0;
+  const Eigen::VectorXd x3 = fem::solve_spd(B, b1, o, &i3);
+  EXPECT_FALSE(i3.reused_factorization);
+  EXPECT_LT((B * x3 - b1).norm(), 1e-9 * b1.norm());
+  EXPECT_EQ(o.factorization_cache->factorizations(), 2);
+  EXPECT_EQ(o.factorization_cache->reuses(), 1);
+}
