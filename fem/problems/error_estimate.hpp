@@ -1,8 +1,9 @@
 // A posteriori estimate of the discretization error by gradient recovery (Zienkiewicz–Zhu, nodal
 // averaging; issue 22). The gradient of u_h is evaluated at every DOF point of every cell (the
 // reference lattice of degree p mapped by the cell's order-k geometry) and averaged over the
-// cells sharing the DOF, weighted by their volumes (of the straight tets on their corners); interpolated in the same Lagrange space it is
-// the recovered gradient G(u_h), continuous where ∇u_h jumps. The indicator of cell K is
+// cells sharing the DOF, weighted by their volumes (of the straight tets on their corners);
+// interpolated in the same Lagrange space it is the recovered gradient G(u_h), continuous where
+// ∇u_h jumps. The indicator of cell K is
 //   η_K = ‖G(u_h) − ∇u_h‖_L2(K)   (all components of a vector field together),
 // and η = (Σ_K η_K²)^{1/2} estimates ‖∇(u − u_h)‖_L2, the H1-semi error compute_errors reports.
 // It needs no exact solution, no rhs and no second derivatives, so it works on curved cells of
