@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <unordered_map>
@@ -666,6 +667,20 @@ struct CoarseState {
   // coarsening needs (its faces move) are tried only if the repair with these is refused.
   std::vector<char> repair_strict;
   int repairs = 0, repair_splits = 0, repair_failures = 0;
+  // ε levels (build_curved_mesh_levels): the coarse shell of the finer level before, with its
+  // owned points, from which this level's coarsening resumes instead of the input's shell.
+  bool resume = false;
+  sh::Shell start;
+  std::vector<std::vector<int>> start_owned;
+  // The next level starts from the coarse shell the last one kept, with a fresh attempt loop.
+  void next_level() {
+    start = shell;
+    start_owned = owned;
+    resume = true;
+    repair = false;
+    repair_strict.clear();
+    repairs = repair_splits = repair_failures = 0;
+  }
 };
 
 CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& options,
@@ -949,7 +964,27 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.stage_seconds.emplace_back("repair", watch.seconds());
   } else {
     if (progress) progress("coarsen", 0.0);
-    shell = sh::simplify_shell(beveled.shell, surface, simplify_options, simplify_stats);
+    bool resumed = false;
+    if (st.resume) {
+      // The finer level's coarse shell, coarsened further under this level's bounds (which are
+      // not smaller anywhere, so no point starts beyond its bound unless a curved-aware attempt
+      // here keeps it strict; those are repaired first, SimplifyOptions::resume).
+      sh::SimplifyOptions resume_options = simplify_options;
+      resume_options.resume = true;
+      resume_options.owned_points = st.start_owned;
+      shell = sh::simplify_shell(st.start, surface, resume_options, simplify_stats);
+      resumed = simplify_stats.violating_points == 0;
+      if (resumed)
+        stats.coarsen_start_faces = int(st.start.F.rows());
+      else {
+        log::info("mesh: resuming from the finer level's ", st.start.F.rows(),
+                  " coarse faces left ", simplify_stats.violating_points,
+                  " points beyond the bound: coarsening the input's shell");
+        simplify_stats = sh::SimplifyStats();
+      }
+    }
+    if (!resumed)
+      shell = sh::simplify_shell(beveled.shell, surface, simplify_options, simplify_stats);
     if (progress) progress("coarsen", 1.0);
     stats.coarse_faces = int(shell.F.rows());
     stats.coarsen_collapses = simplify_stats.collapses;
@@ -1448,15 +1483,9 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
 // refinement refined (0 when it refined nothing), also when an attempt throws.
 CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions& options,
                                CurvedMeshStats& stats, const ProgressFn& progress,
-                               int& thin_refined) {
+                               CoarseState& state) {
   const bool curved = options.curved_coarsening && options.order >= 2 &&
                       options.curved_linear_factor > 1 && options.curved_attempts > 0;
-  CoarseState state;
-  struct Report {
-    const CoarseState& state;
-    int& out;
-    ~Report() { out = state.thin_stats.refined_faces; }
-  } report{state, thin_refined};
   if (!curved) return build_attempt(input, options, {}, false, stats, progress, &state);
   // Curved-aware attempts, each keeping more input vertices under the linear bound; the last
   // resort is the linear bound everywhere (whose α = 0 fallback always meets ε).
@@ -1525,10 +1554,54 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
 
 CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
                              CurvedMeshStats& stats, const ProgressFn& progress) {
-  int thin_refined = 0;
+  std::vector<CurvedMeshStats> level_stats;
+  std::vector<CurvedMesh> out = build_curved_mesh_levels(
+      input, options, {{options.eps_rel, options.eps_scale}}, level_stats, progress);
+  stats = std::move(level_stats.front());
+  return std::move(out.front());
+}
+
+std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
+                                                 const CurvedMeshOptions& options,
+                                                 const std::vector<EpsLevel>& levels,
+                                                 std::vector<CurvedMeshStats>& stats,
+                                                 const ProgressFn& progress) {
+  if (levels.empty()) throw InputError("mesh: no eps level given");
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    if (!(levels[i].eps_rel > 0))
+      throw InputError("mesh: eps level " + std::to_string(i + 1) + " is not positive");
+    for (std::size_t j = 0; j < i; ++j)
+      if (levels[j].eps_rel == levels[i].eps_rel)
+        throw InputError("mesh: eps level " + std::to_string(i + 1) + " repeats level " +
+                         std::to_string(j + 1));
+  }
+  // Finest first: a coarse shell within the smaller bounds is within the larger ones.
+  std::vector<std::size_t> order(levels.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return levels[a].eps_rel < levels[b].eps_rel;
+  });
+  auto run = [&](const CurvedMeshOptions& base, CoarseState& state) {
+    std::vector<CurvedMesh> out(levels.size());
+    stats.assign(levels.size(), CurvedMeshStats());
+    for (std::size_t n = 0; n < order.size(); ++n) {
+      const std::size_t i = order[n];
+      CurvedMeshOptions o = base;
+      o.eps_rel = levels[i].eps_rel;
+      o.eps_scale = levels[i].eps_scale;
+      if (n > 0) state.next_level();
+      if (levels.size() > 1)
+        log::info("mesh: eps level ", n + 1, " of ", levels.size(), " (eps ", o.eps_rel, ")",
+                  n > 0 ? " from the finer level's coarse shell" : "");
+      out[i] = build_with_attempts(input, o, stats[i], progress, state);
+    }
+    return out;
+  };
+  CoarseState state;
   try {
-    return build_with_attempts(input, options, stats, progress, thin_refined);
+    return run(options, state);
   } catch (const MeshingError& e) {
+    const int thin_refined = state.thin_stats.refined_faces;
     if (thin_refined == 0) throw;
     // The refined surface's shell could not be meshed (seen on a plate 0.1 ε thick: the slab
     // layer's inner surface stayed self-intersecting): the unrefined input, as before.
@@ -1536,8 +1609,9 @@ CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& 
               "; meshing the input without the thin refinement");
     CurvedMeshOptions plain = options;
     plain.thin_refine_ratio = 0;
-    CurvedMesh out = build_with_attempts(input, plain, stats, progress, thin_refined);
-    stats.thin_fallback = e.what();
+    CoarseState plain_state;
+    std::vector<CurvedMesh> out = run(plain, plain_state);
+    for (CurvedMeshStats& s : stats) s.thin_fallback = e.what();
     return out;
   }
 }

@@ -206,6 +206,9 @@ struct CurvedMeshStats {
   // splits they made in all (repair_splits), and repairs that could not reach the bound and
   // coarsened the input again instead (repair_failures).
   int curved_repairs = 0, repair_splits = 0, repair_failures = 0;
+  // ε levels (build_curved_mesh_levels): the coarse faces of the finer level this level's
+  // coarsening resumed from (0: coarsened from the input's shell).
+  int coarsen_start_faces = 0;
   OptimizeStats optimize;
   std::vector<std::pair<std::string, double>> stage_seconds;
 };
@@ -222,5 +225,23 @@ struct CurvedMesh {
 // cannot meet its guarantees (e.g. interior boundary recovery).
 CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
                              CurvedMeshStats& stats, const ProgressFn& progress = {});
+
+// ε levels from one coarsening (issue 22): one mesh per level, each with options' other settings
+// and the level's bound (eps_rel, eps_scale as in CurvedMeshOptions). The shell is built once;
+// the finest level coarsens it, and every coarser level resumes from the coarse shell the finer
+// one kept (the larger bounds hold there already), so an extra level costs a short coarsening
+// plus its own curving, fill and stitch. stats[i] belongs to levels[i]: its stage_seconds hold
+// that level's stages only ("shell" in the finest one), coarsen_start_faces where it resumed
+// from. The meshes are those build_curved_mesh gives at the finest level and may differ from
+// its results at the others (a different start for the collapses).
+struct EpsLevel {
+  double eps_rel = 1e-2;
+  std::vector<double> eps_scale;  // empty or one factor in (0, 1] per input vertex
+};
+std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
+                                                 const CurvedMeshOptions& options,
+                                                 const std::vector<EpsLevel>& levels,
+                                                 std::vector<CurvedMeshStats>& stats,
+                                                 const ProgressFn& progress = {});
 
 }  // namespace curvefem::meshing::curved

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -1028,7 +1029,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
       throw MeshingError("simplify: chain collapses need the distance bound (max_distance)");
     if (!options.extra_points.empty())
       throw MeshingError("simplify: chain collapses with extra distance points are not supported");
-    if (!shell.reference.empty())
+    if (!shell.reference.empty() && !options.resume)
       throw MeshingError("simplify: chain collapses on a shell with a reference copy");
     const int ni = input.num_vertices();
     std::vector<int> degree(std::size_t(ni), 0);
@@ -1048,16 +1049,39 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.chain_vertex.assign(std::size_t(ni), 0);
     for (int x = 0; x < ni; ++x) m.chain_vertex[std::size_t(x)] = degree[std::size_t(x)] == 2;
     m.on_chain.assign(std::size_t(ni), 0);
+    // Resume: the coarse feature edges of the earlier run's chain collapses, from the reference
+    // copy; each edge's interior in order from its end on the smaller input vertex id.
+    std::map<std::pair<int, int>, std::vector<std::pair<double, int>>> inside;
+    for (const SnappedVertex& q : shell.reference) {
+      const int lo = std::min(q.a, q.b), hi = std::max(q.a, q.b);
+      inside[{lo, hi}].push_back({q.a == lo ? q.s : 1 - q.s, q.vertex});
+      if (q.vertex >= 0 && q.vertex < ni) m.on_chain[std::size_t(q.vertex)] = 1;
+    }
+    for (auto& [ends, along] : inside) {
+      const int a = middle_of[std::size_t(ends.first)], b = middle_of[std::size_t(ends.second)];
+      const auto t = a >= 0 && b >= 0 ? m.edge_tuple(Id(a), Id(b)) : std::nullopt;
+      if (!t)
+        throw MeshingError("simplify: resume: input vertices snapped between input vertices " +
+                           std::to_string(ends.first) + " and " + std::to_string(ends.second) +
+                           ", which are not the ends of a coarse edge");
+      std::sort(along.begin(), along.end());
+      ShellMesh::ChainEdge edge{true, {}};
+      for (const auto& [s, x] : along) edge.interior.push_back(x);
+      m.set_edge(m.chain, *t, std::move(edge));
+    }
   }
   stats.faces_before = nf;
-  if (options.repair) {
+  if (options.repair && options.resume)
+    throw MeshingError("simplify: repair and resume modes are exclusive");
+  if (options.repair || options.resume) {
+    const std::string mode = options.repair ? "repair" : "resume";
     if (!(m.max_distance > 0))
-      throw MeshingError("simplify: repair mode needs the distance bound (max_distance)");
+      throw MeshingError("simplify: " + mode + " mode needs the distance bound (max_distance)");
     if (int(options.owned_points.size()) != nf)
-      throw MeshingError("simplify: repair mode needs owned_points for each of the " +
+      throw MeshingError("simplify: " + mode + " mode needs owned_points for each of the " +
                          std::to_string(nf) + " shell faces (got " +
                          std::to_string(options.owned_points.size()) + ")");
-    if (options.collapse_chains)
+    if (options.repair && options.collapse_chains)
       throw MeshingError("simplify: repair mode does not collapse feature chains");
     m.repair = true;
     for (const auto& e : options.feature_edges)
@@ -1065,7 +1089,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (const SnappedVertex& q : shell.reference)
       m.feature_pairs.insert({std::min(q.a, q.b), std::max(q.a, q.b)});
   }
-  if (m.max_distance > 0 && options.repair) {  // the points where the earlier run left them
+  if (m.max_distance > 0 &&
+      (options.repair || options.resume)) {  // the points where the earlier run left them
     m.extra_points = &options.extra_points;
     const int np = input.num_vertices() + int(options.extra_points.size());
     for (int f = 0; f < nf; ++f) {
@@ -1315,7 +1340,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
         worst = std::max(worst, m.place[f][j][2] - m.max_distance);
     return worst;
   };
-  for (int pass = 0; options.repair && pass < options.repair_passes; ++pass) {
+  for (int pass = 0; (options.repair || options.resume) && pass < options.repair_passes; ++pass) {
     bool any = false;
     for (const auto& t : m.get_faces()) any = any || excess(t.fid) > 0;
     if (!any) break;
@@ -1328,7 +1353,13 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     stats.splits += sp;
     if (sp == 0) break;
   }
-  for (int round = 0; !options.repair && round < options.rounds; ++round) {
+  // Resume: the collapse rounds only once every point is within its bound.
+  bool rounds = !options.repair;
+  if (options.resume) {
+    for (const auto& t : m.get_faces()) rounds = rounds && !(excess(t.fid) > 0);
+    if (rounds) m.repair = false;
+  }
+  for (int round = 0; rounds && round < options.rounds; ++round) {
     int changed = 0;
     int collapsed = collapse_pass();
     stats.collapses += collapsed;

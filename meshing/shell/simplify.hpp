@@ -127,6 +127,14 @@ struct SimplifyOptions {
   bool repair = false;
   std::vector<std::vector<int>> owned_points;
   int repair_passes = 16;
+  // Resume mode (issue 22, ε levels from one coarsening): `shell` and `owned_points` as in repair
+  // mode, typically the coarse shell of a smaller bound, coarsened further under this one. Points
+  // beyond their bound here (only when the bounds are not larger than the earlier run's) are
+  // first repaired as in repair mode; if some are left (SimplifyStats::violating_points > 0) the
+  // shell is returned without collapses, else the collapse rounds run as from the input's shell.
+  // Feature chains resume too: the coarse feature edges are rebuilt from the shell's reference
+  // copy (each snapped vertex inside the coarse edge between its two ends).
+  bool resume = false;
 };
 
 struct SimplifyStats {

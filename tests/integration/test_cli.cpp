@@ -390,6 +390,55 @@ TEST(Cli, MeshWithAnEpsFieldSavesItAndTheValidatorChecksIt) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
 
+// --eps-levels (issue 22): one shell and one coarsening, a validated mesh folder per level.
+TEST(Cli, MeshWithEpsLevelsWritesAValidFolderPerLevel) {
+  const auto dir = test::scratch_dir("cli_mesh_eps_levels");
+  const SurfaceMesh sphere = make_icosphere(3);  // 1280 faces
+  io::write_surface(dir / "sphere.obj", sphere, io::SurfaceFormat::obj);
+  const std::string in = (dir / "sphere.obj").string(), out_dir = (dir / "m").string();
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + out_dir +
+                                  " --order 2 --threads 2 --eps-levels 0.02,0.005",
+                              &out),
+            0)
+      << out;
+  const auto levels = read_json(dir / "m" / "levels.json");
+  ASSERT_EQ(levels["levels"].size(), 2u);
+  EXPECT_TRUE(levels["valid"].get<bool>());
+  const auto& coarse = levels["levels"][0];
+  const auto& fine = levels["levels"][1];
+  EXPECT_EQ(coarse["dir"], "eps_0.02");
+  EXPECT_EQ(fine["dir"], "eps_0.005");
+  EXPECT_EQ(fine["coarsen_start_faces"].get<int>(), 0);
+  EXPECT_EQ(coarse["coarsen_start_faces"].get<int>(), fine["coarse_faces"].get<int>());
+  EXPECT_LT(coarse["coarse_faces"].get<int>(), fine["coarse_faces"].get<int>());
+  EXPECT_GT(fine["shell_seconds"].get<double>(), 0);
+  EXPECT_EQ(coarse["shell_seconds"].get<double>(), 0);
+  for (const char* level : {"eps_0.02", "eps_0.005"}) {
+    const auto j = read_json(dir / "m" / level / "report.json");
+    EXPECT_TRUE(j["valid"].get<bool>()) << level;
+    EXPECT_EQ(j["eps_levels"].size(), 2u);
+    EXPECT_LE(j["max_distance_rel"].get<double>(), j["eps_rel"].get<double>()) << level;
+    EXPECT_TRUE(std::filesystem::exists(dir / "m" / level / "boundary_map.json"));
+    EXPECT_EQ(test::run_command(cli() + " validate " + (dir / "m" / level).string(), &out), 0)
+        << out;
+  }
+  EXPECT_DOUBLE_EQ(read_json(dir / "m" / "eps_0.02" / "report.json")["eps_rel"].get<double>(),
+                   0.02);
+  // --eps and --eps-levels together, or a repeated level: refused, nothing written.
+  EXPECT_NE(test::run_command(cli() + " mesh -q " + in + " -o " + (dir / "x").string() +
+                                  " --eps 0.01 --eps-levels 0.02,0.01",
+                              &out),
+            0);
+  EXPECT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + (dir / "x").string() +
+                                  " --eps-levels 0.02,0.02",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("repeats level 1"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x"));
+}
+
 TEST(Cli, GenerateWritesTheAdversarialSurfacesAndRefusesUnknownNames) {
   const auto dir = test::scratch_dir("cli_generate");
   std::string out;

@@ -46,6 +46,7 @@ struct MeshArgs {
   int eps_samples = 0;
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
+  std::vector<double> eps_levels;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
        low_degree_slabs = false, no_pan = false, no_feature_chains = false,
        linear_coarsening = false, no_curved_repair = false;
@@ -156,6 +157,14 @@ void register_mesh(CLI::App& app) {
   sub->add_option("--constraints", args->constraints,
                   "JSON list of [x, y, z] points on the input where the distance bound must also "
                   "hold");
+  sub->add_option("--eps-levels", args->eps_levels,
+                  "several distance bounds from one shell and one coarsening (e.g. "
+                  "0.04,0.02,0.01): the finest level coarsens the shell, each coarser one "
+                  "resumes from the finer level's coarse shell; each level is meshed, validated "
+                  "and written to OUTPUT/eps_<value>/, with OUTPUT/levels.json")
+      ->delimiter(',')
+      ->excludes("--eps")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--eps-field", args->eps_field,
                   "spatially varying distance bound: an expression of x, y, z (muparser), "
                   "relative to the longest bbox edge like --eps; the bound at x is "
@@ -234,9 +243,6 @@ void register_mesh(CLI::App& app) {
     options.curved_coarsening = !args->linear_coarsening;
     options.curved_repair = !args->no_curved_repair;
     options.eps_samples = args->eps_samples;
-    if (!args->eps_field.empty())
-      options.eps_scale =
-          pipeline::eps_scale_from_expression(input, args->eps_field, args->eps, "--eps-field");
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);
     options.shell_split_mips = args->split_mips;
@@ -251,98 +257,168 @@ void register_mesh(CLI::App& app) {
       options.feature_edges = cv::detect_feature_edges(input, args->feature_angle);
       feature_source = "dihedral angle > " + std::to_string(args->feature_angle) + " deg";
     }
-    cv::CurvedMeshStats stats;
-    const cv::CurvedMesh result =
-        cv::build_curved_mesh(input, options, stats, progress->callback());
-    const cv::CurvedValidation check = cv::validate_curved_mesh(result.mesh, result.map, input);
-    Stopwatch roundtrip_watch;
-    const ShellFibers fibers = meshing::shell::fibers_of(result.shell, input);
-    const pipeline::MapRoundtrip trip = pipeline::map_roundtrip(result.map, fibers, input);
-    const double roundtrip = trip.max_error_rel;
-    const int roundtrip_failures = trip.failures;
-    const double roundtrip_seconds = roundtrip_watch.seconds();
-    const bool ok = pipeline::curved_mesh_valid(check, args->eps, trip);
+    // One level (--eps) or several (--eps-levels) from one shell and one coarsening.
+    const std::vector<double> eps_values =
+        args->eps_levels.empty() ? std::vector<double>{args->eps} : args->eps_levels;
+    std::vector<cv::EpsLevel> levels;
+    for (double e : eps_values)
+      levels.push_back(
+          {e, args->eps_field.empty()
+                  ? std::vector<double>()
+                  : pipeline::eps_scale_from_expression(input, args->eps_field, e, "--eps-field")});
+    std::vector<cv::CurvedMeshStats> level_stats;
+    const std::vector<cv::CurvedMesh> results =
+        cv::build_curved_mesh_levels(input, options, levels, level_stats, progress->callback());
+    const bool several = levels.size() > 1;
+    const std::string input_abs = std::filesystem::absolute(args->input).string();
+    const std::string input_checksum = pipeline::file_checksum(args->input);
 
     StagedOutputDir out(args->output);
-    Stopwatch write;
-    MeshFields quality;
-    quality.cell_data = curved_validation_cell_fields(check);
-    io::write_vtu(out.path("mesh.vtu"), result.mesh, quality);
-    io::write_msh(out.path("mesh.msh"), result.mesh);
-    const std::string input_abs = std::filesystem::absolute(args->input).string();
-    io::write_boundary_map(out.path("boundary_map.json"), result.map, input_abs, &fibers,
-                           pipeline::file_checksum(args->input));
-    nlohmann::ordered_json stages = nlohmann::ordered_json::object();
-    for (const auto& [name, s] : stats.stage_seconds) stages[name] = s;
-    stages["validate"] = check.seconds;
-    stages["map roundtrip"] = roundtrip_seconds;
-    stages["write"] = write.seconds();
-    nlohmann::ordered_json j = {
-        {"input", input_abs},
-        {"features", feature_source},
-        {"eps_field", args->eps_field.empty() ? nlohmann::ordered_json(nullptr)
-                                              : nlohmann::ordered_json(args->eps_field)}};
-    j.update(pipeline::curved_mesh_stats_json(stats, options));
-    j.update(nlohmann::ordered_json{
-        {"output_tets", result.mesh.num_cells()},
-        {"output_nodes", result.mesh.num_nodes()},
-        {"output_boundary_faces", result.map.boundary.num_cells()},
-        {"exterior", args->exterior},
-        {"exterior_padding_rel",
-         args->exterior ? nlohmann::ordered_json(args->padding) : nlohmann::ordered_json(nullptr)},
-        {"exterior_box",
-         args->exterior
-             ? nlohmann::ordered_json::array(
-                   {{stats.exterior_box_lo[0], stats.exterior_box_lo[1], stats.exterior_box_lo[2]},
-                    {stats.exterior_box_hi[0], stats.exterior_box_hi[1], stats.exterior_box_hi[2]}})
-             : nlohmann::ordered_json(nullptr)},
-        {"max_distance_rel", check.max_distance_rel},
-        {"distance_points", stats.distance_points},
-        {"distance_points_max_distance_rel", check.points_max_distance_rel},
-        {"min_jacobian_certified", check.certified()},
-        {"min_scaled_jacobian", check.min_scaled_jacobian},
-        {"boundary_self_intersections", check.boundary_self_intersections},
-        {"map_roundtrip_max_error_rel", roundtrip},
-        {"map_roundtrip_failures", roundtrip_failures},
-        {"map_roundtrip_method",
-         "every input vertex v: phi(v) located on the curved boundary from its position, pulled "
-         "back along the shell fibers saved in boundary_map.json (the shell projection at h = 0); "
-         "|v - phi^-1(phi(v))| / bbox edge; valid needs "
-         "<= 1e-6"},
-        {"bijectivity_evidence",
-         "certified positive tets + intersection-free subdivided boundary + unfolded input "
-         "triangles within each boundary face; the shell's section property is reported in "
-         "shell_section_verified"},
-        {"validation", curved_validation_json(check, args->eps)},
-        {"valid", ok},
-        {"threads", args->global.threads},
-        {"deterministic", !args->nondeterministic},
-        {"time_s", stages},
-        {"peak_rss_mb", peak_rss_mb()}});
-    j["time_s"]["total"] = total.seconds();
-    write_text_file_atomic(out.path("report.json"), j.dump(2) + "\n");
+    bool all_ok = true;
+    nlohmann::ordered_json level_list = nlohmann::ordered_json::array();
+    std::vector<std::string> lines;
+    for (std::size_t i = 0; i < levels.size(); ++i) {
+      const double eps = levels[i].eps_rel;
+      const cv::CurvedMesh& result = results[i];
+      const cv::CurvedMeshStats& stats = level_stats[i];
+      cv::CurvedMeshOptions level_options = options;
+      level_options.eps_rel = eps;
+      level_options.eps_scale = levels[i].eps_scale;
+      char name[64];
+      std::snprintf(name, sizeof name, "eps_%g", eps);
+      const std::string prefix = several ? std::string(name) + "/" : std::string();
+      if (several) std::filesystem::create_directories(out.path(name));
+      Stopwatch level_watch;
+      const cv::CurvedValidation check = cv::validate_curved_mesh(result.mesh, result.map, input);
+      Stopwatch roundtrip_watch;
+      const ShellFibers fibers = meshing::shell::fibers_of(result.shell, input);
+      const pipeline::MapRoundtrip trip = pipeline::map_roundtrip(result.map, fibers, input);
+      const double roundtrip = trip.max_error_rel;
+      const int roundtrip_failures = trip.failures;
+      const double roundtrip_seconds = roundtrip_watch.seconds();
+      const bool ok = pipeline::curved_mesh_valid(check, eps, trip);
+      all_ok = all_ok && ok;
+
+      Stopwatch write;
+      MeshFields quality;
+      quality.cell_data = curved_validation_cell_fields(check);
+      io::write_vtu(out.path(prefix + "mesh.vtu"), result.mesh, quality);
+      io::write_msh(out.path(prefix + "mesh.msh"), result.mesh);
+      io::write_boundary_map(out.path(prefix + "boundary_map.json"), result.map, input_abs, &fibers,
+                             input_checksum);
+      nlohmann::ordered_json stages = nlohmann::ordered_json::object();
+      double meshing_seconds = 0;
+      for (const auto& [stage, t] : stats.stage_seconds) {
+        stages[stage] = t;
+        meshing_seconds += t;
+      }
+      stages["validate"] = check.seconds;
+      stages["map roundtrip"] = roundtrip_seconds;
+      stages["write"] = write.seconds();
+      nlohmann::ordered_json j = {
+          {"input", input_abs},
+          {"features", feature_source},
+          {"eps_field", args->eps_field.empty() ? nlohmann::ordered_json(nullptr)
+                                                : nlohmann::ordered_json(args->eps_field)},
+          {"eps_levels",
+           several ? nlohmann::ordered_json(eps_values) : nlohmann::ordered_json(nullptr)}};
+      j.update(pipeline::curved_mesh_stats_json(stats, level_options));
+      j.update(nlohmann::ordered_json{
+          {"output_tets", result.mesh.num_cells()},
+          {"output_nodes", result.mesh.num_nodes()},
+          {"output_boundary_faces", result.map.boundary.num_cells()},
+          {"exterior", args->exterior},
+          {"exterior_padding_rel", args->exterior ? nlohmann::ordered_json(args->padding)
+                                                  : nlohmann::ordered_json(nullptr)},
+          {"exterior_box",
+           args->exterior
+               ? nlohmann::ordered_json::array({{stats.exterior_box_lo[0], stats.exterior_box_lo[1],
+                                                 stats.exterior_box_lo[2]},
+                                                {stats.exterior_box_hi[0], stats.exterior_box_hi[1],
+                                                 stats.exterior_box_hi[2]}})
+               : nlohmann::ordered_json(nullptr)},
+          {"max_distance_rel", check.max_distance_rel},
+          {"distance_points", stats.distance_points},
+          {"distance_points_max_distance_rel", check.points_max_distance_rel},
+          {"min_jacobian_certified", check.certified()},
+          {"min_scaled_jacobian", check.min_scaled_jacobian},
+          {"boundary_self_intersections", check.boundary_self_intersections},
+          {"map_roundtrip_max_error_rel", roundtrip},
+          {"map_roundtrip_failures", roundtrip_failures},
+          {"map_roundtrip_method",
+           "every input vertex v: phi(v) located on the curved boundary from its position, "
+           "pulled back along the shell fibers saved in boundary_map.json (the shell projection "
+           "at h = 0); |v - phi^-1(phi(v))| / bbox edge; valid needs <= 1e-6"},
+          {"bijectivity_evidence",
+           "certified positive tets + intersection-free subdivided boundary + unfolded input "
+           "triangles within each boundary face; the shell's section property is reported in "
+           "shell_section_verified"},
+          {"validation", curved_validation_json(check, eps)},
+          {"valid", ok},
+          {"threads", args->global.threads},
+          {"deterministic", !args->nondeterministic},
+          {"time_s", stages},
+          {"peak_rss_mb", peak_rss_mb()}});
+      // One level: the whole command; several: this level's meshing, validation and output.
+      j["time_s"]["total"] = several ? meshing_seconds + level_watch.seconds() : total.seconds();
+      write_text_file_atomic(out.path(prefix + "report.json"), j.dump(2) + "\n");
+      if (several) {
+        auto stage = [&](const std::string& key) {
+          for (const auto& [k, t] : stats.stage_seconds)
+            if (k == key) return t;
+          return 0.0;
+        };
+        level_list.push_back({{"eps_rel", eps},
+                              {"dir", name},
+                              {"valid", ok},
+                              {"coarse_faces", stats.coarse_faces},
+                              {"coarsen_start_faces", stats.coarsen_start_faces},
+                              {"output_tets", result.mesh.num_cells()},
+                              {"output_nodes", result.mesh.num_nodes()},
+                              {"max_distance_rel", check.max_distance_rel},
+                              {"min_scaled_jacobian", check.min_scaled_jacobian},
+                              {"shell_seconds", stage("shell")},
+                              {"coarsen_seconds", stage("coarsen")},
+                              {"meshing_seconds", meshing_seconds},
+                              {"seconds", j["time_s"]["total"]}});
+      }
+      char distance[160];
+      if (args->eps_field.empty())
+        std::snprintf(distance, sizeof distance, "max distance %.3g (eps %.3g)",
+                      check.max_distance_rel, eps);
+      else
+        std::snprintf(
+            distance, sizeof distance,
+            "max distance %.3g, at most %.3g of the local eps (eps field up to %.3g)",
+            check.max_distance_rel,
+            std::max(check.max_scaled_distance_rel, check.points_max_scaled_distance_rel) / eps,
+            eps);
+      char line[512];
+      std::snprintf(line, sizeof line,
+                    "mesh: %d tets of order %d (%d slab, %d interior), %d boundary faces from %d "
+                    "input faces; certified %s, boundary embedded %s, %s; %.1f s; %s\n",
+                    result.mesh.num_cells(), args->order, stats.slab_tets, stats.interior_tets,
+                    result.map.boundary.num_cells(), stats.input_faces,
+                    check.certified() ? "yes" : "NO", check.boundary_ok() ? "yes" : "NO", distance,
+                    j["time_s"]["total"].get<double>(),
+                    out.final_path(prefix + "report.json").string().c_str());
+      lines.push_back(line);
+    }
+    if (several)
+      write_text_file_atomic(out.path("levels.json"),
+                             nlohmann::ordered_json{{"input", input_abs},
+                                                    {"order", args->order},
+                                                    {"levels", level_list},
+                                                    {"valid", all_ok},
+                                                    {"seconds", total.seconds()}}
+                                     .dump(2) +
+                                 "\n");
     out.commit();
     progress.reset();
-    char distance[160];
-    if (args->eps_field.empty())
-      std::snprintf(distance, sizeof distance, "max distance %.3g (eps %.3g)",
-                    check.max_distance_rel, args->eps);
-    else
-      std::snprintf(
-          distance, sizeof distance,
-          "max distance %.3g, at most %.3g of the local eps (eps field up to %.3g)",
-          check.max_distance_rel,
-          std::max(check.max_scaled_distance_rel, check.points_max_scaled_distance_rel) / args->eps,
-          args->eps);
-    std::printf(
-        "mesh: %d tets of order %d (%d slab, %d interior), %d boundary faces from %d input "
-        "faces; certified %s, boundary embedded %s, %s; %.1f s; %s\n",
-        result.mesh.num_cells(), args->order, stats.slab_tets, stats.interior_tets,
-        result.map.boundary.num_cells(), stats.input_faces, check.certified() ? "yes" : "NO",
-        check.boundary_ok() ? "yes" : "NO", distance, total.seconds(),
-        out.final_path("report.json").string().c_str());
+    for (const std::string& line : lines) std::fputs(line.c_str(), stdout);
+    if (several) std::printf("mesh: %zu eps levels in %.1f s\n", levels.size(), total.seconds());
     std::fflush(stdout);
-    return ok ? 0 : 3;
+    return all_ok ? 0 : 3;
   });
 }
 

@@ -695,3 +695,59 @@ TEST(CurvedMesher, CurvedAwareCoarseningMeetsEpsWithFewerFaces) {
   EXPECT_FALSE(st.curved_coarsening);
   EXPECT_LE(st.linear_max_distance_rel, 1e-2);
 }
+
+// ε levels from one coarsening (issue 22): the shell is built once, the finest level coarsens
+// it, each coarser level resumes from the finer one's coarse shell (feature chains included);
+// every level is a valid mesh under its own bound, and the finest is the single-ε mesh.
+TEST(CurvedMesher, EpsLevelsComeFromOneShellAndOneCoarseningAndAreEachValid) {
+  const SurfaceMesh cyl = curvefem::make_cylinder(96, 16, 8, 2.0);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.threads = 2;
+  o.feature_edges = cv::detect_feature_edges(cyl, 60);
+  ASSERT_FALSE(o.feature_edges.empty());
+  const std::vector<cv::EpsLevel> levels = {{0.01, {}}, {0.0025, {}}, {0.04, {}}};
+  std::vector<cv::CurvedMeshStats> stats;
+  const std::vector<cv::CurvedMesh> out = cv::build_curved_mesh_levels(cyl, o, levels, stats);
+  ASSERT_EQ(out.size(), 3u);
+  ASSERT_EQ(stats.size(), 3u);
+  auto has_stage = [](const cv::CurvedMeshStats& s, const std::string& name) {
+    return std::any_of(s.stage_seconds.begin(), s.stage_seconds.end(),
+                       [&](const auto& e) { return e.first == name; });
+  };
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    const cv::CurvedValidation check = cv::validate_curved_mesh(out[i].mesh, out[i].map, cyl);
+    EXPECT_TRUE(check.valid(levels[i].eps_rel)) << "eps " << levels[i].eps_rel;
+    EXPECT_LE(check.max_distance_rel, levels[i].eps_rel);
+    EXPECT_EQ(check.features_off_edges, 0);
+    std::printf("eps %.4f: %d coarse faces (resumed from %d), %d chain collapses, %d tets\n",
+                levels[i].eps_rel, stats[i].coarse_faces, stats[i].coarsen_start_faces,
+                stats[i].coarsen_chain_collapses, out[i].mesh.num_cells());
+  }
+  // Finest first (level 1, ε = 0.0025), from the input's shell; then 0.01 from its coarse
+  // shell, then 0.04 from that of 0.01. Only the finest builds the shell.
+  EXPECT_EQ(stats[1].coarsen_start_faces, 0);
+  EXPECT_TRUE(has_stage(stats[1], "shell"));
+  EXPECT_EQ(stats[0].coarsen_start_faces, stats[1].coarse_faces);
+  EXPECT_EQ(stats[2].coarsen_start_faces, stats[0].coarse_faces);
+  EXPECT_FALSE(has_stage(stats[0], "shell"));
+  EXPECT_FALSE(has_stage(stats[2], "shell"));
+  // Coarser with every level, the chains included (the rims keep coarsening).
+  EXPECT_LT(stats[0].coarse_faces, stats[1].coarse_faces);
+  EXPECT_LT(stats[2].coarse_faces, stats[0].coarse_faces);
+  EXPECT_GT(stats[0].coarsen_chain_collapses + stats[2].coarsen_chain_collapses, 0);
+  // The finest level is the single-ε mesh, node for node.
+  cv::CurvedMeshOptions single = o;
+  single.eps_rel = 0.0025;
+  cv::CurvedMeshStats single_stats;
+  const cv::CurvedMesh one = cv::build_curved_mesh(cyl, single, single_stats);
+  ASSERT_EQ(one.mesh.num_nodes(), out[1].mesh.num_nodes());
+  ASSERT_EQ(one.mesh.num_cells(), out[1].mesh.num_cells());
+  EXPECT_EQ((one.mesh.nodes - out[1].mesh.nodes).cwiseAbs().maxCoeff(), 0.0);
+  // Repeated or non-positive levels are input errors.
+  EXPECT_THROW((void)cv::build_curved_mesh_levels(cyl, o, {{0.01, {}}, {0.01, {}}}, stats),
+               curvefem::InputError);
+  EXPECT_THROW((void)cv::build_curved_mesh_levels(cyl, o, {{0.01, {}}, {0, {}}}, stats),
+               curvefem::InputError);
+  EXPECT_THROW((void)cv::build_curved_mesh_levels(cyl, o, {}, stats), curvefem::InputError);
+}
