@@ -1,6 +1,8 @@
 #include "pipeline/case_file.hpp"
 
+#include <algorithm>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -477,8 +479,24 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
     if (const json* v = r.get(*m, "eps")) {
-      c.eps = r.number(*v, "/meshing/eps");
-      if (!(c.eps > 0 && c.eps <= 0.5)) fail("/meshing/eps", "must be in (0, 0.5]", r.file);
+      if (v->is_array()) {
+        // ε levels: meshed from one coarsening, solved coarse to fine (run_case.hpp).
+        if (v->size() < 2)
+          fail("/meshing/eps", "a list of at least two bounds (or one number)", r.file);
+        for (std::size_t i = 0; i < v->size(); ++i) {
+          const std::string at = "/meshing/eps/" + std::to_string(i);
+          const double e = r.number((*v)[i], at);
+          if (!(e > 0 && e <= 0.5)) fail(at, "must be in (0, 0.5]", r.file);
+          if (std::find(c.eps_levels.begin(), c.eps_levels.end(), e) != c.eps_levels.end())
+            fail(at, "repeats an earlier bound", r.file);
+          c.eps_levels.push_back(e);
+        }
+        std::sort(c.eps_levels.begin(), c.eps_levels.end(), std::greater<>());
+        c.eps = c.eps_levels.back();
+      } else {
+        c.eps = r.number(*v, "/meshing/eps");
+        if (!(c.eps > 0 && c.eps <= 0.5)) fail("/meshing/eps", "must be in (0, 0.5]", r.file);
+      }
     }
     if (const json* v = r.get(*m, "eps_field")) {
       c.eps_field = r.string(*v, "/meshing/eps_field");
@@ -722,7 +740,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     res["meshing"]["validate"] = c.validate;
   } else if (c.method == "curved") {
     res["meshing"]["order"] = c.order;
-    res["meshing"]["eps"] = c.eps;
+    if (c.eps_levels.empty())
+      res["meshing"]["eps"] = c.eps;
+    else
+      res["meshing"]["eps"] = c.eps_levels;
     if (!c.eps_field.empty()) res["meshing"]["eps_field"] = c.eps_field;
     res["meshing"]["thickness"] = c.thickness;
     res["meshing"]["thickness_per_edge"] = c.thickness_per_edge;

@@ -61,9 +61,12 @@ struct CaseSpec {
   std::string features = "auto";  ///< auto | none | angle | file
   double feature_angle = 60.0;
   std::filesystem::path feature_file;
-  std::string method = "given";     ///< given | curved | dense
-  int order = 3;                    ///< curved: geometric order k
-  double eps = 1e-2;                ///< curved: distance bound, relative to the bbox edge
+  std::string method = "given";  ///< given | curved | dense
+  int order = 3;                 ///< curved: geometric order k
+  double eps = 1e-2;             ///< curved: distance bound, relative to the bbox edge
+  /// curved, meshing.eps a list: the bounds, coarsest first (eps is then the finest). The run
+  /// meshes them all from one coarsening and solves coarse to fine (run_case.hpp).
+  std::vector<double> eps_levels;
   double thickness = 0.02;          ///< curved: shell half-thickness cap (relative)
   double thickness_per_edge = 1.0;  ///< curved: initial cap × each vertex's mean edge (0: off)
   bool feature_chains = true;     ///< curved: coarsen along feature chains (snapped reference copy)

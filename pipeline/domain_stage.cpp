@@ -1,6 +1,7 @@
 // Stages load_surface and mesh_domain (stages.hpp).
 #include <algorithm>
 #include <fstream>
+#include <optional>
 #include <tuple>
 
 #include "mapping/boundary_inverse.hpp"
@@ -97,25 +98,33 @@ void set_outer_box(Domain& d, double padding) {
   d.outer_box = box;
 }
 
-void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
+cv::CurvedMeshOptions curved_options(const CaseSpec& spec, const StageContext& ctx,
+                                     const SurfaceMesh& input) {
   cv::CurvedMeshOptions options;
   options.order = spec.order;
   options.eps_rel = spec.eps;
   options.thickness_rel = spec.thickness;
   options.thickness_per_edge = spec.thickness_per_edge;
   options.eps_samples = spec.eps_samples;
-  if (!spec.eps_field.empty())
-    options.eps_scale =
-        eps_scale_from_expression(d.input, spec.eps_field, spec.eps, "/meshing/eps_field");
   options.feature_chains = spec.feature_chains;
   options.curved_coarsening = spec.curved_coarsening;
   options.threads = ctx.threads;
   options.deterministic = spec.deterministic;
-  options.feature_edges = case_feature_edges(spec, d.input);
+  options.feature_edges = case_feature_edges(spec, input);
   options.exterior = spec.exterior;
   options.exterior_padding = spec.padding;
-  cv::CurvedMeshStats stats;
-  cv::CurvedMesh curved = cv::build_curved_mesh(d.input, options, stats, ctx.progress);
+  return options;
+}
+
+std::vector<double> eps_scale_at(const CaseSpec& spec, const SurfaceMesh& input, double eps) {
+  if (spec.eps_field.empty()) return {};
+  return eps_scale_from_expression(input, spec.eps_field, eps, "/meshing/eps_field");
+}
+
+// A curved mesh made at bound `eps` into `d` (whose input is set): fibers, report, validation,
+// and the exterior's sub-domain.
+void finish_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d, cv::CurvedMesh curved,
+                   const cv::CurvedMeshStats& stats, const cv::CurvedMeshOptions& options) {
   d.mesh = std::move(curved.mesh);
   d.curved_map = std::move(curved.map);
   d.fibers = std::make_shared<const ShellFibers>(meshing::shell::fibers_of(curved.shell, d.input));
@@ -125,7 +134,7 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   d.report["stage_s"] = stages;
   if (spec.validate) {
     ctx.update("validate mesh", 0.0);
-    validate_domain(d, spec.eps);
+    validate_domain(d, options.eps_rel);
   }
   if (spec.exterior && spec.solve_on != "both") {
     // The domain is the outside: the outer slab layer and the exterior (tags 3, 4; the whole
@@ -143,6 +152,14 @@ void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
   // solve_on both: the whole box; the curved surface is an interface (its triangles are faces
   // of a slab tet and of an outer slab tet), the box the only boundary.
   if (spec.exterior) set_outer_box(d, spec.padding);
+}
+
+void mesh_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
+  cv::CurvedMeshOptions options = curved_options(spec, ctx, d.input);
+  options.eps_scale = eps_scale_at(spec, d.input, spec.eps);
+  cv::CurvedMeshStats stats;
+  cv::CurvedMesh curved = cv::build_curved_mesh(d.input, options, stats, ctx.progress);
+  finish_curved(spec, ctx, d, std::move(curved), stats, options);
 }
 
 void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
@@ -294,6 +311,33 @@ Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& 
   else
     mesh_dense(spec, ctx, d);
   return d;
+}
+
+std::vector<Domain> mesh_domain_levels(const CaseSpec& spec, SurfaceMesh input,
+                                       const StageContext& ctx) {
+  if (spec.method != "curved" || spec.eps_levels.empty() || !spec.mesh_dir.empty())
+    throw InputError("mesh levels: a curved case with meshing.eps a list of bounds");
+  std::optional<ScopedTimer> t;
+  if (ctx.timings) t.emplace(*ctx.timings, "meshing");
+  const cv::CurvedMeshOptions options = curved_options(spec, ctx, input);
+  std::vector<cv::EpsLevel> levels;
+  for (double e : spec.eps_levels) levels.push_back({e, eps_scale_at(spec, input, e)});
+  std::vector<cv::CurvedMeshStats> stats;
+  std::vector<cv::CurvedMesh> meshes =
+      cv::build_curved_mesh_levels(input, options, levels, stats, ctx.progress);
+  std::vector<Domain> out(levels.size());
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    Domain& d = out[i];
+    d.method = spec.method;
+    d.input = input;
+    d.report["input_vertices"] = d.input.num_vertices();
+    d.report["input_faces"] = d.input.num_faces();
+    cv::CurvedMeshOptions o = options;
+    o.eps_rel = levels[i].eps_rel;
+    o.eps_scale = levels[i].eps_scale;
+    finish_curved(spec, ctx, d, std::move(meshes[i]), stats[i], o);
+  }
+  return out;
 }
 
 }  // namespace curvefem::pipeline

@@ -52,6 +52,7 @@ ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
        "the geometric error of eps; fem/problems/error_estimate.hpp"},
       {"h1_semi", estimate.eta},
       {"relative", estimate.gradient_norm > 0 ? estimate.eta / estimate.gradient_norm : 0.0},
+      {"gradient_norm", estimate.gradient_norm},
       {"max_cell", estimate.cell_eta.size() > 0 ? estimate.cell_eta.maxCoeff() : 0.0}};
   if (spec.exact.empty()) return out;
   const auto exact = spec.exact;

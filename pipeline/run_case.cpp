@@ -1,11 +1,62 @@
 #include "pipeline/run_case.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <optional>
 
 #include "pipeline/report_json.hpp"
 #include "pipeline/stages.hpp"
 
 namespace curvefem::pipeline {
+
+namespace {
+
+// The solves on one Domain (r.domain): every load case at run.degree, and with adaptive p
+// (CaseSpec::target_error) the degree raised until the estimate meets the target or p = 4.
+// Returns the largest relative estimate over the load cases; `iterations` gets a row per degree.
+double solve_adaptive_p(const CaseSpec& spec, CaseSpec& run, RunResults& r,
+                        const std::vector<LoadCase>& loads, const StageContext& ctx,
+                        std::shared_ptr<fem::FactorizationCache>& cache,
+                        nlohmann::json& iterations) {
+  double estimate = 0;
+  for (;;) {
+    Stopwatch step;
+    r.disc = discretize(run, r.domain, ctx);
+    // Load cases with the same Dirichlet part share the matrix: one factorization for them.
+    cache = loads.size() > 1 ? std::make_shared<fem::FactorizationCache>() : nullptr;
+    r.loads.clear();
+    for (const LoadCase& load : loads)
+      r.loads.push_back(solve_load(run, load, r.domain, r.disc, ctx, cache));
+    estimate = 0;
+    for (const LoadResult& l : r.loads)
+      estimate = std::max(estimate, l.errors.report["error_estimate"]["relative"].get<double>());
+    if (!(spec.target_error > 0)) break;
+    iterations.push_back({{"degree", run.degree},
+                          {"dofs", r.disc.space.num_dofs},
+                          {"estimate_relative", estimate},
+                          {"seconds", step.seconds()}});
+    if (estimate <= spec.target_error || run.degree >= 4) break;
+    ++run.degree;
+  }
+  return estimate;
+}
+
+// What a level's solution is compared by: u_h on every input vertex and ||grad u_h||, per load.
+struct LevelValues {
+  std::vector<Eigen::MatrixXd> on_input;
+  std::vector<double> gradient_norm;
+};
+
+LevelValues level_values(const RunResults& r) {
+  LevelValues v;
+  for (const LoadResult& l : r.loads) {
+    v.on_input.push_back(l.on_input ? l.on_input->values : Eigen::MatrixXd());
+    v.gradient_norm.push_back(l.errors.report["error_estimate"]["gradient_norm"].get<double>());
+  }
+  return v;
+}
+
+}  // namespace
 
 RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const ProgressFn& progress) {
   Stopwatch total;
@@ -15,35 +66,103 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   auto r = std::make_shared<RunResults>();
   SurfaceMesh input;
   if (spec.dense_surface()) input = load_surface(spec, ctx);
-  r->domain = mesh_domain(spec, std::move(input), ctx);
-  // Adaptive p (CaseSpec::target_error): the same mesh, degree raised until the estimate meets
-  // the target or p = 4; the outputs and report are those of the last degree.
   CaseSpec run = spec;
   const std::vector<LoadCase> loads = spec.loads();
   std::shared_ptr<fem::FactorizationCache> cache;
   nlohmann::json iterations = nlohmann::json::array();
   double estimate = 0;
-  for (;;) {
-    Stopwatch step;
-    r->disc = discretize(run, r->domain, ctx);
-    // Load cases with the same Dirichlet part share the matrix: one factorization for them.
-    cache = loads.size() > 1 ? std::make_shared<fem::FactorizationCache>() : nullptr;
-    r->loads.clear();
-    for (const LoadCase& load : loads)
-      r->loads.push_back(solve_load(run, load, r->domain, r->disc, ctx, cache));
-    if (!(spec.target_error > 0)) break;
-    estimate = 0;
-    for (const LoadResult& l : r->loads)
-      estimate = std::max(estimate, l.errors.report["error_estimate"]["relative"].get<double>());
-    iterations.push_back({{"degree", run.degree},
-                          {"dofs", r->disc.space.num_dofs},
-                          {"estimate_relative", estimate},
-                          {"seconds", step.seconds()}});
-    if (estimate <= spec.target_error || run.degree >= 4) break;
-    ++run.degree;
+  nlohmann::json levels_report;
+  if (spec.eps_levels.empty()) {
+    r->domain = mesh_domain(spec, std::move(input), ctx);
+    // Adaptive p (CaseSpec::target_error): the same mesh, degree raised until the estimate meets
+    // the target or p = 4; the outputs and report are those of the last degree.
+    estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, iterations);
+  } else {
+    // ε levels (meshing.eps a list): every level meshed from one coarsening, then solved coarse
+    // to fine. Level i is compared with level i-1 on what both define: u_h on the dense input's
+    // vertices (through each level's φ) and ||grad u_h||; with target_error the run stops at the
+    // first level whose change from the coarser one and whose own estimate are both within it
+    // (the change estimates the coarser level's error, so the level kept is expected to be
+    // better). The outputs and report are those of the last level solved.
+    std::vector<Domain> domains = mesh_domain_levels(spec, std::move(input), ctx);
+    nlohmann::json rows = nlohmann::json::array();
+    std::optional<LevelValues> previous;
+    bool reached = false;
+    for (std::size_t i = 0; i < domains.size(); ++i) {
+      Stopwatch step;
+      r->domain = std::move(domains[i]);
+      run.eps = spec.eps_levels[i];
+      nlohmann::json p_iterations = nlohmann::json::array();
+      estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, p_iterations);
+      const LevelValues now = level_values(*r);
+      double change_rms = -1, change_max = -1, change_gradient = -1;
+      if (previous) {
+        change_rms = change_max = change_gradient = 0;
+        for (std::size_t l = 0; l < loads.size(); ++l) {
+          const Eigen::MatrixXd &a = now.on_input[l], &b = previous->on_input[l];
+          if (a.size() > 0 && a.rows() == b.rows() && a.cols() == b.cols()) {
+            const double scale_rms = std::sqrt(a.squaredNorm() / double(a.rows()));
+            const double scale_max = a.cwiseAbs().maxCoeff();
+            const Eigen::MatrixXd d = a - b;
+            if (scale_rms > 0)
+              change_rms =
+                  std::max(change_rms, std::sqrt(d.squaredNorm() / double(d.rows())) / scale_rms);
+            if (scale_max > 0)
+              change_max = std::max(change_max, d.cwiseAbs().maxCoeff() / scale_max);
+          }
+          if (now.gradient_norm[l] > 0)
+            change_gradient = std::max(
+                change_gradient,
+                std::abs(now.gradient_norm[l] - previous->gradient_norm[l]) / now.gradient_norm[l]);
+        }
+      }
+      nlohmann::json row = {
+          {"eps", run.eps},
+          {"coarse_faces", r->domain.report.value("coarse_faces", 0)},
+          {"tets", r->domain.mesh.num_cells()},
+          {"valid", r->domain.valid},
+          {"degree", run.degree},
+          {"dofs", r->disc.space.num_dofs},
+          {"estimate_relative", estimate},
+          {"change_on_input_rms_rel", previous ? nlohmann::json(change_rms) : nlohmann::json()},
+          {"change_on_input_max_rel", previous ? nlohmann::json(change_max) : nlohmann::json()},
+          {"change_gradient_norm_rel",
+           previous ? nlohmann::json(change_gradient) : nlohmann::json()},
+          {"solve_seconds", step.seconds()}};
+      if (spec.target_error > 0) row["degrees"] = p_iterations;
+      double l2 = -1;
+      for (const LoadResult& l : r->loads)
+        if (l.errors.report.contains("l2_error") && l.errors.report["l2_norm_exact"] > 0)
+          l2 = std::max(l2, l.errors.report["l2_error"].get<double>() /
+                                l.errors.report["l2_norm_exact"].get<double>());
+      if (l2 >= 0) row["l2_error_relative"] = l2;
+      rows.push_back(row);
+      const double change = std::max(change_rms, change_gradient);
+      reached = spec.target_error > 0 && previous && change <= spec.target_error &&
+                estimate <= spec.target_error;
+      previous = now;
+      if (reached) break;
+    }
+    levels_report = {
+        {"method",
+         "meshes for every eps from one shell and one coarsening (build_curved_mesh_levels), "
+         "solved coarse to fine; change_* compare a level with the coarser one: u_h on the dense "
+         "input's vertices (RMS and max, relative to this level's) and ||grad u_h|| (relative); "
+         "with target_error the run stops at the first level where the larger of the RMS and "
+         "gradient changes and the gradient-recovery estimate are within it"},
+        {"levels", rows},
+        {"eps", run.eps}};
+    if (spec.target_error > 0) {
+      levels_report["target_error"] = spec.target_error;
+      levels_report["reached"] = reached;
+      levels_report["reason"] = reached ? "the change from the coarser level and the estimate "
+                                          "meet the target"
+                                        : "the finest level reached above the target";
+    }
   }
   outcome.report = run_report(run, r->domain, r->disc, r->loads);
-  if (spec.target_error > 0)
+  if (!levels_report.is_null()) outcome.report["eps_levels"] = levels_report;
+  if (spec.target_error > 0 && spec.eps_levels.empty())
     outcome.report["adaptive"] = {
         {"method",
          "p: the degree raised on the same mesh until the gradient-recovery estimate "

@@ -96,6 +96,11 @@ struct Domain {
 /// file or built-in mesh (`input` is ignored).
 Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& ctx = {});
 
+/// curved, meshing.eps a list (CaseSpec::eps_levels): one Domain per level, in that order, from
+/// one shell and one coarsening (build_curved_mesh_levels), each validated at its own bound.
+std::vector<Domain> mesh_domain_levels(const CaseSpec& spec, SurfaceMesh input,
+                                       const StageContext& ctx = {});
+
 // ---- discretize -----------------------------------------------------------------------------
 
 struct Discretization {

@@ -610,6 +610,87 @@ TEST(Run, AdaptivePRaisesTheDegreeUntilTheEstimateMeetsTheTarget) {
   EXPECT_NE(log.find("/discretization/target_error"), std::string::npos) << log;
 }
 
+// ε levels in a case (issue 22): meshing.eps a list is meshed from one coarsening and solved
+// coarse to fine; each level is compared with the coarser one on the dense input's vertices.
+// With target_error the run stops at the first level whose change and estimate meet it.
+TEST(Run, EpsLevelsAreSolvedCoarseToFineAndTheAnswerImprovesWithTheGeometry) {
+  const auto dir = test::scratch_dir("run_eps_levels");
+  auto write = [&](const std::string& eps, const std::string& discretization) {
+    return write_case(dir, R"J({
+      "geometry": {"builtin_surface": {"shape": "sphere", "level": 3}, "features": "none"},
+      "meshing": {"method": "curved", "order": 3, "eps": )J" +
+                               eps + R"J(},
+      "physics": {"type": "poisson"},
+      "discretization": )J" + discretization +
+                               R"J(,
+      "rhs": "5*sin(2*x)*cos(y)",
+      "boundary_conditions": [
+        {"type": "dirichlet", "select": {"not": {"plane": {"point": [0,0,0.3], "normal": [0,0,1]}}},
+         "value": "sin(2*x)*cos(y)"},
+        {"type": "neumann", "select": {"plane": {"point": [0,0,0.3], "normal": [0,0,1]}},
+         "value": "2*cos(2*x)*cos(y)*nx - sin(2*x)*sin(y)*ny"}],
+      "exact": "sin(2*x)*cos(y)"})J");
+  };
+  std::string log;
+  ASSERT_EQ(run_case(write("[0.01, 0.04, 0.02]", R"({"degree": 3})"), dir / "all", &log), 0) << log;
+  const auto r = report(dir / "all");
+  const auto& rows = r["eps_levels"]["levels"];
+  ASSERT_EQ(rows.size(), 3u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& row = rows[i];
+    std::printf("eps %.3f: %d faces, %d DOFs, L2 rel %.3e, estimate %.3e, change rms %s\n",
+                row["eps"].get<double>(), row["coarse_faces"].get<int>(), row["dofs"].get<int>(),
+                row["l2_error_relative"].get<double>(), row["estimate_relative"].get<double>(),
+                row["change_on_input_rms_rel"].dump().c_str());
+    EXPECT_TRUE(row["valid"].get<bool>());
+    const double expected_eps[] = {0.04, 0.02, 0.01};
+    EXPECT_DOUBLE_EQ(row["eps"].get<double>(), expected_eps[i]);
+    if (i == 0) {
+      EXPECT_TRUE(row["change_on_input_rms_rel"].is_null());
+      continue;
+    }
+    EXPECT_GT(row["coarse_faces"].get<int>(), rows[i - 1]["coarse_faces"].get<int>());
+    // A better geometry gives a better answer (the issue's k > p defect in reverse).
+    EXPECT_LT(row["l2_error_relative"].get<double>(),
+              rows[i - 1]["l2_error_relative"].get<double>());
+    EXPECT_GT(row["change_on_input_rms_rel"].get<double>(), 0);
+    EXPECT_LT(row["change_on_input_rms_rel"].get<double>(), 0.05);
+  }
+  EXPECT_FALSE(r["eps_levels"].contains("reached"));
+  // The outputs are the finest level's.
+  EXPECT_DOUBLE_EQ(r["meshing"]["eps_rel"].get<double>(), 0.01);
+  EXPECT_EQ(r["dofs"], rows.back()["dofs"]);
+  EXPECT_DOUBLE_EQ(r["l2_error"].get<double>() / r["l2_norm_exact"].get<double>(),
+                   rows.back()["l2_error_relative"].get<double>());
+  const auto resolved = nlohmann::json::parse(std::ifstream(dir / "all" / "resolved_case.json"));
+  EXPECT_EQ(resolved["meshing"]["eps"], nlohmann::json({0.04, 0.02, 0.01}));
+  // With a target: adaptive p on each level, stop at the first level that meets it.
+  const double target = 0.006;
+  ASSERT_EQ(run_case(write("[0.04, 0.02, 0.01, 0.005]", R"({"degree": 2, "target_error": 0.006})"),
+                     dir / "target", &log),
+            0)
+      << log;
+  const auto t = report(dir / "target");
+  const auto& trows = t["eps_levels"]["levels"];
+  ASSERT_GE(trows.size(), 2u);
+  EXPECT_TRUE(t["eps_levels"]["reached"].get<bool>());
+  auto worst = [](const nlohmann::json& row) {
+    return std::max({row["change_on_input_rms_rel"].get<double>(),
+                     row["change_gradient_norm_rel"].get<double>(),
+                     row["estimate_relative"].get<double>()});
+  };
+  EXPECT_LE(worst(trows.back()), target);
+  for (std::size_t i = 1; i + 1 < trows.size(); ++i) EXPECT_GT(worst(trows[i]), target) << i;
+  EXPECT_DOUBLE_EQ(t["meshing"]["eps_rel"].get<double>(), trows.back()["eps"].get<double>());
+  EXPECT_EQ(t["degree"], trows.back()["degree"]);
+  EXPECT_GT(trows.back()["degree"].get<int>(), 2);  // p was raised on the way
+  // A list of one bound, or a repeated bound, names the key.
+  EXPECT_EQ(run_case(write("[0.01]", R"({"degree": 1})"), dir / "one", &log), 2) << log;
+  EXPECT_NE(log.find("/meshing/eps"), std::string::npos) << log;
+  EXPECT_EQ(run_case(write("[0.02, 0.02]", R"({"degree": 1})"), dir / "twice", &log), 2) << log;
+  EXPECT_NE(log.find("/meshing/eps/1"), std::string::npos) << log;
+}
+
 // Traction-only linear elasticity: u = (x², yz, xy) plus the rigid motion (1 + z, 2, −x), in P2,
 // with its constant body force and the traction σ(u) n on every side (E = 1, ν = 0.3). The
 // errors are modulo a rigid motion and vanish; the load is balanced.
