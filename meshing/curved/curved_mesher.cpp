@@ -672,6 +672,10 @@ struct CoarseState {
   bool resume = false;
   sh::Shell start;
   std::vector<std::vector<int>> start_owned;
+  // The input vertices the finer level's attempts kept under the linear bound: where its curved
+  // surface missed ε, a coarser level's (larger faces, same thin parts) mostly misses too, so its
+  // first attempt starts with them (each miss found again costs a whole attempt).
+  std::vector<char> carried_strict;
   // The next level starts from the coarse shell the last one kept, with a fresh attempt loop.
   void next_level() {
     start = shell;
@@ -1489,7 +1493,7 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
   if (!curved) return build_attempt(input, options, {}, false, stats, progress, &state);
   // Curved-aware attempts, each keeping more input vertices under the linear bound; the last
   // resort is the linear bound everywhere (whose α = 0 fallback always meets ε).
-  std::vector<char> strict;
+  std::vector<char> strict = state.resume ? state.carried_strict : std::vector<char>();
   std::vector<std::pair<std::string, double>> discarded;
   int last_misses = INT_MAX;
   bool give_up = false, widened = false;
@@ -1507,6 +1511,7 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
       s.curved_widened = widened;
       s.stage_seconds.insert(s.stage_seconds.begin(), discarded.begin(), discarded.end());
       stats = std::move(s);
+      state.carried_strict = strict;
       return out;
     } catch (const CurvedBoundMissed& missed) {
       discarded.emplace_back("discarded attempt " + std::to_string(attempt), watch.seconds());
