@@ -335,8 +335,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
 
   const json* geometry = r.get(j, "geometry");
   if (!geometry) fail("/geometry", "missing (e.g. {\"surface\": \"part.obj\"})", r.file);
-  r.only_keys(*geometry, "/geometry",
-              {"mesh", "builtin", "surface", "builtin_surface", "features", "mesh_dir"});
+  r.only_keys(
+      *geometry, "/geometry",
+      {"mesh", "builtin", "surface", "builtin_surface", "features", "mesh_dir", "data_surface"});
   const json* mesh = r.get(*geometry, "mesh");
   const json* builtin = r.get(*geometry, "builtin");
   const json* surface = r.get(*geometry, "surface");
@@ -362,6 +363,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       fail("/geometry/features", "the mesh of geometry.mesh_dir is reused as saved", r.file);
   }
   if (mesh) c.mesh = resolve(r.string(*mesh, "/geometry/mesh"));
+  if (const json* v = r.get(*geometry, "data_surface")) {
+    if (!mesh && !builtin)
+      fail("/geometry/data_surface",
+           "only with a given tet mesh (geometry.mesh or builtin): on a dense surface the data "
+           "are already read on it",
+           r.file);
+    c.data_surface = resolve(r.string(*v, "/geometry/data_surface"));
+    if (!std::filesystem::is_regular_file(c.data_surface))
+      fail("/geometry/data_surface", "file not found: " + c.data_surface.string(), r.file);
+  }
   if (builtin) {
     r.only_keys(*builtin, "/geometry/builtin", {"shape", "size", "divisions", "order"});
     const json* shape = r.get(*builtin, "shape");
@@ -734,6 +745,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     else
       res["geometry"]["features"] = c.features;
   }
+  if (!c.data_surface.empty()) res["geometry"]["data_surface"] = c.data_surface.string();
   res["meshing"] = {{"method", c.method}};
   if (!c.mesh_dir.empty()) {
     res["meshing"]["reused"] = true;

@@ -41,10 +41,13 @@ struct LoadCase {
 struct CaseSpec {
   std::filesystem::path case_file;
   std::filesystem::path mesh;  ///< geometry.mesh, resolved (empty for a built-in shape)
-  std::string builtin;         ///< geometry.builtin.shape: "" | ball | cube
-  double builtin_size = 0.3;   ///< ball: target edge length (radius 1)
-  int builtin_divisions = 4;   ///< cube: n³ cubes of 6 tets on [0,1]³
-  int builtin_order = 1;       ///< geometric order k of the built-in mesh
+  /// geometry.data_surface, resolved (given meshes): boundary values are read at the closest
+  /// point of this surface, as for data painted on a dense surface the mesh approximates.
+  std::filesystem::path data_surface;
+  std::string builtin;        ///< geometry.builtin.shape: "" | ball | cube
+  double builtin_size = 0.3;  ///< ball: target edge length (radius 1)
+  int builtin_divisions = 4;  ///< cube: n³ cubes of 6 tets on [0,1]³
+  int builtin_order = 1;      ///< geometric order k of the built-in mesh
   // Dense-surface pipelines (meshing.method curved | dense):
   std::filesystem::path surface;  ///< geometry.surface, resolved (empty for a built-in surface)
   std::string builtin_surface;    ///< geometry.builtin_surface.shape: "" | sphere | torus | box

@@ -17,6 +17,7 @@
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/fibers_of.hpp"
+#include "meshing/shell/shell_intersection.hpp"
 #include "meshing/tetfill/tetfill.hpp"
 #include "pipeline/eps_field.hpp"
 #include "pipeline/mesh_dir.hpp"
@@ -292,6 +293,15 @@ Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& 
                              [](const Eigen::Vector3d& x) { return x; });
     else
       d.mesh = load_mesh_file(spec.mesh);
+    if (!spec.data_surface.empty()) {
+      const SurfaceMesh data = io::read_surface(spec.data_surface);
+      if (data.num_faces() == 0)
+        throw InputError(spec.data_surface.string() + ": no triangles (geometry.data_surface)");
+      d.data_surface = std::make_shared<const meshing::shell::InputSurfaceIndex>(data.V, data.F);
+      d.report["data_surface"] = {{"file", spec.data_surface.string()},
+                                  {"faces", data.num_faces()},
+                                  {"boundary_values_at", "the closest point of the surface"}};
+    }
     return d;
   }
   if (!spec.mesh_dir.empty()) {

@@ -237,6 +237,8 @@ json run_report(const CaseSpec& spec, const Domain& domain, const Discretization
     report["mesh_valid"] = domain.valid;
   } else {
     report["mesh"] = spec.builtin.empty() ? spec.mesh.string() : "builtin " + spec.builtin;
+    if (domain.report.contains("data_surface"))
+      report["data_surface"] = domain.report["data_surface"];
   }
   report["tets"] = disc.mesh.num_cells();
   report["order"] = disc.mesh.order;

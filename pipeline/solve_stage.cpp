@@ -11,6 +11,7 @@
 #include "mapping/selection.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/shell/shell_intersection.hpp"
 #include "pipeline/stages.hpp"
 
 namespace curvefem::pipeline {
@@ -108,6 +109,14 @@ BoundaryData bind_boundary(const CaseSpec& spec,
     data.data_point = [box, inverse = disc.inverse](const Eigen::Vector3d& x) -> Eigen::Vector3d {
       if (box && box->side(x) >= 0) return x;
       return inverse->at(x).position;
+    };
+  } else if (domain.data_surface) {
+    // geometry.data_surface: the closest point of that surface (a mesh approximating it, with
+    // data painted on it).
+    data.data_point = [index = domain.data_surface](const Eigen::Vector3d& x) {
+      Eigen::Vector3d closest = x;
+      index->closest_face(x, closest);
+      return closest;
     };
   } else {
     data.data_point = [](const Eigen::Vector3d& x) { return x; };

@@ -38,6 +38,10 @@
 #include "meshing/core/progress.hpp"
 #include "meshing/core/shell_fibers.hpp"
 #include "meshing/core/surface_mesh.hpp"
+
+namespace curvefem::meshing::shell {
+class InputSurfaceIndex;
+}
 #include "meshing/core/timer.hpp"
 #include "pipeline/case_file.hpp"
 
@@ -87,6 +91,9 @@ struct Domain {
   std::vector<Field> cell_quality;
   bool valid = true;      ///< curved: the independent validation passed (or was not asked for)
   nlohmann::json report;  ///< report.json "meshing" (curved | dense)
+  /// given, with geometry.data_surface: that surface's index; boundary values are read at the
+  /// closest point of it.
+  std::shared_ptr<const meshing::shell::InputSurfaceIndex> data_surface;
   const BoundaryMap& map() const { return curved_map ? *curved_map : identity_map; }
   bool on_input() const { return method != "given"; }
 };

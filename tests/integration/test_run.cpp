@@ -6,7 +6,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "meshing/core/primitives.hpp"
 #include "meshing/io/gmsh_session.hpp"
+#include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -689,6 +691,51 @@ TEST(Run, EpsLevelsAreSolvedCoarseToFineAndTheAnswerImprovesWithTheGeometry) {
   EXPECT_NE(log.find("/meshing/eps"), std::string::npos) << log;
   EXPECT_EQ(run_case(write("[0.02, 0.02]", R"({"degree": 1})"), dir / "twice", &log), 2) << log;
   EXPECT_NE(log.find("/meshing/eps/1"), std::string::npos) << log;
+}
+
+// geometry.data_surface (issue 22's coarse-linear peer): a given mesh reads its boundary values
+// at the closest point of a dense surface. The unit ball with data "x" painted on a sphere of
+// radius 1.1 takes 1.1 x on its boundary, so u_h is 1.1 x up to the facets' sag.
+TEST(Run, BoundaryValuesOfAGivenMeshAreReadOnTheDataSurface) {
+  const auto dir = test::scratch_dir("run_data_surface");
+  curvefem::io::write_surface(dir / "sphere.obj", curvefem::make_icosphere(4, 1.1),
+                              curvefem::io::SurfaceFormat::obj);
+  auto run = [&](const std::string& name, const std::string& exact, bool data) {
+    const auto file = write_case(dir,
+                                 R"J({
+      "geometry": {"builtin": {"shape": "ball", "size": 0.35, "order": 2})J" +
+                                     std::string(data ? R"(, "data_surface": "sphere.obj")" : "") +
+                                     R"J(},
+      "physics": {"type": "poisson"}, "discretization": {"degree": 2}, "rhs": "0",
+      "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x"}],
+      "exact": ")J" + exact + R"J("})J");
+    std::string log;
+    EXPECT_EQ(run_case(file, dir / name, &log), 0) << log;
+    const auto r = report(dir / name);
+    return r["l2_error"].get<double>() / r["l2_norm_exact"].get<double>();
+  };
+  const double scaled = run("scaled", "1.1*x", true), plain = run("plain", "x", true),
+               without = run("without", "x", false);
+  std::printf("relative L2 error: against 1.1 x %.2e, against x %.2e; without the surface %.2e\n",
+              scaled, plain, without);
+  EXPECT_LT(scaled, 5e-3);
+  EXPECT_GT(plain, 0.05);
+  EXPECT_LT(without, 1e-6);  // x is in P2: exact without the surface
+  EXPECT_EQ(report(dir / "scaled")["data_surface"]["faces"], 5120);
+  // Only with a given mesh; a missing file names the key.
+  std::string log;
+  const auto dense = write_case(dir, R"J({
+      "geometry": {"surface": "sphere.obj", "data_surface": "sphere.obj"},
+      "physics": {"type": "poisson"}, "rhs": "0",
+      "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x"}]})J");
+  EXPECT_EQ(run_case(dense, dir / "dense", &log), 2) << log;
+  EXPECT_NE(log.find("/geometry/data_surface"), std::string::npos) << log;
+  const auto missing = write_case(dir, R"J({
+      "geometry": {"builtin": {"shape": "cube"}, "data_surface": "nothing.obj"},
+      "physics": {"type": "poisson"}, "rhs": "0",
+      "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x"}]})J");
+  EXPECT_EQ(run_case(missing, dir / "missing", &log), 2) << log;
+  EXPECT_NE(log.find("file not found"), std::string::npos) << log;
 }
 
 // Traction-only linear elasticity: u = (x², yz, xy) plus the rigid motion (1 + z, 2, −x), in P2,
