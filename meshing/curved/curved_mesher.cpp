@@ -669,6 +669,7 @@ struct CoarseState {
   int repairs = 0, repair_splits = 0, repair_failures = 0;
   // ε levels (build_curved_mesh_levels): the coarse shell of the finer level before, with its
   // owned points, from which this level's coarsening resumes instead of the input's shell.
+  double shell_seconds = 0;  // building `beveled`
   bool resume = false;
   sh::Shell start;
   std::vector<std::vector<int>> start_owned;
@@ -746,7 +747,10 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.thin_max_ratio_after = st.thin_stats.max_ratio_after;
   stats.singular_vertices = st.shell_stats.singular_vertices;
   stats.shell_faces = int(beveled.shell.F.rows());
-  if (built_now) stats.stage_seconds.emplace_back("shell", watch.seconds());
+  if (built_now) {
+    st.shell_seconds = watch.seconds();
+    stats.stage_seconds.emplace_back("shell", st.shell_seconds);
+  }
 
   // Distance points besides the input vertices, on the shell's middle surface (the input): their
   // position, the shell face whose prism holds them, and the input face / barycentric
@@ -1503,6 +1507,7 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
     state.repair = options.curved_repair && relaxed && attempt > 1;
     CurvedMeshStats s;
     Stopwatch watch;
+    const bool had_shell = state.built;
     try {
       CurvedMesh out = build_attempt(input, options, strict, relaxed, s, progress, &state);
       s.curved_coarsening = relaxed;
@@ -1514,7 +1519,13 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
       state.carried_strict = strict;
       return out;
     } catch (const CurvedBoundMissed& missed) {
-      discarded.emplace_back("discarded attempt " + std::to_string(attempt), watch.seconds());
+      // The shell built by this attempt is kept for the next ones: its time is its own stage.
+      double seconds = watch.seconds();
+      if (!had_shell && state.built) {
+        seconds -= state.shell_seconds;
+        discarded.emplace_back("shell", state.shell_seconds);
+      }
+      discarded.emplace_back("discarded attempt " + std::to_string(attempt), seconds);
       if (strict.empty()) strict.assign(std::size_t(input.num_vertices()), 0);
       auto keep_linear = [&](const std::vector<int>& vertices) {
         for (int x : vertices) {
