@@ -1,4 +1,6 @@
 // Stages compute_errors, transfer_to_input and write_outputs (stages.hpp).
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -126,6 +128,50 @@ InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
   out.fields.point_data.push_back(field_of(c == 1 ? "u" : "displacement", out.values));
   out.fields.point_data.push_back(field_of("phi_offset", out.images - input.V));
   out.report = json::object();
+  {
+    // The geometric error at every input vertex (issue 22): |φ(v) - v|, and the angle between
+    // the curved boundary's normal at φ(v) and the nearest in direction of the normals of the
+    // input faces around v (0 where φ(v) lies in one of them, as on a dense mesh).
+    const BoundaryMap& map = domain.map();
+    std::vector<std::vector<int>> faces_of(std::size_t(input.num_vertices()));
+    for (int f = 0; f < input.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) faces_of[std::size_t(input.F(f, k))].push_back(f);
+    Eigen::MatrixXd deviation = Eigen::MatrixXd::Zero(input.num_vertices(), 1);
+    double max_deviation = 0, sum_deviation = 0, max_offset = 0;
+    long long counted = 0;
+    for (int v = 0; v < input.num_vertices() && v < map.num_input_vertices(); ++v) {
+      const int f = map.vertex_face[v];
+      if (f < 0 || faces_of[std::size_t(v)].empty()) continue;
+      const Eigen::MatrixXd J =
+          map.boundary.jacobian(f, Eigen::Vector3d(map.vertex_uv(v, 0), map.vertex_uv(v, 1), 0));
+      const Eigen::Vector3d du = J.col(0), dv = J.col(1);
+      const Eigen::Vector3d n = du.cross(dv);
+      if (!(n.norm() > 0)) continue;
+      double best = 180;
+      for (int t : faces_of[std::size_t(v)]) {
+        const Eigen::Vector3d a = input.V.row(input.F(t, 0)), b = input.V.row(input.F(t, 1)),
+                              c = input.V.row(input.F(t, 2));
+        const Eigen::Vector3d m = (b - a).cross(c - a);
+        if (!(m.norm() > 0)) continue;
+        best = std::min(best, std::atan2(n.cross(m).norm(), n.dot(m)) * 180 / M_PI);
+      }
+      deviation(v, 0) = best;
+      max_deviation = std::max(max_deviation, best);
+      sum_deviation += best;
+      ++counted;
+      max_offset = std::max(max_offset, (out.images.row(v) - input.V.row(v)).norm());
+    }
+    out.fields.point_data.push_back(field_of("normal_deviation_deg", deviation));
+    const double unit = bbox_longest_edge(input.V);
+    out.report["surface_geometry"] = {
+        {"max_phi_offset_rel", unit > 0 ? max_offset / unit : 0.0},
+        {"max_normal_deviation_deg", max_deviation},
+        {"mean_normal_deviation_deg", counted > 0 ? sum_deviation / double(counted) : 0.0},
+        {"method",
+         "per input vertex v: |phi(v) - v| / bbox edge, and the angle between the curved "
+         "boundary's normal at phi(v) and the closest normal of the input faces around v; "
+         "surface.vtu fields phi_offset, normal_deviation_deg"}};
+  }
   if (errors.exact_value) {
     const mapping::SurfaceErrors e = mapping::surface_errors(input, out.values, errors.exact_value);
     out.fields.point_data.push_back(field_of("exact", e.exact));
@@ -303,8 +349,9 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
         }
         if (l.on_input)
           for (Field f : l.on_input->fields.point_data) {
-            if (f.name == "phi_offset" && i > 0) continue;  // the same for every load case
-            if (f.name != "phi_offset") f.name = suffixed(f.name, l.load);
+            const bool shared = f.name == "phi_offset" || f.name == "normal_deviation_deg";
+            if (shared && i > 0) continue;  // the same for every load case
+            if (!shared) f.name = suffixed(f.name, l.load);
             all_surface.point_data.push_back(std::move(f));
           }
         if (l.on_input)

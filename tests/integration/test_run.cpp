@@ -284,6 +284,10 @@ TEST(Run, ParaviewScriptOpensVolumeAndSurfaceAndColoursBySolutionAndError) {
                               &log),
             0)
       << log;
+  // φ is the identity on a dense mesh: no geometric error.
+  const auto g = report(out)["surface_geometry"];
+  EXPECT_EQ(g["max_phi_offset_rel"].get<double>(), 0.0);
+  EXPECT_LT(g["max_normal_deviation_deg"].get<double>(), 1e-6);
   const auto script = out / "open_in_paraview.py";
   ASSERT_TRUE(std::filesystem::exists(script));
   const auto calls = run_paraview_script(script, dir);
@@ -659,6 +663,14 @@ TEST(Run, EpsLevelsAreSolvedCoarseToFineAndTheAnswerImprovesWithTheGeometry) {
     EXPECT_LT(row["change_on_input_rms_rel"].get<double>(), 0.05);
   }
   EXPECT_FALSE(r["eps_levels"].contains("reached"));
+  // The geometric error of φ on the input: within ε, and normals within a few degrees.
+  const auto& g = r["surface_geometry"];
+  std::printf("phi offset max %.2e, normal deviation max %.2f deg, mean %.2f deg\n",
+              g["max_phi_offset_rel"].get<double>(), g["max_normal_deviation_deg"].get<double>(),
+              g["mean_normal_deviation_deg"].get<double>());
+  EXPECT_LE(g["max_phi_offset_rel"].get<double>(), 0.01);
+  EXPECT_GT(g["max_normal_deviation_deg"].get<double>(), 0);
+  EXPECT_LT(g["max_normal_deviation_deg"].get<double>(), 15);
   // The outputs are the finest level's.
   EXPECT_DOUBLE_EQ(r["meshing"]["eps_rel"].get<double>(), 0.01);
   EXPECT_EQ(r["dofs"], rows.back()["dofs"]);
