@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "meshing/core/error.hpp"
 #include "pipeline/report_json.hpp"
 #include "pipeline/stages.hpp"
 
@@ -65,14 +66,19 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
       .threads = settings.threads, .progress = progress, .timings = &outcome.timings};
   auto r = std::make_shared<RunResults>();
   SurfaceMesh input;
-  if (spec.dense_surface()) input = load_surface(spec, ctx);
+  if (spec.dense_surface() && !settings.domain) input = load_surface(spec, ctx);
   CaseSpec run = spec;
   const std::vector<LoadCase> loads = spec.loads();
   std::shared_ptr<fem::FactorizationCache> cache;
   nlohmann::json iterations = nlohmann::json::array();
   double estimate = 0;
   nlohmann::json levels_report;
-  if (spec.eps_levels.empty()) {
+  if (settings.domain && !spec.eps_levels.empty())
+    throw InputError("run: a given Domain and meshing.eps a list");
+  if (settings.domain) {
+    r->domain = *settings.domain;
+    estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, iterations);
+  } else if (spec.eps_levels.empty()) {
     r->domain = mesh_domain(spec, std::move(input), ctx);
     // Adaptive p (CaseSpec::target_error): the same mesh, degree raised until the estimate meets
     // the target or p = 4; the outputs and report are those of the last degree.

@@ -18,6 +18,10 @@ struct RunSettings {
   int threads = 0;        ///< --threads (0 = all cores); also the curved mesher's workers
   bool paraview = false;  ///< also write open_in_paraview.py
   bool write = true;      ///< false: no output files (the results stay in RunOutcome::results)
+  /// Set: the run solves on this Domain instead of loading and meshing (a curved mesh made for
+  /// several runs at once, e.g. the ε levels of a study, mesh_domain_levels); it must be what
+  /// mesh_domain would give for the case.
+  std::shared_ptr<const Domain> domain;
 };
 
 /// The results of every stage of one run. Built in place and never moved: the Discretization and

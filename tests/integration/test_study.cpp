@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -223,4 +224,44 @@ TEST(Study, AFailedRunIsRecordedTheOthersAreWrittenAndTheStudyExitsThree) {
   EXPECT_FALSE(std::filesystem::exists(out / "runs" / "divisions=1"));
   EXPECT_TRUE(std::filesystem::exists(out / "runs" / "divisions=4" / "report.json"));
   EXPECT_EQ(read_csv(out / "study.csv").size(), 3u);
+}
+
+// An ε × degree sweep on a curved case meshes once (issue 22): the runs share the ε levels of
+// one coarsening (study.json shared_meshing), and each run solves on its own level.
+TEST(Study, AnEpsSweepMeshesTheLevelsOnceAndEveryRunUsesItsOwn) {
+  const auto dir = test::scratch_dir("study_eps_levels");
+  const auto file = dir / "study.json";
+  std::ofstream(file) << R"JSON({"base": {
+      "geometry": {"builtin_surface": {"shape": "sphere", "level": 3}, "features": "none"},
+      "meshing": {"method": "curved", "order": 2},
+      "physics": {"type": "poisson"},
+      "rhs": "5*sin(2*x)*cos(y)",
+      "boundary_conditions": [{"type": "dirichlet", "select": {"all": true},
+                               "value": "sin(2*x)*cos(y)"}],
+      "exact": "sin(2*x)*cos(y)"},
+    "sweep": {"/discretization/degree": [1, 2], "/meshing/eps": [0.04, 0.01]}})JSON";
+  const auto out = dir / "out";
+  std::string log;
+  ASSERT_EQ(run_study(file, out, &log), 0) << log;
+  const auto j = read_json(out / "study.json");
+  ASSERT_EQ(j["shared_meshing"].size(), 1u) << j["shared_meshing"].dump();
+  const auto& shared = j["shared_meshing"][0];
+  EXPECT_EQ(shared["runs"].size(), 4u);
+  EXPECT_EQ(shared["eps"].size(), 2u);
+  EXPECT_GT(shared["seconds"].get<double>(), 0);
+  // Each run on its own level: the mesh's bound, validity and faces; both degrees of a level on
+  // the same mesh; the finer level has more faces.
+  std::map<double, int> faces;
+  for (const char* run :
+       {"degree=1_eps=0.04", "degree=2_eps=0.04", "degree=1_eps=0.01", "degree=2_eps=0.01"}) {
+    const auto r = read_json(out / "runs" / run / "report.json");
+    const double eps = r["meshing"]["eps_rel"].get<double>();
+    EXPECT_TRUE(r["mesh_valid"].get<bool>()) << run;
+    EXPECT_LE(r["meshing"]["validation"]["max_distance_rel"].get<double>(), eps) << run;
+    const int f = r["meshing"]["coarse_faces"].get<int>();
+    if (faces.count(eps)) EXPECT_EQ(faces[eps], f) << run;
+    faces[eps] = f;
+  }
+  ASSERT_EQ(faces.size(), 2u);
+  EXPECT_GT(faces[0.01], faces[0.04]);
 }

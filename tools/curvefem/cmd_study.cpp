@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -143,8 +145,65 @@ class StudyProgress {
   TerminalProgress m_run;  ///< handed to each run
 };
 
+/// Curved meshes shared by several runs (issue 22: an ε study never rebuilds the shell): the
+/// curved runs whose geometry and meshing differ at most in meshing.eps are meshed once, as the
+/// ε levels of one coarsening (mesh_domain_levels); each run then solves on its level's Domain.
+struct SharedMeshing {
+  std::vector<std::shared_ptr<const pipeline::Domain>> domain;  ///< per run (null: meshes alone)
+  ordered_json report = ordered_json::array();                  ///< study.json "shared_meshing"
+};
+
+SharedMeshing mesh_shared(const StudySpec& study, int threads) {
+  SharedMeshing out;
+  out.domain.resize(study.runs.size());
+  std::map<std::string, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < study.runs.size(); ++i) {
+    const CaseSpec& c = study.runs[i].spec;
+    if (c.method != "curved" || !c.mesh_dir.empty() || !c.eps_levels.empty()) continue;
+    json key = {{"geometry", c.resolved.value("geometry", json())},
+                {"meshing", c.resolved.value("meshing", json())}};
+    key["meshing"].erase("eps");
+    groups[key.dump()].push_back(i);
+  }
+  for (const auto& [key, runs] : groups) {
+    if (runs.size() < 2) continue;
+    CaseSpec spec = study.runs[runs.front()].spec;
+    std::vector<double> eps;
+    for (std::size_t i : runs)
+      if (std::find(eps.begin(), eps.end(), study.runs[i].spec.eps) == eps.end())
+        eps.push_back(study.runs[i].spec.eps);
+    spec.eps_levels = eps;
+    Stopwatch watch;
+    std::vector<pipeline::Domain> domains;
+    ordered_json entry;
+    for (std::size_t i : runs) entry["runs"].push_back(study.runs[i].name);
+    entry["eps"] = eps;
+    try {
+      log::info("study: meshing ", eps.size(), " eps level(s) once for ", runs.size(), " runs");
+      domains =
+          pipeline::mesh_domain_levels(spec, pipeline::load_surface(spec), {.threads = threads});
+    } catch (const Error& e) {
+      // Each run meshes alone and reports its own failure.
+      log::warn("study: shared meshing failed (", e.what(), "); each run meshes alone");
+      entry["failed"] = e.what();
+      out.report.push_back(entry);
+      continue;
+    }
+    entry["seconds"] = watch.seconds();
+    out.report.push_back(entry);
+    std::vector<std::shared_ptr<const pipeline::Domain>> level(eps.size());
+    for (std::size_t l = 0; l < eps.size(); ++l)
+      level[l] = std::make_shared<const pipeline::Domain>(std::move(domains[l]));
+    for (std::size_t i : runs)
+      out.domain[i] = level[std::size_t(std::find(eps.begin(), eps.end(), study.runs[i].spec.eps) -
+                                        eps.begin())];
+  }
+  return out;
+}
+
 RunRow run_one(const StudySpec& study, const StudyRun& run, const std::filesystem::path& runs_dir,
-               int threads, TerminalProgress& progress) {
+               int threads, TerminalProgress& progress,
+               std::shared_ptr<const pipeline::Domain> domain = nullptr) {
   RunRow row;
   row.run = &run;
   pipeline::CaseSpec spec = run.spec;
@@ -152,8 +211,8 @@ RunRow run_one(const StudySpec& study, const StudyRun& run, const std::filesyste
   spec.resolved["output"]["dir"] = (study.output_dir / "runs" / run.name).string();
   Stopwatch watch;
   try {
-    const pipeline::RunOutcome outcome =
-        pipeline::run_case(spec, {.threads = threads}, progress.callback());
+    const pipeline::RunOutcome outcome = pipeline::run_case(
+        spec, {.threads = threads, .domain = std::move(domain)}, progress.callback());
     progress.end_stage();
     row.report = outcome.report;
     row.exit_code = outcome.exit_code;
@@ -337,14 +396,17 @@ int run_study(const StudyOptions& o) {
   std::vector<Series> series;
   std::vector<json> rates;
   std::string plot_problem;
+  SharedMeshing shared;
   try {
     staged.emplace(study.output_dir);
     const auto runs_dir = staged->path("runs");
     std::filesystem::create_directory(runs_dir);
+    shared = mesh_shared(study, o.global.threads);
     StudyProgress progress(mode, static_cast<int>(study.runs.size()));
     for (std::size_t i = 0; i < study.runs.size(); ++i) {
       TerminalProgress& run_progress = progress.start(static_cast<int>(i), study.runs[i].name);
-      rows.push_back(run_one(study, study.runs[i], runs_dir, o.global.threads, run_progress));
+      rows.push_back(run_one(study, study.runs[i], runs_dir, o.global.threads, run_progress,
+                             shared.domain[i]));
       progress.done(static_cast<int>(i), rows.back());
     }
     series = group_series(study, rows);
@@ -406,6 +468,8 @@ int run_study(const StudyOptions& o) {
         "over the ok runs of a series; rate_h = -3 * slope_dofs (h ~ DOFs^(-1/3)), rate_h_tets = "
         "-3 * slope_tets";
     report["failed_runs"] = failed;
+    // Runs that solved on a shared mesh have no meshing time of their own (meshing_s 0).
+    report["shared_meshing"] = shared.report;
     report["plot"] = plot_problem.empty() ? ordered_json("study.png") : ordered_json(nullptr);
     if (!plot_problem.empty()) report["plot_problem"] = plot_problem;
     report["threads"] = o.global.threads;
