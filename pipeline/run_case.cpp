@@ -102,10 +102,12 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
       estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, p_iterations);
       const LevelValues now = level_values(*r);
       double change_rms = -1, change_max = -1, change_gradient = -1;
+      bool compared = true;  // every load case's values on the input compared
       if (previous) {
         change_rms = change_max = change_gradient = 0;
         for (std::size_t l = 0; l < loads.size(); ++l) {
           const Eigen::MatrixXd &a = now.on_input[l], &b = previous->on_input[l];
+          compared = compared && a.size() > 0 && a.rows() == b.rows() && a.cols() == b.cols();
           if (a.size() > 0 && a.rows() == b.rows() && a.cols() == b.cols()) {
             const double scale_rms = std::sqrt(a.squaredNorm() / double(a.rows()));
             const double scale_max = a.cwiseAbs().maxCoeff();
@@ -144,7 +146,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
       if (l2 >= 0) row["l2_error_relative"] = l2;
       rows.push_back(row);
       const double change = std::max(change_rms, change_gradient);
-      reached = spec.target_error > 0 && previous && change <= spec.target_error &&
+      reached = spec.target_error > 0 && previous && compared && change <= spec.target_error &&
                 estimate <= spec.target_error;
       previous = now;
       if (reached) break;
