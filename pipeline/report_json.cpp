@@ -73,6 +73,7 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
           {"coarse_faces", stats.coarse_faces},
           {"coarsening",
            {{"start_faces", stats.coarsen_start_faces},
+            {"linear_phase_faces", stats.linear_phase_faces},
             {"collapses", stats.coarsen_collapses},
             {"flips", stats.coarsen_flips},
             {"pillar_rotations", stats.coarsen_rotations},

@@ -671,6 +671,8 @@ struct CoarseState {
   // owned points, from which this level's coarsening resumes instead of the input's shell.
   double shell_seconds = 0;  // building `beveled`
   bool resume = false;
+  bool linear_phase_done = false;  // CurvedMeshOptions::two_phase
+  int linear_phase_faces = 0;
   sh::Shell start;
   std::vector<std::vector<int>> start_owned;
   // The input vertices the finer level's attempts kept under the linear bound: where its curved
@@ -679,6 +681,7 @@ struct CoarseState {
   std::vector<char> carried_strict;
   // The next level starts from the coarse shell the last one kept, with a fresh attempt loop.
   void next_level() {
+    linear_phase_faces = 0;
     start = shell;
     start_owned = owned;
     resume = true;
@@ -973,6 +976,26 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   } else {
     if (progress) progress("coarsen", 0.0);
     bool resumed = false;
+    if (options.two_phase && st.coarse && !st.resume && !st.linear_phase_done) {
+      // Two-phase curved-aware coarsening: once the first attempt (coarsened from the input's
+      // shell) has missed, the input's shell is coarsened once under the linear bound
+      // everywhere, and every later attempt resumes from it (any strict set holds there, so no
+      // attempt coarsens the input again; the last resort, the linear bound, starts there too).
+      Stopwatch phase;
+      sh::SimplifyOptions linear = simplify_options;
+      linear.curved_order = 0;
+      linear.relaxed_distance = linear.curved_distance = 0;
+      linear.strict_input_vertices.clear();
+      linear.curved_slab_ok = nullptr;
+      sh::SimplifyStats linear_stats;
+      st.start = sh::simplify_shell(beveled.shell, surface, linear, linear_stats);
+      st.start_owned = std::move(linear_stats.owned_points);
+      st.resume = st.linear_phase_done = true;
+      st.linear_phase_faces = int(st.start.F.rows());
+      stats.stage_seconds.emplace_back("coarsen (linear phase)", phase.seconds());
+      log::info("mesh: linear phase: shell ", beveled.shell.F.rows(), " prisms coarsened to ",
+                st.start.F.rows());
+    }
     if (st.resume) {
       // The finer level's coarse shell, coarsened further under this level's bounds (which are
       // not smaller anywhere, so no point starts beyond its bound unless a curved-aware attempt
@@ -1514,6 +1537,7 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
       s.curved_attempts = attempt;
       s.strict_vertices = int(std::count(strict.begin(), strict.end(), 1));
       s.curved_widened = widened;
+      s.linear_phase_faces = state.linear_phase_faces;
       s.stage_seconds.insert(s.stage_seconds.begin(), discarded.begin(), discarded.end());
       stats = std::move(s);
       state.carried_strict = strict;

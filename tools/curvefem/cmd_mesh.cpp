@@ -49,7 +49,7 @@ struct MeshArgs {
   std::vector<double> eps_levels;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
        low_degree_slabs = false, no_pan = false, no_feature_chains = false,
-       linear_coarsening = false, no_curved_repair = false;
+       linear_coarsening = false, no_curved_repair = false, no_two_phase = false;
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
@@ -206,6 +206,10 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
+  sub->add_flag("--no-two-phase-coarsening", args->no_two_phase,
+                "after a missed curved-aware attempt, coarsen the input again for the next one "
+                "(default: coarsen it once under the linear bound and resume every later attempt "
+                "from that shell)");
   sub->add_flag("--exterior", args->exterior,
                 "also mesh the space between the surface and a padded box (tags 3, 4)");
   sub->add_option("--padding", args->padding,
@@ -242,6 +246,7 @@ void register_mesh(CLI::App& app) {
     options.feature_chains = !args->no_feature_chains;
     options.curved_coarsening = !args->linear_coarsening;
     options.curved_repair = !args->no_curved_repair;
+    options.two_phase = !args->no_two_phase;
     options.eps_samples = args->eps_samples;
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);

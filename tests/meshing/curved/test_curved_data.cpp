@@ -130,6 +130,7 @@ TEST(CurvedData, CurvedAwareCoarseningRetriesAfterAMissAndMeetsEps) {
 // 3, then 14 faces), so from the third attempt on the linear bound also holds around every needed
 // face whose slab the thickening pulled above the shell's base (attempt 3: 3 misses, attempt 4:
 // none, 640 faces); before the widening, bunny fell back to the linear bound everywhere (856).
+// With two phases (attempts 2-4 resume from the linear-bound shell): attempt 4, 704 faces.
 TEST(CurvedData, CurvedAwareCoarseningWidensAroundPulledSlabsOnBunny) {
   auto run = dev_mesh("bunny.obj");
   if (!run) GTEST_SKIP() << k_no_data;
@@ -152,6 +153,9 @@ TEST(CurvedData, CurvedAwareCoarseningWidensAroundPulledSlabsOnBunny) {
   EXPECT_TRUE(stats.curved_widened);
   EXPECT_GE(stats.curved_attempts, 3);
   EXPECT_LT(stats.coarse_faces, 0.85 * linear.coarse_faces);
+  // The attempts after the first resumed from one linear-bound coarsening (two phases): that
+  // shell is the linear mesh's coarse shell.
+  EXPECT_EQ(stats.linear_phase_faces, linear.coarse_faces);
 }
 
 // --exterior on real meshes: the shell's own tops self-intersect between coarse faces (spot,
