@@ -997,9 +997,10 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
                 st.start.F.rows());
     }
     if (st.resume) {
-      // The finer level's coarse shell, coarsened further under this level's bounds (which are
-      // not smaller anywhere, so no point starts beyond its bound unless a curved-aware attempt
-      // here keeps it strict; those are repaired first, SimplifyOptions::resume).
+      // The start shell (the finer level's coarse shell, or the linear phase's), coarsened
+      // further under this attempt's bounds (not smaller anywhere, so no point starts beyond its
+      // bound unless a curved-aware attempt keeps a finer level's relaxed point strict; those
+      // are repaired first, SimplifyOptions::resume).
       sh::SimplifyOptions resume_options = simplify_options;
       resume_options.resume = true;
       resume_options.owned_points = st.start_owned;
@@ -1008,7 +1009,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       if (resumed)
         stats.coarsen_start_faces = int(st.start.F.rows());
       else {
-        log::info("mesh: resuming from the finer level's ", st.start.F.rows(),
+        log::info("mesh: resuming from the start shell's ", st.start.F.rows(),
                   " coarse faces left ", simplify_stats.violating_points,
                   " points beyond the bound: coarsening the input's shell");
         simplify_stats = sh::SimplifyStats();
