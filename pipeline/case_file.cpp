@@ -460,9 +460,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
 
   if (const json* m = r.get(j, "meshing")) {
     r.only_keys(*m, "/meshing",
-                {"method", "order", "eps", "eps_field", "thickness", "thickness_per_edge",
-                 "eps_samples", "feature_chains", "curved_coarsening", "validate", "deterministic",
-                 "exterior", "padding", "solve_on"});
+                {"method", "order", "eps", "eps_field", "eps_by_tag", "thickness",
+                 "thickness_per_edge", "eps_samples", "feature_chains", "curved_coarsening",
+                 "validate", "deterministic", "exterior", "padding", "solve_on"});
     if (mesh_dir)
       for (const auto& [key, value] : m->items())
         if (key != "method" && key != "validate")
@@ -484,8 +484,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
     for (const char* key :
-         {"order", "eps", "eps_field", "thickness", "thickness_per_edge", "eps_samples",
-          "feature_chains", "curved_coarsening", "validate", "deterministic"})
+         {"order", "eps", "eps_field", "eps_by_tag", "thickness", "thickness_per_edge",
+          "eps_samples", "feature_chains", "curved_coarsening", "validate", "deterministic"})
       if (r.get(*m, key) && c.method != "curved")
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order")) c.order = r.integer(*v, "/meshing/order", 1, 4);
@@ -513,6 +513,17 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       c.eps_field = r.string(*v, "/meshing/eps_field");
       if (c.eps_field.empty()) fail("/meshing/eps_field", "an empty expression", r.file);
       (void)Expression(c.eps_field, "/meshing/eps_field");  // syntax errors name the key
+    }
+    if (const json* v = r.get(*m, "eps_by_tag")) {
+      if (!v->is_object() || v->empty())
+        fail("/meshing/eps_by_tag",
+             "an object of face tags (value or name) and bounds, e.g. {\"3\": 0.002}", r.file);
+      for (const auto& [key, value] : v->items()) {
+        const std::string at = "/meshing/eps_by_tag/" + key;
+        const double e = r.number(value, at);
+        if (!(e > 0 && e <= 0.5)) fail(at, "must be in (0, 0.5]", r.file);
+        c.eps_by_tag[key] = e;
+      }
     }
     if (const json* v = r.get(*m, "thickness")) {
       c.thickness = r.number(*v, "/meshing/thickness");
@@ -757,6 +768,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     else
       res["meshing"]["eps"] = c.eps_levels;
     if (!c.eps_field.empty()) res["meshing"]["eps_field"] = c.eps_field;
+    if (!c.eps_by_tag.empty()) res["meshing"]["eps_by_tag"] = c.eps_by_tag;
     res["meshing"]["thickness"] = c.thickness;
     res["meshing"]["thickness_per_edge"] = c.thickness_per_edge;
     res["meshing"]["eps_samples"] = c.eps_samples;

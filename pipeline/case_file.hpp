@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -75,8 +76,11 @@ struct CaseSpec {
   bool feature_chains = true;     ///< curved: coarsen along feature chains (snapped reference copy)
   bool curved_coarsening = true;  ///< curved: distance bound on the curved patch (order >= 2)
   std::string eps_field;  ///< curved: spatially varying ε, an expression of x, y, z ("" off)
-  int eps_samples = 0;    ///< curved: ε also at the degree-L lattice points of every input face
-  bool validate = true;   ///< curved: independent validation of the mesh (report.json)
+  /// curved: ε per face tag of the input (key: tag value or name; relative bound); the bound at a
+  /// vertex is the smallest of eps, eps_field and the bounds of the faces around it.
+  std::map<std::string, double> eps_by_tag;
+  int eps_samples = 0;   ///< curved: ε also at the degree-L lattice points of every input face
+  bool validate = true;  ///< curved: independent validation of the mesh (report.json)
   bool deterministic = true;  ///< curved: single-threaded coarsening, bit-identical output
   /// curved | dense: solve outside the surface, out to its bounding box padded by `padding` ×
   /// the longest bbox edge (the inside is not part of the domain).

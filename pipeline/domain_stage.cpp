@@ -118,8 +118,11 @@ cv::CurvedMeshOptions curved_options(const CaseSpec& spec, const StageContext& c
 }
 
 std::vector<double> eps_scale_at(const CaseSpec& spec, const SurfaceMesh& input, double eps) {
-  if (spec.eps_field.empty()) return {};
-  return eps_scale_from_expression(input, spec.eps_field, eps, "/meshing/eps_field");
+  std::vector<double> scale;
+  if (!spec.eps_field.empty())
+    scale = eps_scale_from_expression(input, spec.eps_field, eps, "/meshing/eps_field");
+  return min_eps_scale(std::move(scale),
+                       eps_scale_from_tags(input, spec.eps_by_tag, eps, "/meshing/eps_by_tag"));
 }
 
 // A curved mesh made at bound `eps` into `d` (whose input is set): fibers, report, validation,

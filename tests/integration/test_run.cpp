@@ -555,6 +555,76 @@ TEST(Run, AnEpsFieldRefinesWhereItIsSmallerAndIsValidatedPerVertex) {
   }
 }
 
+// meshing.eps_by_tag: a finer bound on the faces of one OBJ group (named or by number), the
+// vertex bound the smallest of its faces', checked by the run's validation per vertex.
+TEST(Run, EpsByTagRefinesTheTaggedFacesAndIsValidatedPerVertex) {
+  const auto dir = test::scratch_dir("run_eps_by_tag");
+  curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  sphere.tags.resize(sphere.num_faces());
+  int upper = 0;
+  for (int f = 0; f < sphere.num_faces(); ++f) {
+    double z = 0;
+    for (int c = 0; c < 3; ++c) z += sphere.V(sphere.F(f, c), 2);
+    sphere.tags[f] = z > 0 ? 1 : 2;
+    upper += z > 0;
+  }
+  sphere.tag_names = {{1, "cap"}, {2, "rest"}};
+  curvefem::io::write_surface(dir / "tagged.obj", sphere, curvefem::io::SurfaceFormat::obj);
+  // OBJ groups are numbered in order of first appearance: the number the reader gives "cap".
+  int cap_tag = -1;
+  for (const auto& [t, name] : curvefem::io::read_surface(dir / "tagged.obj").tag_names)
+    if (name == "cap") cap_tag = t;
+  ASSERT_GT(cap_tag, 0);
+  auto run = [&](const std::string& name, const std::string& extra) {
+    const auto file = write_case(dir, R"J({
+      "geometry": {"surface": "tagged.obj", "features": "none"},
+      "meshing": {"method": "curved", "order": 2, "eps": 0.02)J" +
+                                          extra + R"J(},
+      "physics": {"type": "poisson"}, "discretization": {"degree": 2},
+      "rhs": "-6", "boundary_conditions": [
+        {"type": "dirichlet", "select": {"all": true}, "value": "x*x + y*y + z*z"}],
+      "exact": "x*x + y*y + z*z"})J");
+    std::string log;
+    const int code = run_case(file, dir / name, &log);
+    EXPECT_EQ(code, 0) << log;
+    return code == 0 ? report(dir / name) : nlohmann::json();
+  };
+  const auto plain = run("plain", "");
+  const auto named = run("named", R"J(, "eps_by_tag": {"cap": 0.004})J");
+  const auto number =
+      run("number", R"J(, "eps_by_tag": {")J" + std::to_string(cap_tag) + R"J(": 0.004})J");
+  ASSERT_FALSE(named.is_null());
+  ASSERT_FALSE(number.is_null());
+  EXPECT_TRUE(named["mesh_valid"].get<bool>());
+  const auto& v = named["meshing"]["validation"];
+  EXPECT_TRUE(v["eps_field"].get<bool>());
+  EXPECT_LE(v["max_distance_over_local_eps"].get<double>(), 1.0);
+  const int faces_plain = plain["meshing"]["coarse_faces"].get<int>();
+  const int faces_named = named["meshing"]["coarse_faces"].get<int>();
+  EXPECT_GT(faces_named, faces_plain * 3 / 2);
+  // The same table by tag value gives the same mesh (deterministic coarsening).
+  EXPECT_EQ(number["meshing"]["coarse_faces"].get<int>(), faces_named);
+  EXPECT_EQ(number["l2_error"].get<double>(), named["l2_error"].get<double>());
+  std::printf("coarse faces: eps 0.02 everywhere %d, 0.004 on the %d faces of group cap %d\n",
+              faces_plain, upper, faces_named);
+  std::ifstream in(dir / "named" / "resolved_case.json");
+  const auto resolved = nlohmann::json::parse(in);
+  EXPECT_EQ(resolved["meshing"]["eps_by_tag"]["cap"].get<double>(), 0.004);
+  // A tag the input does not have, or a bound out of range: exit 2 naming the key, no output.
+  for (const char* bad : {R"J({"lid": 0.004})J", R"J({"7": 0.004})J", R"J({"cap": 0})J"}) {
+    const auto file = write_case(dir, std::string(R"J({
+      "geometry": {"surface": "tagged.obj", "features": "none"},
+      "meshing": {"method": "curved", "eps_by_tag": )J") +
+                                          bad + R"J(},
+      "physics": {"type": "poisson"}, "rhs": "1",
+      "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "0"}]})J");
+    std::string log;
+    EXPECT_EQ(run_case(file, dir / "bad", &log), 2) << bad << ": " << log;
+    EXPECT_NE(log.find("/meshing/eps_by_tag/"), std::string::npos) << log;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+  }
+}
+
 // discretization.target_error: adaptive p on one mesh, driven by the gradient-recovery estimate.
 TEST(Run, AdaptivePRaisesTheDegreeUntilTheEstimateMeetsTheTarget) {
   // Measured (2026-12-02): p = 1..4 give 135 / 854 / 2,678 / 6,127 DOFs and relative estimates

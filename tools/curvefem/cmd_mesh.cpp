@@ -6,8 +6,10 @@
 // a guarantee fails (outputs are still written, with the failure named in report.json).
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -43,6 +45,7 @@ namespace cv = meshing::curved;
 
 struct MeshArgs {
   std::string input, output, features, constraints, eps_field;
+  std::vector<std::string> eps_by_tag;
   int eps_samples = 0;
   int order = 3;
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
@@ -169,6 +172,11 @@ void register_mesh(CLI::App& app) {
                   "spatially varying distance bound: an expression of x, y, z (muparser), "
                   "relative to the longest bbox edge like --eps; the bound at x is "
                   "min(--eps, EXPR), e.g. \"x < 0 ? 0.002 : 0.01\"");
+  sub->add_option("--eps-by-tag", args->eps_by_tag,
+                  "distance bounds per face tag of the input: TAG=EPS,... (TAG a tag value or an "
+                  "OBJ group / MSH physical name; EPS relative like --eps); the bound at a vertex "
+                  "is the smallest of --eps, --eps-field and the bounds of the faces around it")
+      ->delimiter(',');
   sub->add_option("--eps-samples", args->eps_samples,
                   "also bound the distance at the non-corner points of the degree-L barycentric "
                   "lattice of every input triangle (L >= 2; 0: vertices only)")
@@ -265,12 +273,25 @@ void register_mesh(CLI::App& app) {
     // One level (--eps) or several (--eps-levels) from one shell and one coarsening.
     const std::vector<double> eps_values =
         args->eps_levels.empty() ? std::vector<double>{args->eps} : args->eps_levels;
+    std::map<std::string, double> eps_by_tag;
+    for (const std::string& entry : args->eps_by_tag) {
+      const auto eq = entry.find('=');
+      char* end = nullptr;
+      const double value =
+          eq == std::string::npos ? 0.0 : std::strtod(entry.c_str() + eq + 1, &end);
+      if (eq == std::string::npos || eq == 0 || end == entry.c_str() + eq + 1 || *end != '\0')
+        throw InputError("--eps-by-tag: '" + entry + "' is not TAG=EPS");
+      eps_by_tag[entry.substr(0, eq)] = value;
+    }
     std::vector<cv::EpsLevel> levels;
-    for (double e : eps_values)
-      levels.push_back(
-          {e, args->eps_field.empty()
-                  ? std::vector<double>()
-                  : pipeline::eps_scale_from_expression(input, args->eps_field, e, "--eps-field")});
+    for (double e : eps_values) {
+      std::vector<double> scale;
+      if (!args->eps_field.empty())
+        scale = pipeline::eps_scale_from_expression(input, args->eps_field, e, "--eps-field");
+      levels.push_back({e, pipeline::min_eps_scale(
+                               std::move(scale), pipeline::eps_scale_from_tags(input, eps_by_tag, e,
+                                                                               "--eps-by-tag"))});
+    }
     std::vector<cv::CurvedMeshStats> level_stats;
     const std::vector<cv::CurvedMesh> results =
         cv::build_curved_mesh_levels(input, options, levels, level_stats, progress->callback());
@@ -325,6 +346,8 @@ void register_mesh(CLI::App& app) {
           {"features", feature_source},
           {"eps_field", args->eps_field.empty() ? nlohmann::ordered_json(nullptr)
                                                 : nlohmann::ordered_json(args->eps_field)},
+          {"eps_by_tag", eps_by_tag.empty() ? nlohmann::ordered_json(nullptr)
+                                            : nlohmann::ordered_json(eps_by_tag)},
           {"eps_levels",
            several ? nlohmann::ordered_json(eps_values) : nlohmann::ordered_json(nullptr)}};
       j.update(pipeline::curved_mesh_stats_json(stats, level_options));
@@ -388,7 +411,7 @@ void register_mesh(CLI::App& app) {
                               {"seconds", j["time_s"]["total"]}});
       }
       char distance[160];
-      if (args->eps_field.empty())
+      if (levels[i].eps_scale.empty())
         std::snprintf(distance, sizeof distance, "max distance %.3g (eps %.3g)",
                       check.max_distance_rel, eps);
       else
