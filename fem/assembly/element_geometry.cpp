@@ -22,7 +22,14 @@ void GeometryEvaluator::evaluate(int cell, CellGeometry& out) const {
   out.x.noalias() = m_tab.values * X;
   out.jacobian_inv.resize(nq);
   out.det_w.resize(nq);
+  double det0 = 0;
   for (int q = 0; q < nq; ++q) {
+    if (q > 0 && m_mesh.order == 1) {
+      // A straight tet: J is the same at every point (the gradients of the P1 basis are).
+      out.jacobian_inv[q] = out.jacobian_inv[0];
+      out.det_w[q] = det0 * m_weights[q];
+      continue;
+    }
     const Eigen::Matrix3d J = X.transpose() * m_tab.gradients[q];  // 3 × 3: ∂x/∂ξ
     const double det = J.determinant();
     if (!(det > 0.0)) {
@@ -33,6 +40,7 @@ void GeometryEvaluator::evaluate(int cell, CellGeometry& out) const {
     }
     out.jacobian_inv[q] = J.inverse();
     out.det_w[q] = det * m_weights[q];
+    det0 = det;
   }
 }
 

@@ -22,7 +22,7 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
   const int n = static_cast<int>(space.cell_dofs.cols());
   const int degree = quadrature_degree >= 0
                          ? quadrature_degree
-                         : default_quadrature_degree(p, mesh.order, QuadratureUse::error);
+                         : default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
   const QuadratureRule& rule = tetrahedron_quadrature(degree);
   const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);

@@ -25,7 +25,9 @@ struct RecoveryEstimate {
 };
 
 /// u: components values per DOF (DOF-major), as compute_errors takes it. quadrature_degree < 0:
-/// default_quadrature_degree(p, k, error).
+/// default_quadrature_degree(p, k, mass) — exact on straight cells, where G(u_h) and ∇u_h are
+/// polynomials of degrees p and p − 1 (the over-integration of compute_errors is for the exact
+/// solution, which the estimate does not have).
 RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const FunctionSpace& space,
                                             const Eigen::VectorXd& u, int components,
                                             int quadrature_degree = -1);
