@@ -8,13 +8,19 @@
 #include <pybind11/stl.h>
 #include <tbb/global_control.h>
 
+#include <filesystem>
 #include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/io/surface_io.hpp"
+#include "meshing/io/vtu_io.hpp"
 #include "pipeline/case_file.hpp"
+#include "pipeline/mesh_dir.hpp"
 #include "pipeline/report_json.hpp"
 #include "pipeline/run_case.hpp"
 #include "pipeline/stages.hpp"
@@ -151,18 +157,62 @@ PYBIND11_MODULE(_curvefem, m) {
       },
       py::arg("case"));
 
-  py::class_<Domain, std::shared_ptr<Domain>>(m, "Domain")
-      .def_property_readonly("method", [](const Domain& d) { return d.method; })
-      .def_property_readonly("nodes", [](const Domain& d) { return d.mesh.nodes; })
-      .def_property_readonly("cells", [](const Domain& d) { return d.mesh.cells; })
-      .def_property_readonly("cell_tags", [](const Domain& d) { return d.mesh.cell_tags; })
-      .def_property_readonly("order", [](const Domain& d) { return d.mesh.order; })
-      .def_property_readonly("valid", [](const Domain& d) { return d.valid; })
-      .def_property_readonly("report_json", [](const Domain& d) { return d.report.dump(); })
-      .def_property_readonly("input_vertices", [](const Domain& d) { return d.input.V; })
-      .def_property_readonly("input_faces", [](const Domain& d) { return d.input.F; })
-      .def_property_readonly("vertex_face", [](const Domain& d) { return d.map().vertex_face; })
-      .def_property_readonly("vertex_uv", [](const Domain& d) { return d.map().vertex_uv; })
+  py::class_<Domain, std::shared_ptr<Domain>>(
+      m, "Domain",
+      "The mesh a case runs on (stage 2: curvefem.mesh or curvefem.load_mesh): the tetrahedra of "
+      "order k and, for curved | dense meshes, the dense input and the boundary map phi.")
+      .def_property_readonly(
+          "method", [](const Domain& d) { return d.method; }, "curved | dense | given")
+      .def_property_readonly(
+          "nodes", [](const Domain& d) { return d.mesh.nodes; },
+          "#N x 3 Lagrange node coordinates of the tet mesh (order k).")
+      .def_property_readonly(
+          "cells", [](const Domain& d) { return d.mesh.cells; },
+          "#C x (k+1)(k+2)(k+3)/6 node ids per tet, canonical local order (docs/conventions.md): "
+          "the 4 corners first, then edge, face and interior nodes.")
+      .def_property_readonly(
+          "cell_tags", [](const Domain& d) { return d.mesh.cell_tags; },
+          "#C region tags, or empty.")
+      .def_property_readonly(
+          "order", [](const Domain& d) { return d.mesh.order; }, "The geometric order k (1..4).")
+      .def_property_readonly(
+          "valid", [](const Domain& d) { return d.valid; },
+          "curved: the independent validation passed (or was not asked for).")
+      .def_property_readonly(
+          "report_json", [](const Domain& d) { return d.report.dump(); },
+          "report.json's \"meshing\" section, as JSON text (Domain.report: a dict).")
+      .def_property_readonly(
+          "input_vertices", [](const Domain& d) { return d.input.V; },
+          "#V x 3 vertices of the dense input (curved | dense; empty for given meshes).")
+      .def_property_readonly(
+          "input_faces", [](const Domain& d) { return d.input.F; },
+          "#F x 3 triangles of the dense input.")
+      .def_property_readonly(
+          "vertex_face", [](const Domain& d) { return d.map().vertex_face; },
+          "phi as (face, u, v), part 1: per input vertex, the boundary triangle (a row of "
+          "boundary_cells) its image lies in; -1 for an unreferenced vertex.")
+      .def_property_readonly(
+          "vertex_uv", [](const Domain& d) { return d.map().vertex_uv; },
+          "phi as (face, u, v), part 2: #V x 2 reference coordinates in that triangle.")
+      .def_property_readonly(
+          "boundary_nodes", [](const Domain& d) { return d.map().boundary.nodes; },
+          "#B x 3 nodes of the curved boundary triangles phi maps onto (order k).")
+      .def_property_readonly(
+          "boundary_cells", [](const Domain& d) { return d.map().boundary.cells; },
+          "#T x (k+1)(k+2)/2 node ids (rows of boundary_nodes) per boundary triangle, "
+          "canonical order: corners, edges (0,1) (0,2) (1,2), interior.")
+      .def_property_readonly(
+          "boundary_node_to_volume",
+          [](const Domain& d) { return d.map().boundary_node_to_volume; },
+          "Per boundary node, the row of nodes it is (-1: not tied to the volume mesh).")
+      .def_property_readonly(
+          "cell_quality",
+          [](const Domain& d) {
+            std::vector<std::tuple<std::string, int, std::vector<double>>> out;
+            for (const Field& f : d.cell_quality) out.emplace_back(f.name, f.components, f.values);
+            return out;
+          },
+          "curved: the validator's per-tet fields (name, components, values), as in mesh.vtu.")
       .def(
           "phi",
           [](const Domain& d) {
@@ -174,6 +224,34 @@ PYBIND11_MODULE(_curvefem, m) {
             return X;
           },
           "φ(v) for every input vertex (#V × 3; NaN for unreferenced vertices).");
+
+  m.def(
+      "load_mesh_dir",
+      [](const std::string& dir, bool validate, int threads, const py::object& progress) {
+        CaseSpec spec;
+        spec.method = "curved";
+        spec.mesh_dir = std::filesystem::absolute(dir).lexically_normal();
+        spec.validate = validate;
+        for (const char* name : {"mesh.msh", "boundary_map.json", "report.json"})
+          if (!std::filesystem::is_regular_file(spec.mesh_dir / name))
+            throw InputError("no " + std::string(name) +
+                                 " in it (not a `curvefem mesh` or curved `curvefem run` output)",
+                             {.file = spec.mesh_dir.string()});
+        const ProgressFn fn = progress_of(progress);
+        py::gil_scoped_release release;
+        const auto limit = limit_threads(threads);
+        return std::make_shared<Domain>(load_mesh_dir(spec, {.threads = threads, .progress = fn}));
+      },
+      py::arg("dir"), py::arg("validate") = true, py::arg("threads") = 0,
+      py::arg("progress") = py::none(),
+      "The Domain of a saved curved mesh folder (pipeline/mesh_dir.hpp), without meshing.");
+
+  m.def(
+      "vtk_node_permutation",
+      [](int order) { return io::vtk_node_permutation(CellKind::tetrahedron, order); },
+      py::arg("order"),
+      "perm with VTK local node i = canonical local node perm[i] for a tet of this order (VTK "
+      "quadratic tetra for 2, VTK_LAGRANGE_TETRAHEDRON for 3, 4).");
 
   m.def(
       "mesh_domain",
@@ -195,6 +273,9 @@ PYBIND11_MODULE(_curvefem, m) {
       .def_property_readonly("degree", [](const Discretization& d) { return d.space.degree; })
       .def_property_readonly("dof_points",
                              [](const Discretization& d) { return d.space.dof_points; })
+      .def_property_readonly(
+          "dof_cells", [](const Discretization& d) { return d.space.cell_dofs; },
+          "#C x (p+1)(p+2)(p+3)/6 DOF ids (rows of dof_points) per tet, canonical order.")
       .def_property_readonly("dofs", [](const Discretization& d) {
         return static_cast<long long>(d.space.num_dofs) * d.components;
       });
@@ -278,6 +359,12 @@ PYBIND11_MODULE(_curvefem, m) {
                                return std::const_pointer_cast<Domain>(
                                    std::shared_ptr<const Domain>(o.results, &o.results->domain));
                              })
+      .def_property_readonly(
+          "discretization",
+          [](const RunOutcome& o) {
+            return std::const_pointer_cast<Discretization>(
+                std::shared_ptr<const Discretization>(o.results, &o.results->disc));
+          })
       .def_property_readonly("load_names",
                              [](const RunOutcome& o) {
                                std::vector<std::string> names;

@@ -16,10 +16,20 @@ A case is a dict with the keys of a case file (cases/README.md), a path to a cas
 `discretize`, `solve`, `compute_errors`, `transfer_to_input`), e.g. to solve several physics
 problems on one mesh. Errors raise `curvefem.InputError` (bad case or input; exit_code 2),
 `MeshingError`, `SolverError` (3) or `IoError` (4), all subclasses of `curvefem.Error`.
+
+Meshes as arrays: a `Domain` (from `mesh`, `load_mesh` or `RunResult.domain`) has `nodes`
+(#N x 3), `cells` (#C x n_k Lagrange node ids of order k, corners first), `corners` (#C x 4),
+the dense input (`input_vertices`, `input_faces`) and phi of every input vertex as (face, u, v):
+`vertex_face`, `vertex_uv` into the curved boundary triangles `boundary_nodes` /
+`boundary_cells`. A folder written by `curvefem mesh` or a curved `run` is read back without
+meshing by `load_mesh(dir)`; `Domain.to_meshio()` and `RunResult.to_meshio()` give a
+`meshio.Mesh` (Debian's python3-meshio) for XDMF, VTU, Exodus, ... Worked examples: docs/examples/.
 """
 
 import json as _json
 import os as _os
+
+import numpy as _np
 
 from . import _curvefem
 from ._curvefem import (  # noqa: F401  (re-exported)
@@ -38,8 +48,8 @@ from ._curvefem import (  # noqa: F401  (re-exported)
 __all__ = [
     "Case", "Domain", "Discretization", "Error", "InputError", "IoError", "MeshingError",
     "RunResult", "SolverError", "Surface", "case", "check", "compute_errors", "discretize",
-    "load_surface", "mesh", "read_case", "resolved", "run", "set_log_level", "solve",
-    "transfer_to_input",
+    "load_mesh", "load_surface", "mesh", "read_case", "resolved", "run", "set_log_level",
+    "solve", "transfer_to_input",
 ]
 
 # A library should not chatter: warnings and errors only, until set_log_level says otherwise.
@@ -92,6 +102,20 @@ def mesh(case, surface=None, threads=0, progress=None):
     return _curvefem.mesh_domain(c, surface, threads, progress)
 
 
+def load_mesh(path, validate=True, threads=0, progress=None):
+    """Stage 2 without meshing: the curved `Domain` saved in the folder `path` (the output of
+    `curvefem mesh` or of a curved `curvefem run` / `curvefem.run(..., output_dir=...)`: mesh.msh,
+    boundary_map.json with phi and the shell fibers, report.json).
+
+    The dense input is read from the path recorded in boundary_map.json and must still have the
+    recorded checksum (InputError naming the file otherwise). With `validate` the independent
+    validation runs again against the eps the mesh was made for (`Domain.valid`,
+    `Domain.report["validation"]`). The result is what `mesh` would give for a case with
+    `"geometry": {"mesh_dir": path}`: pass it to `discretize` / `solve` with any case of the same
+    input (e.g. one with that geometry) to solve new boundary conditions on it."""
+    return _curvefem.load_mesh_dir(_os.fspath(path), validate, threads, progress)
+
+
 def discretize(case, domain):
     """Stage 3: the solve geometry and function space of a `Domain`."""
     return _curvefem.discretize(read_case(case), domain)
@@ -115,6 +139,100 @@ def transfer_to_input(case, domain, discretization, solution, load=""):
     return s.values, s.images
 
 
+# ---- meshio -------------------------------------------------------------------------------------
+
+def _meshio_cells(nodes, cells, order, high_order):
+    """(points, cell type, connectivity, used) of a tet mesh for meshio; `used` are the rows of
+    `nodes` kept as points (None: all of them)."""
+    nodes = _np.asarray(nodes, dtype=float)
+    cells = _np.asarray(cells, dtype=_np.int64)
+    if high_order not in ("auto", "corners", "lagrange"):
+        raise ValueError("high_order: 'auto', 'corners' or 'lagrange', not %r" % (high_order,))
+    if order == 1:
+        return nodes, "tetra", cells[:, :4], None
+    if order == 2 and high_order != "corners":
+        # meshio's tetra10 is VTK's quadratic tetra (edges 01 12 02 03 13 23).
+        return nodes, "tetra10", cells[:, _curvefem.vtk_node_permutation(2)], None
+    if high_order == "lagrange":
+        return (nodes, "VTK_LAGRANGE_TETRAHEDRON",
+                cells[:, _curvefem.vtk_node_permutation(order)], None)
+    used = _np.unique(cells[:, :4])
+    index = _np.full(len(nodes), -1, dtype=_np.int64)
+    index[used] = _np.arange(len(used))
+    return nodes[used], "tetra", index[cells[:, :4]], used
+
+
+def _to_meshio(nodes, cells, order, high_order, point_data=None, cell_data=None):
+    import meshio  # Debian's python3-meshio; only needed here
+
+    points, kind, conn, used = _meshio_cells(nodes, cells, order, high_order)
+    pd = {}
+    for name, values in (point_data or {}).items():
+        values = _np.asarray(values, dtype=float)
+        if values.ndim == 2 and values.shape[1] == 1:
+            values = values[:, 0]
+        pd[name] = values if used is None else values[used]
+    cd = {name: [_np.asarray(values)] for name, values in (cell_data or {}).items()}
+    return meshio.Mesh(points, [(kind, conn)], point_data=pd, cell_data=cd)
+
+
+_HIGH_ORDER_DOC = """
+    Cells by order: 1 "tetra", 2 "tetra10" (meshio's, i.e. VTK's quadratic tetra node order;
+    XDMF, VTU, Gmsh, Exodus, ...). meshio's cubic and quartic tets ("tetra20", "tetra35") exist
+    only for Gmsh files, in Gmsh's node order, and its VTU and XDMF writers do not know them
+    (curvefem's own mesh.msh / volume.vtu hold them), so for order 3 and 4
+    `high_order="auto"` (default) or "corners" gives straight
+    "tetra" cells through the corner nodes only (points and point data restricted to the corners;
+    the curved geometry and the higher-order values in between are dropped), and
+    `high_order="lagrange"` gives meshio's "VTK_LAGRANGE_TETRAHEDRON" cells in VTK's node order
+    with every node — written only by meshio's VTU / VTK writers. "corners" also turns order 2
+    into straight tets. meshio's XDMF writer needs python3-h5py."""
+
+
+def _domain_to_meshio(self, high_order="auto"):
+    cell_data = {}
+    if len(self.cell_tags) == len(self.cells):
+        cell_data["tag"] = _np.asarray(self.cell_tags)
+    for name, components, values in self.cell_quality:
+        if len(values) == components * len(self.cells):
+            v = _np.asarray(values).reshape(-1, components)
+            cell_data[name] = v[:, 0] if components == 1 else v
+    return _to_meshio(self.nodes, self.cells, self.order, high_order, cell_data=cell_data)
+
+
+_domain_to_meshio.__doc__ = """The mesh (order k, no solution) as a meshio.Mesh, with the cell
+    data "tag" (region tags, when set) and, for curved meshes, the validator's per-tet quality
+    fields of mesh.vtu.
+""" + _HIGH_ORDER_DOC
+
+
+def _disc_to_meshio(self, fields=None, high_order="auto", cell_data=None):
+    point_data = {}
+    for name, values in (fields or {}).items():
+        values = getattr(values, "values", values)  # a Solution or an array
+        values = _np.asarray(values)
+        if len(values) != len(self.dof_points):
+            raise ValueError("field %r: %d rows, the space has %d DOF points" % (
+                name, len(values), len(self.dof_points)))
+        point_data[name] = values
+    return _to_meshio(self.dof_points, self.dof_cells, self.degree, high_order, point_data,
+                      cell_data)
+
+
+_disc_to_meshio.__doc__ = """The function space's Lagrange mesh (degree p: points are the DOF
+    points) as a meshio.Mesh, with `fields` ({name: Solution or #DOFs x c array}) as point data.
+""" + _HIGH_ORDER_DOC
+
+Domain.report = property(lambda self: _json.loads(self.report_json),
+                         doc="report.json's \"meshing\" section as a dict (quality, validation).")
+Domain.corners = property(lambda self: self.cells[:, :4],
+                          doc="#C x 4 corner node ids per tet (rows of nodes), positively "
+                              "oriented: det(x1-x0, x2-x0, x3-x0) > 0.")
+_domain_to_meshio.__name__ = _disc_to_meshio.__name__ = "to_meshio"
+Domain.to_meshio = _domain_to_meshio
+Discretization.to_meshio = _disc_to_meshio
+
+
 class RunResult:
     """What `run` returns: the report (dict), exit code, stage times and the arrays. With
     load_cases: `solutions` and `surface_values_by_load` hold every case (in order, by name);
@@ -126,6 +244,7 @@ class RunResult:
         self.exit_code = outcome.exit_code
         self.timings = dict(outcome.timings)
         self.domain = outcome.domain
+        self.discretization = outcome.discretization
         self.load_names = list(outcome.load_names)
         self.solutions = [outcome.solution(i) for i in range(len(self.load_names))]
         self.solution = self.solutions[0]
@@ -134,6 +253,43 @@ class RunResult:
             name: (None if s is None else s.values) for name, s in zip(self.load_names, on_input)}
         self.surface_values = None if on_input[0] is None else on_input[0].values
         self.surface_images = None if on_input[0] is None else on_input[0].images
+
+    def _field_name(self, i):
+        base = "u" if self.solutions[i].components == 1 else "displacement"
+        name = self.load_names[i]
+        return base if name == "" else base + "_" + name
+
+    def to_meshio(self, high_order="auto"):
+        """The solution as a meshio.Mesh: the degree-p Lagrange mesh of the function space
+        (points = DOF points) with every load case's solution as point data ("u" or
+        "displacement", "_<name>" appended for named load cases, as in volume.vtu), and the
+        curved mesh's per-tet quality fields as cell data.
+        """
+        d = self.discretization
+        fields = {self._field_name(i): s for i, s in enumerate(self.solutions)}
+        cell_data = {}
+        for name, components, values in self.domain.cell_quality:
+            if len(values) == components * len(d.dof_cells):
+                v = _np.asarray(values).reshape(-1, components)
+                cell_data[name] = v[:, 0] if components == 1 else v
+        return d.to_meshio(fields, high_order=high_order, cell_data=cell_data)
+
+    to_meshio.__doc__ += _HIGH_ORDER_DOC
+
+    def surface_to_meshio(self):
+        """The dense input surface (curved | dense runs) as a meshio.Mesh of "triangle" cells
+        with u_h(phi(v)) of every load case as point data (named as in `to_meshio`)."""
+        import meshio
+
+        if self.surface_values is None:
+            raise ValueError("a run on a given mesh has no input surface")
+        point_data = {}
+        for i, name in enumerate(self.load_names):
+            values = self.surface_values_by_load[name]
+            point_data[self._field_name(i)] = values[:, 0] if values.shape[1] == 1 else values
+        return meshio.Mesh(self.domain.input_vertices,
+                           [("triangle", _np.asarray(self.domain.input_faces))],
+                           point_data=point_data)
 
     @property
     def valid(self):
