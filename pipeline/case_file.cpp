@@ -691,7 +691,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
 
   if (const json* s = r.get(j, "solver")) {
-    r.only_keys(*s, "/solver", {"type", "rtol", "max_iterations", "near_nullspace"});
+    r.only_keys(*s, "/solver",
+                {"type", "rtol", "max_iterations", "near_nullspace", "preconditioner"});
     if (const json* v = r.get(*s, "type")) c.solver = r.string(*v, "/solver/type");
     if (c.solver != "auto" && c.solver != "direct" && c.solver != "cg")
       fail("/solver/type", "'" + c.solver + "': expected auto, direct or cg", r.file);
@@ -701,6 +702,13 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*s, "near_nullspace")) {
       if (!v->is_boolean()) fail("/solver/near_nullspace", "expected true/false", r.file);
       c.solver_near_nullspace = v->get<bool>();
+    }
+    if (const json* v = r.get(*s, "preconditioner")) {
+      c.solver_preconditioner = r.string(*v, "/solver/preconditioner");
+      if (c.solver_preconditioner != "gamg" && c.solver_preconditioner != "hypre" &&
+          c.solver_preconditioner != "ml")
+        fail("/solver/preconditioner",
+             "'" + c.solver_preconditioner + "': expected gamg, hypre or ml", r.file);
     }
   }
   std::string out = "out";
@@ -844,7 +852,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   res["solver"] = {{"type", c.solver},
                    {"rtol", c.solver_rtol},
                    {"max_iterations", c.solver_max_iterations},
-                   {"near_nullspace", c.solver_near_nullspace}};
+                   {"near_nullspace", c.solver_near_nullspace},
+                   {"preconditioner", c.solver_preconditioner}};
   res["output"] = {{"dir", c.output_dir.string()}};
   c.resolved = res;
   return c;

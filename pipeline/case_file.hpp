@@ -127,9 +127,10 @@ struct CaseSpec {
   std::string solver = "auto";
   double solver_rtol = 1e-10;
   int solver_max_iterations = 5000;
-  bool solver_near_nullspace = true;  ///< cg: rigid-body modes for GAMG (elasticity)
-  std::filesystem::path output_dir;   ///< resolved
-  nlohmann::json resolved;            ///< the case with defaults, as run
+  bool solver_near_nullspace = true;           ///< cg: rigid-body modes for GAMG (elasticity)
+  std::string solver_preconditioner = "gamg";  ///< cg: gamg | hypre | ml
+  std::filesystem::path output_dir;            ///< resolved
+  nlohmann::json resolved;                     ///< the case with defaults, as run
   int components() const { return physics == "poisson" ? 1 : 3; }
 };
 

@@ -135,6 +135,7 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   solver.rtol = spec.solver_rtol;
   solver.max_iterations = spec.solver_max_iterations;
   solver.use_near_nullspace = spec.solver_near_nullspace;
+  solver.preconditioner = spec.solver_preconditioner;
   if (spec.physics != "neo_hookean") solver.factorization_cache = std::move(cache);
   const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == "nodal"
                                                       ? fem::PartialDirichlet::nodal

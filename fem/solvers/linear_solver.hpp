@@ -1,8 +1,11 @@
 // Solves symmetric positive definite systems A x = b from the FEM assemblies.
 //
 // type "direct": CHOLMOD supernodal Cholesky (SuiteSparse, on OpenBLAS).
-// type "cg":     PETSc KSP CG preconditioned by algebraic multigrid (GAMG), relative tolerance
-//                `rtol` on the preconditioned residual, at most `max_iterations`.
+// type "cg":     PETSc KSP CG preconditioned by algebraic multigrid, relative tolerance `rtol`
+//                on the preconditioned residual, at most `max_iterations`. `preconditioner`:
+//                "gamg" (PETSc's smoothed aggregation, the default; takes the near-nullspace),
+//                "hypre" (hypre BoomerAMG, classical AMG; scalar, no near-nullspace) or "ml"
+//                (Trilinos ML smoothed aggregation; takes the near-nullspace too).
 // type "auto":   direct up to `auto_direct_max_dofs` unknowns, cg above.
 // Near-nullspace (cg): GAMG builds its coarse spaces from the near-nullspace of A. The default is
 // the constant vector per block; elasticity needs the six rigid-body modes, given either as the
@@ -50,7 +53,8 @@ struct LinearSolverOptions {
   double rtol = 1e-10;
   int max_iterations = 5000;
   int auto_direct_max_dofs = 200000;
-  int block_size = 1;  ///< unknowns per node (3 for elasticity): helps AMG
+  std::string preconditioner = "gamg";  ///< cg: gamg | hypre | ml
+  int block_size = 1;                   ///< unknowns per node (3 for elasticity): helps AMG
   /// cg, block_size 3: coordinates of the node of each block of 3 consecutive rows (#rows/3 x 3,
   /// row r = the node of unknowns 3r, 3r+1, 3r+2): GAMG's near-nullspace = the rigid-body modes.
   Eigen::MatrixXd near_nullspace_coordinates;
@@ -66,7 +70,8 @@ struct LinearSolverOptions {
 };
 
 struct LinearSolveInfo {
-  std::string method;              ///< "cholmod-supernodal" | "petsc-cg-gamg"
+  std::string
+      method;  ///< "cholmod-supernodal" | "petsc-cg-gamg" | "petsc-cg-hypre" | "petsc-cg-ml"
   int iterations = 0;              ///< 0 for direct
   double relative_residual = 0.0;  ///< ‖b − A x‖ / ‖b‖, measured after the solve
   double setup_s = 0.0, solve_s = 0.0;

@@ -85,7 +85,7 @@ struct KspState {
   Eigen::MatrixXd null_space, coordinates, vectors;
   double rtol = 0;
   int max_iterations = 0, block_size = 1;
-  std::string near_nullspace;
+  std::string near_nullspace, preconditioner;
   // MatCreateSeqAIJWithArrays keeps pointers to these.
   std::vector<PetscInt> row_ptr, col;
   std::vector<PetscScalar> val;
@@ -104,8 +104,8 @@ struct KspState {
       return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
     };
     return rtol == o.rtol && max_iterations == o.max_iterations && block_size == o.block_size &&
-           same(null_space, ns) && same(coordinates, xyz) && same(vectors, vec) &&
-           identical_matrices(matrix, A);
+           preconditioner == o.preconditioner && same(null_space, ns) && same(coordinates, xyz) &&
+           same(vectors, vec) && identical_matrices(matrix, A);
   }
 };
 
@@ -120,6 +120,7 @@ std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSol
   st->rtol = options.rtol;
   st->max_iterations = options.max_iterations;
   st->block_size = options.block_size;
+  st->preconditioner = options.preconditioner;
   const SparseMatrix& A = st->matrix;
   const PetscInt n = static_cast<PetscInt>(A.rows());
   // CSR from the column-major symmetric matrix: rows of A = columns of A (symmetric).
@@ -157,7 +158,14 @@ std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSol
   check(KSPSetOperators(st->ksp, M, M), "KSPSetOperators");
   check(KSPSetType(st->ksp, KSPCG), "KSPSetType");
   check(KSPGetPC(st->ksp, &pc), "KSPGetPC");
-  check(PCSetType(pc, PCGAMG), "PCSetType");
+  if (options.preconditioner == "hypre") {
+    check(PCSetType(pc, PCHYPRE), "PCSetType");
+    check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
+  } else if (options.preconditioner == "ml") {
+    check(PCSetType(pc, PCML), "PCSetType");
+  } else {
+    check(PCSetType(pc, PCGAMG), "PCSetType");
+  }
   check(
       KSPSetTolerances(st->ksp, options.rtol, PETSC_DEFAULT, PETSC_DEFAULT, options.max_iterations),
       "KSPSetTolerances");
@@ -174,7 +182,11 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                                const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
                                FactorizationCache* cache) {
   ensure_petsc();
-  info.method = "petsc-cg-gamg";
+  if (options.preconditioner != "gamg" && options.preconditioner != "hypre" &&
+      options.preconditioner != "ml")
+    throw InputError("cg: unknown preconditioner '" + options.preconditioner +
+                     "' (gamg, hypre or ml)");
+  info.method = "petsc-cg-" + options.preconditioner;
   Stopwatch watch;
   const PetscInt n = static_cast<PetscInt>(A.rows());
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;

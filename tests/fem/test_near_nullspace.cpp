@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "fem/problems/elasticity.hpp"
+#include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
 
 using namespace curvefem;
@@ -73,6 +74,26 @@ TEST(NearNullspace, RigidBodyModesLowerGamgIterationsOnACantilever) {
     EXPECT_LT((with.u - direct.u).norm(), 1e-7 * direct.u.norm()) << "p=" << p;
     EXPECT_LT((without.u - direct.u).norm(), 1e-7 * direct.u.norm()) << "p=" << p;
   }
+}
+
+// solver.preconditioner: every AMG of Debian's PETSc solves elasticity (P2 cantilever) to the
+// direct solution; GAMG and ML use the rigid-body modes, BoomerAMG does not take them.
+TEST(NearNullspace, EveryPreconditionerSolvesTheCantileverToTheDirectSolution) {
+  const Cantilever beam(3, 2);
+  const auto direct = fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, {});
+  for (const char* pc : {"gamg", "hypre", "ml"}) {
+    fem::LinearSolverOptions o = cg(true);
+    o.preconditioner = pc;
+    const auto s = fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, o);
+    std::printf("%s: %d unknowns, %d iterations\n", pc, s.free_unknowns, s.solve.iterations);
+    EXPECT_EQ(s.solve.method, std::string("petsc-cg-") + pc);
+    EXPECT_GT(s.solve.iterations, 0);
+    EXPECT_LT(s.solve.iterations, 200) << pc;
+    EXPECT_LT((s.u - direct.u).norm(), 1e-7 * direct.u.norm()) << pc;
+  }
+  fem::LinearSolverOptions bad = cg(true);
+  bad.preconditioner = "jacobi";
+  EXPECT_THROW(fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, bad), InputError);
 }
 
 TEST(NearNullspace, ComponentsFixedSeparatelyGiveTheModesAsVectors) {
