@@ -124,6 +124,19 @@ BoundaryData bind_boundary(const CaseSpec& spec,
   return data;
 }
 
+// solver.type "auto": CHOLMOD up to this many unknowns, CG + GAMG above. The crossovers measured
+// in benchmarks/results/solver_crossover.md (structured unit cubes, 2 threads, solve stage):
+// Poisson P1-P3 and elasticity P1, direct faster at ~20k unknowns and CG from ~36k; elasticity P2
+// even at 36-47k; elasticity P3 direct up to 89k, CG from 152k. P4 was not measured (P3's values).
+namespace {
+int auto_direct_max_unknowns(const std::string& physics, int degree) {
+  if (physics == "poisson") return 25000;
+  if (degree <= 1) return 25000;
+  if (degree == 2) return 40000;
+  return 120000;
+}
+}  // namespace
+
 Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryData& data,
                const std::vector<Expression>& rhs, const StageContext& ctx,
                std::shared_ptr<fem::FactorizationCache> cache) {
@@ -136,6 +149,7 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   solver.max_iterations = spec.solver_max_iterations;
   solver.use_near_nullspace = spec.solver_near_nullspace;
   solver.preconditioner = spec.solver_preconditioner;
+  solver.auto_direct_max_dofs = auto_direct_max_unknowns(spec.physics, disc.space.degree);
   if (spec.physics != "neo_hookean") solver.factorization_cache = std::move(cache);
   const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == "nodal"
                                                       ? fem::PartialDirichlet::nodal

@@ -6,7 +6,8 @@
 //                "gamg" (PETSc's smoothed aggregation, the default; takes the near-nullspace),
 //                "hypre" (hypre BoomerAMG, classical AMG; scalar, no near-nullspace) or "ml"
 //                (Trilinos ML smoothed aggregation; takes the near-nullspace too).
-// type "auto":   direct up to `auto_direct_max_dofs` unknowns, cg above.
+// type "auto":   direct up to `auto_direct_max_dofs` unknowns, cg above (the pipeline sets the
+//                limit per physics and degree from benchmarks/results/solver_crossover.md).
 // Near-nullspace (cg): GAMG builds its coarse spaces from the near-nullspace of A. The default is
 // the constant vector per block; elasticity needs the six rigid-body modes, given either as the
 // nodes' coordinates (block_size 3, MatNullSpaceCreateRigidBody) or as explicit vectors.
