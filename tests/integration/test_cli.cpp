@@ -30,6 +30,36 @@ TEST(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(test::run_command(cli(), &out), 1);
 }
 
+// Under an MPI launcher with more than one process every rank refuses (exit 2) before writing:
+// distributed runs are not implemented, and N copies of one run would write the same files.
+TEST(Cli, SeveralMpiProcessesAreRefusedBeforeAnyOutput) {
+  const auto dir = test::scratch_dir("cli_mpi");
+  io::write_surface(dir / "sphere.obj", make_icosphere(2), io::SurfaceFormat::obj);
+  const std::string mesh =
+      " mesh " + (dir / "sphere.obj").string() + " -o " + (dir / "out").string() + " -q";
+  std::string out;
+  EXPECT_EQ(test::run_command("OMPI_COMM_WORLD_SIZE=2 " + cli() + mesh, &out), 2) << out;
+  EXPECT_NE(out.find("2 MPI processes"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  EXPECT_EQ(test::run_command("PMI_SIZE=3 " + cli() + mesh, &out), 2) << out;
+  EXPECT_NE(out.find("3 MPI processes"), std::string::npos) << out;
+  // One process (what mpirun -n 1 sets) runs as usual.
+  EXPECT_EQ(
+      test::run_command(
+          "OMPI_COMM_WORLD_SIZE=1 " + cli() + " check -q " + (dir / "sphere.obj").string(), &out),
+      0)
+      << out;
+  // The real launcher, where there is one (CI runs as root: --allow-run-as-root).
+  if (test::run_command("command -v mpirun", &out) == 0) {
+    EXPECT_NE(
+        test::run_command("mpirun --allow-run-as-root --oversubscribe -n 2 " + cli() + mesh, &out),
+        0)
+        << out;
+    EXPECT_NE(out.find("2 MPI processes"), std::string::npos) << out;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  }
+}
+
 TEST(Cli, CheckAcceptsClosedSphereAndRejectsOpenBox) {
   const auto dir = test::scratch_dir("cli_check");
   io::write_surface(dir / "sphere.obj", make_icosphere(2), io::SurfaceFormat::obj);
