@@ -1,8 +1,11 @@
-// Case files of `curvefem run` (schema in cases/README.md). Parsing is strict: an unknown key, a
-// wrong type or a bad expression is an InputError naming the JSON path (e.g.
+// Case files of `curvefem run`. The keys are the table of pipeline/case_schema.hpp (documented in
+// cases/README.md's table, generated from it): every object's allowed keys, and the enums and
+// numeric ranges of most keys, come from that table. Parsing is strict: an unknown key, a wrong
+// type or a bad expression is an InputError naming the JSON path (e.g.
 // "/boundary_conditions/1/select/box: expected [[x0,y0,z0],[x1,y1,z1]]"). Defaults are injected
-// and the resolved case (every key, with defaults) is available for resolved_case.json. Relative
-// paths resolve against the case file's folder.
+// (CaseSpec's initializers, equal to the table's: tests/tools/test_case_schema_unit.cpp) and the
+// resolved case (every key, with defaults) is available for resolved_case.json. Relative paths
+// resolve against the case file's folder.
 #pragma once
 
 #include <Eigen/Core>

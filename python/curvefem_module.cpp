@@ -20,6 +20,7 @@
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
 #include "pipeline/case_file.hpp"
+#include "pipeline/case_schema.hpp"
 #include "pipeline/mesh_dir.hpp"
 #include "pipeline/report_json.hpp"
 #include "pipeline/run_case.hpp"
@@ -148,6 +149,11 @@ PYBIND11_MODULE(_curvefem, m) {
         return std::make_shared<CaseSpec>(read_case_json(j, path, output));
       },
       py::arg("text"), py::arg("path"), py::arg("output_dir") = "");
+  m.def(
+      "case_schema_json", [] { return case_schema_json().dump(); },
+      "The case-file keys (pipeline/case_schema.hpp) as a JSON array of objects.");
+  m.def("case_schema_markdown", &case_schema_markdown,
+        "cases/README.md's key table, generated from the schema.");
 
   m.def(
       "load_surface",

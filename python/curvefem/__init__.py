@@ -24,6 +24,9 @@ the dense input (`input_vertices`, `input_faces`) and phi of every input vertex 
 `boundary_cells`. A folder written by `curvefem mesh` or a curved `run` is read back without
 meshing by `load_mesh(dir)`; `Domain.to_meshio()` and `RunResult.to_meshio()` give a
 `meshio.Mesh` (Debian's python3-meshio) for XDMF, VTU, Exodus, ... Worked examples: docs/examples/.
+
+`schema()` lists every case key (type, default, allowed values, meaning): the table the parser
+takes its keys from and cases/README.md's key table is generated from.
 """
 
 import json as _json
@@ -48,7 +51,7 @@ from ._curvefem import (  # noqa: F401  (re-exported)
 __all__ = [
     "Case", "Domain", "Discretization", "Error", "InputError", "IoError", "MeshingError",
     "RunResult", "SolverError", "Surface", "case", "check", "compute_errors", "discretize",
-    "load_mesh", "load_surface", "mesh", "read_case", "resolved", "run", "set_log_level",
+    "load_mesh", "load_surface", "mesh", "read_case", "resolved", "run", "schema", "set_log_level",
     "solve", "transfer_to_input",
 ]
 
@@ -56,10 +59,62 @@ __all__ = [
 set_log_level("warn")
 
 
+def schema(section=None):
+    """The case-file keys as a list of dicts, one per key, in the documented order (the table
+    of pipeline/case_schema.cpp: the parser accepts exactly these keys, and cases/README.md's
+    key table is generated from it):
+
+    - "path": "meshing.eps"; "[]" marks an array of objects ("boundary_conditions[].select.box");
+      the keys under "boundary_conditions[].select" also apply inside and / or / not;
+    - "type": object, array, string, number, integer, boolean, path, expression, selection,
+      number_list or any; "type_text": the README's type column;
+    - "default": the value resolved_case.json gets when the key is absent, or None (required,
+      optional, or depending on other keys: "default_text" says which);
+    - "allowed": the string values allowed ([] when any);
+    - "minimum", "maximum" (None: unbounded), "minimum_exclusive", "maximum_exclusive";
+    - "doc": the meaning (Markdown).
+
+    `section` ("meshing", "boundary_conditions[]", ...): only the keys below it."""
+    keys = _json.loads(_curvefem.case_schema_json())
+    if section is None:
+        return keys
+    return [k for k in keys if k["path"].startswith(section + ".")]
+
+
+def _sections_doc():
+    """One line per top-level section of a case: its keys, or the key's type and default."""
+    children = {}
+    for k in schema():
+        top, _, rest = k["path"].partition(".")
+        children.setdefault(top, [])
+        if rest and "." not in rest:
+            children[top].append(rest)
+    by_path = {k["path"]: k for k in schema()}
+    lines = []
+    for top, keys in children.items():
+        name = top[:-2] if top.endswith("[]") else top
+        if keys:
+            what = ("[{...}, ...] with keys: " if top.endswith("[]") else "{...} with keys: ")
+            what += ", ".join(keys)
+        else:
+            k = by_path[top]
+            what = "%s (default %s)" % (k["type_text"], k["default_text"])
+        lines.append("        %s=%s" % (name, what.replace("\\|", "|")))
+    return "\n".join(lines)
+
+
 def case(**sections):
     """A case dict from keyword arguments, one per top-level section of a case file:
-    case(geometry={...}, meshing={...}, physics={...}, boundary_conditions=[...], ...)."""
+    case(geometry={...}, meshing={...}, physics={...}, boundary_conditions=[...], ...).
+
+    The sections and their keys (`schema()` has each key's type, default and meaning)::
+
+"""
     return dict(sections)
+
+
+if case.__doc__:  # None under python -OO
+    case.__doc__ += _sections_doc()
 
 
 def read_case(case, output_dir=None, base_dir=None):

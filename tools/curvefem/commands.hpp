@@ -20,6 +20,7 @@ void register_shell(CLI::App& app);     // cmd_shell.cpp
 void register_mesh(CLI::App& app);      // cmd_mesh.cpp
 void register_validate(CLI::App& app);  // cmd_validate.cpp
 void register_study(CLI::App& app);     // cmd_study.cpp
+void register_schema(CLI::App& app);    // cmd_schema.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
@@ -32,6 +33,7 @@ inline void register_commands(CLI::App& app) {
   register_mesh(app);
   register_validate(app);
   register_study(app);
+  register_schema(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

@@ -1,0 +1,426 @@
+// The case schema table (case_schema.hpp). The documentation of each row is cases/README.md's
+// key table, generated from here: edit a row here, then `curvefem schema --update cases/README.md`.
+#include "pipeline/case_schema.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "meshing/core/error.hpp"
+
+namespace curvefem::pipeline {
+namespace {
+
+using T = CaseKeyType;
+constexpr double k_inf_hi = std::numeric_limits<double>::infinity();
+constexpr double k_inf_lo = -k_inf_hi;
+
+// clang-format off
+const std::vector<CaseKeyRow> k_rows = {
+    {.keys = {{.path = "geometry.surface", .type = T::path}},
+     .type = R"md(path)md",
+     .doc = R"md(a dense closed triangle surface (`.obj .off .stl .ply .msh`; OBJ groups / PLY face property / MSH physical tags become face tags). Must pass `curvefem check`, else exit 2 naming `/geometry/surface`)md"},
+    {.keys = {{.path = "geometry.builtin_surface", .type = T::object}},
+     .type = R"md(object)md",
+     .doc = R"md(instead of `surface`, a generated surface: `{"shape": "sphere", "level": 3, "radius": 1}` (icosphere, 20·4^level faces), `{"shape": "torus", "R": 1, "r": 0.4, "nu": 48, "nv": 24}` (around z, 2·nu·nv faces), `{"shape": "box", "lo": [0,0,0], "hi": [1,1,1], "divisions": 4}` (12·n² faces, tags 1..6 = −x, +x, −y, +y, −z, +z); the defaults are the values shown)md"},
+    {.keys = {{.path = "geometry.builtin_surface.shape", .type = T::string, .allowed = {"sphere", "torus", "box"}}},
+     .type = R"md(`"sphere"` \| `"torus"` \| `"box"`)md",
+     .doc = R"md(required: which surface; the other keys of `builtin_surface` are that shape's parameters)md"},
+    {.keys = {{.path = "geometry.builtin_surface.level", .type = T::integer, .default_json = R"(3)", .range = CaseKeyRange{0, 7, false, false}}},
+     .type = R"md(0..7)md",
+     .doc = R"md(sphere: icosphere subdivisions (20·4^level faces))md"},
+    {.keys = {{.path = "geometry.builtin_surface.radius", .type = T::number, .default_json = R"(1)", .range = CaseKeyRange{0, k_inf_hi, true, false}}},
+     .type = R"md(number > 0)md",
+     .doc = R"md(sphere: radius (centred at the origin))md"},
+    {.keys = {{.path = "geometry.builtin_surface.R", .type = T::number, .default_json = R"(1)"},
+              {.path = "geometry.builtin_surface.r", .type = T::number, .default_json = R"(0.4)"}},
+     .type = R"md(numbers, 0 < r < R)md",
+     .doc = R"md(torus: radius of the centre circle (around z) and of the tube)md"},
+    {.keys = {{.path = "geometry.builtin_surface.nu", .type = T::integer, .default_json = R"(48)", .range = CaseKeyRange{3, 2000, false, false}},
+              {.path = "geometry.builtin_surface.nv", .type = T::integer, .default_json = R"(24)", .range = CaseKeyRange{3, 2000, false, false}}},
+     .type = R"md(3..2000)md",
+     .doc = R"md(torus: segments around z and around the tube)md"},
+    {.keys = {{.path = "geometry.builtin_surface.lo", .type = T::array, .default_json = R"([0, 0, 0])"},
+              {.path = "geometry.builtin_surface.hi", .type = T::array, .default_json = R"([1, 1, 1])"}},
+     .type = R"md(`[x, y, z]`)md",
+     .doc = R"md(box: lower and upper corner (`hi` above `lo` in every coordinate))md"},
+    {.keys = {{.path = "geometry.builtin_surface.divisions", .type = T::integer, .default_json = R"(4)", .range = CaseKeyRange{1, 500, false, false}}},
+     .type = R"md(1..500)md",
+     .doc = R"md(box: n × n squares (two triangles each) per side)md"},
+    {.keys = {{.path = "geometry.features", .type = T::any, .default_json = R"("auto")", .allowed = {"auto", "none"}}},
+     .type = R"md(string \| object)md",
+     .doc = R"md(feature edges kept sharp by the curved mesher: `"auto"` (dihedral angle > 60°), `"none"`, `{"angle": DEG}`, `{"file": "edges.json"}` (a JSON list of input vertex-index pairs, or `{"edges": [...]}`); only with a surface)md"},
+    {.keys = {{.path = "geometry.features.angle", .type = T::number, .range = CaseKeyRange{0, 180, true, true}}},
+     .type = R"md(number in (0, 180))md",
+     .doc = R"md(`{"angle": DEG}`: feature edges are those whose dihedral angle exceeds DEG)md"},
+    {.keys = {{.path = "geometry.features.file", .type = T::path}},
+     .type = R"md(path)md",
+     .doc = R"md(`{"file": "edges.json"}`: the feature edges listed in that file)md"},
+    {.keys = {{.path = "geometry.mesh", .type = T::path}},
+     .type = R"md(path)md",
+     .doc = R"md(a tetrahedral mesh of order 1–4: `.msh` (Gmsh 2.2/4.1; triangles' physical tags become boundary tags) or `.vtu` (method `given`))md"},
+    {.keys = {{.path = "geometry.data_surface", .type = T::path}},
+     .type = R"md(path)md",
+     .doc = R"md(with `geometry.mesh` or `builtin`: a dense surface the mesh approximates, with the boundary data painted on it; every boundary value (Dirichlet, Neumann, Robin expressions) is read at the closest point of that surface instead of at the mesh's own point, as a user transferring data from a scan to an external coarse mesh would (issue 22's coarse-linear peer, benchmarks/run_coarse_linear.py). report.json `data_surface`. Selections still act on the mesh (tags, planes, boxes))md"},
+    {.keys = {{.path = "geometry.mesh_dir", .type = T::path}},
+     .type = R"md(path)md",
+     .doc = R"md(instead of a surface or mesh: the output folder of `curvefem mesh` or of a curved `curvefem run` (mesh.msh + boundary_map.json with the shell fibers; a run of a built-in surface also saves input.msh). The curved mesh and φ are reused without meshing (method `curved`; only `meshing.method` and `meshing.validate` may be given, no `features`); the input is read from the path saved with the map and refused (exit 2, naming the file) if its bytes changed (FNV-1a checksum). The mesh is validated again against the ε it was made for (`meshing.validate`). Exterior meshes cannot be reused yet)md"},
+    {.keys = {{.path = "geometry.builtin", .type = T::object}},
+     .type = R"md(object)md",
+     .doc = R"md(instead of `mesh`: `{"shape": "ball", "size": h, "order": k}` (unit ball, Gmsh) or `{"shape": "cube", "divisions": n, "order": k}` (unit cube, 6n³ tets; boundary tags 1..6 = x=0, x=1, y=0, y=1, z=0, z=1))md"},
+    {.keys = {{.path = "geometry.builtin.shape", .type = T::string, .allowed = {"ball", "cube"}}},
+     .type = R"md(`"ball"` \| `"cube"`)md",
+     .doc = R"md(required: the unit ball or the unit cube)md"},
+    {.keys = {{.path = "geometry.builtin.size", .type = T::number, .default_json = R"(0.3)", .range = CaseKeyRange{0.02, 2, false, false}}},
+     .type = R"md(number in [0.02, 2])md",
+     .doc = R"md(ball: target edge length h)md"},
+    {.keys = {{.path = "geometry.builtin.divisions", .type = T::integer, .default_json = R"(4)", .range = CaseKeyRange{1, 100, false, false}}},
+     .type = R"md(1..100)md",
+     .doc = R"md(cube: n, n³ cubes of 6 tets)md"},
+    {.keys = {{.path = "geometry.builtin.order", .type = T::integer, .default_json = R"(1)", .range = CaseKeyRange{1, 4, false, false}}},
+     .type = R"md(1..4)md",
+     .doc = R"md(geometric order k of the built-in mesh)md"},
+    {.keys = {{.path = "meshing.method", .type = T::string, .allowed = {"curved", "dense", "given"}}},
+     .type = R"md(string)md",
+     .default_text = R"md(`"curved"` with a surface, `"given"` with a mesh)md",
+     .doc = R"md(`curved`: coarse curved mesh of order k with the bijective boundary map φ (DESIGN.md §1); `dense`: the input itself tetrahedralized (boundary unchanged, order 1, φ = identity) — the classical baseline; `given`: the tet mesh of `geometry.mesh`/`builtin`)md"},
+    {.keys = {{.path = "meshing.order", .type = T::integer, .default_json = R"(3)", .range = CaseKeyRange{1, 4, false, false}}},
+     .type = R"md(1..4)md",
+     .doc = R"md(curved: geometric order k)md"},
+    {.keys = {{.path = "meshing.eps", .type = T::number_list, .default_json = R"(0.01)", .range = CaseKeyRange{0, 0.5, true, false}}},
+     .type = R"md(number or list)md",
+     .doc = R"md(curved: distance bound ε, relative to the longest bounding-box edge of the input. A list of distinct bounds (e.g. `[0.04, 0.02, 0.01]`, issue 22) meshes every level from one shell and one coarsening (`curvefem mesh --eps-levels`) and solves them coarse to fine; report.json `eps_levels` has a row per level solved (ε, coarse faces, DOFs, degree, estimate, `change_on_input_rms_rel` / `_max_rel`: u_h on the dense input's vertices against the coarser level's, `change_gradient_norm_rel`, and the exact error when known). With `discretization.target_error` each level runs adaptive p and the run stops at the first level whose RMS and gradient changes and estimate are within the target (`reached`, `reason`). The outputs are the last level solved. Measured (`Run.EpsLevels…`, sphere, k = p = 3, mixed Dirichlet/Neumann): ε 4% / 2% / 1%: 48 / 62 / 130 faces, relative L2 error 3.0e-3 / 1.9e-3 / 6.1e-4, change on the input 8.8e-3 / 6.2e-3)md"},
+    {.keys = {{.path = "meshing.eps_field", .type = T::expression}},
+     .type = R"md(string)md",
+     .doc = R"md(curved: a spatially varying distance bound, an expression of x, y, z relative to the bbox edge like `eps`; the bound at an input vertex x is min(`eps`, field(x)), inside an input face the linear interpolation of its corners' (meshing/curved/README.md, "Spatially varying ε"). The coarsening and the curving honour it, the factors are saved in `boundary_map.json` and the validator checks every vertex against its own bound (`validation.max_distance_over_local_eps` ≤ 1). A value that is not positive at some vertex is an input error naming it. E.g. `"z > 0 ? 0.004 : 1"` with `eps` 0.02: 182 coarse faces on a sphere instead of 66)md"},
+    {.keys = {{.path = "meshing.eps_by_tag", .type = T::object, .range = CaseKeyRange{0, 0.5, true, false}}},
+     .type = R"md(object)md",
+     .doc = R"md(curved: distance bounds per face tag of the input, `{"cap": 0.002, "3": 0.01}` (keys a tag value or a tag name: OBJ group, MSH physical name; values relative like `eps`, in (0, 0.5]); a face's bound is its tag's entry, or `eps` for tags not listed; a vertex takes the smallest bound of its faces and of `eps_field`. Validated per vertex like `eps_field`. A key that names no tag of the input is an input error listing its tags)md"},
+    {.keys = {{.path = "meshing.thickness", .type = T::number, .default_json = R"(0.02)", .range = CaseKeyRange{0, 0.5, true, false}}},
+     .type = R"md(number)md",
+     .doc = R"md(curved: cap on the shell's half-thickness (relative))md"},
+    {.keys = {{.path = "meshing.feature_chains", .type = T::boolean, .default_json = R"(true)"}},
+     .type = R"md(boolean)md",
+     .doc = R"md(curved: the coarsening runs along feature chains (their vertices snapped onto the coarse feature edges in a reference copy of the input; meshing/shell/README.md) instead of keeping every feature vertex; ignored, with a warning, together with `eps_samples`)md"},
+    {.keys = {{.path = "meshing.curved_coarsening", .type = T::boolean, .default_json = R"(true)"}},
+     .type = R"md(boolean)md",
+     .doc = R"md(curved, order ≥ 2: the coarsening lets an input vertex lie up to 3 ε from the *linear* middle surface when its face's fully curved patch is within ε of it (meshing/curved/README.md, "Curved-aware coarsening"); false: ε on the linear surface (`curvefem mesh --linear-coarsening`))md"},
+    {.keys = {{.path = "meshing.eps_samples", .type = T::integer, .default_json = R"(0)", .range = CaseKeyRange{0, 16, false, false}}},
+     .type = R"md(integer 0 or 2..16)md",
+     .doc = R"md(curved: ε is enforced at every input vertex and, with L ≥ 2, also at the non-corner points of the degree-L barycentric lattice of every input triangle (2: edge midpoints; 3: two points per edge and the centroid); they are written to `boundary_map.json` and re-checked by the validator (`distance_points_max_distance_rel` in report.json). On a 768-face torus at ε = 0.6%, the images of these points reached 1.04% without them)md"},
+    {.keys = {{.path = "meshing.thickness_per_edge", .type = T::number, .default_json = R"(1)", .range = CaseKeyRange{0, 100, false, false}, .range_note = " (0: off)"}},
+     .type = R"md(number ≥ 0)md",
+     .doc = R"md(curved: also cap each vertex's initial half-thickness at this multiple of its mean input edge length (0: off); coarsening grows the shell again where the coarse faces allow. A shell much thicker than the input's triangles makes coarsening stall on dense inputs (refined elephant, ε = 2%: 9,258 coarse faces with 0, 662 with 1))md"},
+    {.keys = {{.path = "meshing.validate", .type = T::boolean, .default_json = R"(true)"}},
+     .type = R"md(bool)md",
+     .doc = R"md(curved: independent validation of the mesh (certified Jacobians, embedded boundary, distance) reported under `meshing.validation`; a failed validation still writes the results and exits 3)md"},
+    {.keys = {{.path = "meshing.deterministic", .type = T::boolean, .default_json = R"(true)"}},
+     .type = R"md(bool)md",
+     .doc = R"md(curved: coarsen on one thread so the same case gives a bit-identical mesh; `false` coarsens on `--threads` workers (about 1.6× faster on two cores, the mesh then varies between runs))md"},
+    {.keys = {{.path = "meshing.exterior", .type = T::boolean, .default_json = R"(false)"}},
+     .type = R"md(bool)md",
+     .doc = R"md(curved, dense: solve *outside* the input surface, out to its bounding box padded by `meshing.padding` (the inside is not part of the domain); see "Exterior problems" below)md"},
+    {.keys = {{.path = "meshing.solve_on", .type = T::string, .default_json = R"("outside")", .allowed = {"outside", "both"}}},
+     .type = R"md(`"outside"` \| `"both"`)md",
+     .doc = R"md(with `exterior`: the domain is the outside of the surface, or the whole box (two regions; the surface is an interface and the outer box the only boundary, so every selection must use `outer_box`))md"},
+    {.keys = {{.path = "meshing.padding", .type = T::number, .default_json = R"(0.25)", .range = CaseKeyRange{0, 10, true, false}, .range_note = " (relative to the longest bbox edge)"}},
+     .type = R"md(number in (0, 10])md",
+     .doc = R"md(with `exterior`: the box is the input's bounding box padded by this × its longest edge (curved: pushed out where the outer slab surface comes closer than a quarter of the padding))md"},
+    {.keys = {{.path = "physics.type", .type = T::string, .default_json = R"("poisson")", .allowed = {"poisson", "linear_elasticity", "neo_hookean"}}},
+     .type = R"md(string)md",
+     .doc = R"md(`poisson` \| `linear_elasticity` \| `neo_hookean`)md"},
+    {.keys = {{.path = "physics.kappa", .type = T::expression, .default_json = R"("1")"}},
+     .type = R"md(expression)md",
+     .doc = R"md(Poisson: −∇·(κ∇u) = f)md"},
+    {.keys = {{.path = "physics.kappa_inside", .type = T::expression}},
+     .type = R"md(expression)md",
+     .default_text = R"md(`kappa`)md",
+     .doc = R"md(Poisson with `solve_on` both: κ inside the surface (`kappa` is then the outside's))md"},
+    {.keys = {{.path = "physics.E_inside", .type = T::number, .range = CaseKeyRange{0, k_inf_hi, true, false}},
+              {.path = "physics.nu_inside", .type = T::number, .range = CaseKeyRange{-1, 0.5, true, true}}},
+     .type = R"md(numbers)md",
+     .default_text = R"md(`E`, `nu`)md",
+     .doc = R"md(elasticity with `solve_on` both: the inside's material (`E`, `nu` are then the outside's))md"},
+    {.keys = {{.path = "physics.E", .type = T::number, .default_json = R"(1)", .range = CaseKeyRange{0, k_inf_hi, true, false}},
+              {.path = "physics.nu", .type = T::number, .default_json = R"(0.3)", .range = CaseKeyRange{-1, 0.5, true, true}}},
+     .type = R"md(numbers)md",
+     .doc = R"md(elasticity: Young's modulus, Poisson ratio (ν in (−1, 0.5)))md"},
+    {.keys = {{.path = "physics.load_steps", .type = T::integer, .default_json = R"(1)", .range = CaseKeyRange{1, 10000, false, false}}},
+     .type = R"md(integer)md",
+     .doc = R"md(Neo-Hookean: loads and prescribed displacements applied in this many steps)md"},
+    {.keys = {{.path = "discretization.degree", .type = T::integer, .default_json = R"(1)", .range = CaseKeyRange{1, 4, false, false}}},
+     .type = R"md(1..4)md",
+     .doc = R"md(Lagrange degree p (independent of the mesh order k))md"},
+    {.keys = {{.path = "discretization.target_error", .type = T::number, .range = CaseKeyRange{0, 1, true, true}, .range_note = ": the relative H1-semi error estimate to reach"}},
+     .type = R"md(number in (0, 1))md",
+     .doc = R"md(adaptive p (issue 22): the degree is raised from `degree` up to 4 on the same mesh until the relative gradient-recovery estimate η / ‖∇u_h‖ (`error_estimate.relative`, fem/README.md) of every load case is at most this; report.json `adaptive` lists each iteration (degree, DOFs, estimate, seconds) and says whether the target was reached; the outputs are the last degree's. The estimate does not see the geometric error of ε: on a sphere at ε = 1%, k = 3, it falls 0.239 / 0.020 / 0.0057 / 0.0042 for p = 1..4 while the true error stops near 7e-3 (`Run.AdaptivePRaises…`))md"},
+    {.keys = {{.path = "discretization.quadrature", .type = T::any, .default_json = R"("default")", .range = CaseKeyRange{0, 30, false, false}}},
+     .type = R"md(0..30 \| `"default"`)md",
+     .doc = R"md(quadrature degree of the stiffness; default 2p + 2(k−1))md"},
+    {.keys = {{.path = "discretization.partial_dirichlet", .type = T::string, .allowed = {"nitsche", "nodal"}}},
+     .type = R"md(`"nitsche"` \| `"nodal"`)md",
+     .default_text = R"md(Poisson `"nitsche"`; elasticity `"nodal"` (Neo-Hookean's only mode))md",
+     .doc = R"md(a boundary face of the mesh that a Dirichlet selection covers only in part (see "Boundary data on the dense input"): imposed weakly by Nitsche's method on the face quadrature points the selection covers, or by fixing the DOFs it covers (the others stay free, and the flux is missing from the weak form on the face's Dirichlet part))md"},
+    {.keys = {{.path = "discretization.geometry", .type = T::string, .default_json = R"("iso")", .allowed = {"iso", "mesh"}}},
+     .type = R"md(`"iso"` \| `"mesh"`)md",
+     .doc = R"md(a mesh of order k above the degree p: `iso` solves on the degree-p interpolant of every tet's map (meshing/core/geometry_degree.hpp; the corners and the DOF points stay where they are, tets whose interpolant is not certified positive keep their map: `solve_geometry` in report.json, volume.vtu shows the solved geometry); `mesh` solves on the order-k maps (super-parametric). On a degree-k > p map the degree-p space misses the linear fields, rigid rotations included: P2 elasticity on the curved elephant at k = 3 came out at 0.39 of the reference displacement (16% RMS error) with `mesh`, 2.3% with `iso` (k = 2: 1.3%; issue 20, meshing/curved/README.md))md"},
+    {.keys = {{.path = "rhs", .type = T::expression}},
+     .type = R"md(expression(s))md",
+     .default_text = R"md(0)md",
+     .doc = R"md(Poisson: f; elasticity: body force, an array of three (evaluated in the volume))md"},
+    {.keys = {{.path = "boundary_conditions[]", .type = T::array, .default_json = R"([])"}},
+     .type = R"md(array)md",
+     .doc = R"md(`{"type": "dirichlet" \| "neumann", "select": S, "value": V}`; Neumann is the flux κ∂u/∂n (Poisson) or the traction σn (elasticity); vector Dirichlet takes `"components": [bool, bool, bool]` (default all true); Poisson also takes `{"type": "robin", "select": S, "h": H, "u_inf": U}`, the convective condition −κ∂u/∂n = h (u − u∞) (h > 0; H and U are expressions, with `nx`, `ny`, `nz` allowed as for Neumann values))md"},
+    {.keys = {{.path = "boundary_conditions[].type", .type = T::string, .allowed = {"dirichlet", "neumann", "robin"}}},
+     .type = R"md(`"dirichlet"` \| `"neumann"` \| `"robin"`)md",
+     .doc = R"md(required: the kind of condition (robin: Poisson only))md"},
+    {.keys = {{.path = "boundary_conditions[].value", .type = T::expression}},
+     .type = R"md(expression(s))md",
+     .doc = R"md(required for dirichlet and neumann: the prescribed value, flux or traction (an array of three for vector problems))md"},
+    {.keys = {{.path = "boundary_conditions[].components", .type = T::array, .default_json = R"([true, true, true])"}},
+     .type = R"md(`[bool, bool, bool]`)md",
+     .doc = R"md(vector Dirichlet: which components are imposed)md"},
+    {.keys = {{.path = "boundary_conditions[].h", .type = T::expression},
+              {.path = "boundary_conditions[].u_inf", .type = T::expression}},
+     .type = R"md(expressions)md",
+     .doc = R"md(robin only (and required there): h and u∞ of −κ∂u/∂n = h (u − u∞))md"},
+    {.keys = {{.path = "boundary_conditions[].select", .type = T::selection}},
+     .type = R"md(object)md",
+     .doc = R"md(exactly one of the kinds below. A selection that selects nothing is an error (exit 2))md"},
+    {.keys = {{.path = "boundary_conditions[].select.all", .type = T::boolean}},
+     .type = R"md(`true`)md",
+     .doc = R"md(the whole boundary)md"},
+    {.keys = {{.path = "boundary_conditions[].select.tag", .type = T::integer, .range = CaseKeyRange{0, 1073741824, false, false}}},
+     .type = R"md(integer)md",
+     .doc = R"md(surface methods: input faces with this tag; `given`: boundary tag of the mesh)md"},
+    {.keys = {{.path = "boundary_conditions[].select.box", .type = T::array}},
+     .type = R"md(`[[x0,y0,z0],[x1,y1,z1]]`)md",
+     .doc = R"md(points with lo ≤ x ≤ hi (closed))md"},
+    {.keys = {{.path = "boundary_conditions[].select.plane", .type = T::object}},
+     .type = R"md(`{"point": [..], "normal": [..]}`)md",
+     .doc = R"md(points on the side the normal points to, (x − point)·normal ≥ 0)md"},
+    {.keys = {{.path = "boundary_conditions[].select.plane.point", .type = T::array},
+              {.path = "boundary_conditions[].select.plane.normal", .type = T::array}},
+     .type = R"md(`[x, y, z]`)md",
+     .doc = R"md(required: a point of the plane and a non-zero normal towards the selected side)md"},
+    {.keys = {{.path = "boundary_conditions[].select.normal", .type = T::object}},
+     .type = R"md(`{"direction": [..], "angle": DEG}`)md",
+     .default_text = R"md(angle 0)md",
+     .doc = R"md(input faces whose outward normal is within DEG degrees of the direction (surface methods only))md"},
+    {.keys = {{.path = "boundary_conditions[].select.normal.direction", .type = T::array}},
+     .type = R"md(`[dx, dy, dz]`)md",
+     .doc = R"md(required: a non-zero direction)md"},
+    {.keys = {{.path = "boundary_conditions[].select.normal.angle", .type = T::number, .default_json = R"(0)", .range = CaseKeyRange{0, 180, false, false}}},
+     .type = R"md(number in [0, 180])md",
+     .doc = R"md(the largest angle in degrees between a selected face's normal and the direction)md"},
+    {.keys = {{.path = "boundary_conditions[].select.and", .type = T::array},
+              {.path = "boundary_conditions[].select.or", .type = T::array}},
+     .type = R"md(array of selections)md",
+     .doc = R"md(all / any of them (surface methods only))md"},
+    {.keys = {{.path = "boundary_conditions[].select.not", .type = T::selection}},
+     .type = R"md(selection)md",
+     .doc = R"md(the complement (surface methods only))md"},
+    {.keys = {{.path = "boundary_conditions[].select.outer_box", .type = T::string, .allowed = {"all", "xmin", "xmax", "ymin", "ymax", "zmin", "zmax"}}},
+     .type = R"md(`"all"` \| `"xmin"` \| `"xmax"` \| `"ymin"` \| `"ymax"` \| `"zmin"` \| `"zmax"`)md",
+     .doc = R"md(`meshing.exterior` only: the outer box, or one of its sides)md"},
+    {.keys = {{.path = "exact_gradient", .type = T::expression}},
+     .type = R"md(expressions)md",
+     .doc = R"md(derivatives of `exact` for the H1 error (see below); otherwise finite differences)md"},
+    {.keys = {{.path = "exact", .type = T::expression}},
+     .type = R"md(expression(s))md",
+     .doc = R"md(exact solution: L2 and H1 errors in report.json, `exact` and `error` fields in volume.vtu and surface.vtu)md"},
+    {.keys = {{.path = "load_cases[]", .type = T::array}},
+     .type = R"md(array)md",
+     .doc = R"md(instead of the top-level `rhs`, `boundary_conditions`, `exact`, `exact_gradient`: `[{"name": N, "rhs": ..., "boundary_conditions": [...], "exact": ..., "exact_gradient": ...}, ...]` (names of letters, digits, `_`, `-`; distinct), each solved on the one mesh and function space of the run (mesh once; cases with the same Dirichlet part share one CHOLMOD factorization with the direct solver: `factorizations`, `factorization_reuses` in report.json). report.json gets `load_cases[]` (errors, surface errors, solver, physics details per case); volume.vtu / surface.vtu hold every case's fields with a `_N` suffix; `volume_N.vtu` / `surface_N.vtu` are result.pvd's time steps, one per case)md"},
+    {.keys = {{.path = "load_cases[].name", .type = T::string}},
+     .type = R"md(string)md",
+     .doc = R"md(required: letters, digits, `_`, `-`; distinct)md"},
+    {.keys = {{.path = "load_cases[].rhs", .type = T::expression},
+              {.path = "load_cases[].exact", .type = T::expression},
+              {.path = "load_cases[].exact_gradient", .type = T::expression}},
+     .type = R"md(as at the top level)md",
+     .doc = R"md(the load case's `rhs`, `exact` and `exact_gradient`)md"},
+    {.keys = {{.path = "load_cases[].boundary_conditions[]", .type = T::array, .default_json = R"([])"}},
+     .type = R"md(array)md",
+     .doc = R"md(the load case's boundary conditions, with the keys of the top-level `boundary_conditions[]`)md"},
+    {.keys = {{.path = "solver.type", .type = T::string, .default_json = R"("auto")", .allowed = {"auto", "direct", "cg"}}},
+     .type = R"md(string)md",
+     .doc = R"md(`direct` (CHOLMOD supernodal) \| `cg` (PETSc CG + GAMG) \| `auto`: direct up to 25k unknowns (Poisson, elasticity P1), 40k (elasticity P2), 120k (elasticity P3–P4), cg above — the crossovers measured in benchmarks/results/solver_crossover.md)md"},
+    {.keys = {{.path = "solver.preconditioner", .type = T::string, .default_json = R"("gamg")", .allowed = {"gamg", "hypre", "ml"}}},
+     .type = R"md(string)md",
+     .doc = R"md(`cg`: `gamg` (PETSc smoothed aggregation; takes the near-nullspace) \| `hypre` (hypre BoomerAMG, classical AMG; no near-nullspace) \| `ml` (Trilinos ML smoothed aggregation; takes the near-nullspace). benchmarks/results/solver_crossover.md compares them)md"},
+    {.keys = {{.path = "solver.rtol", .type = T::number, .default_json = R"(1e-10)", .range = CaseKeyRange{0, k_inf_hi, true, false}},
+              {.path = "solver.max_iterations", .type = T::integer, .default_json = R"(5000)", .range = CaseKeyRange{1, 1000000, false, false}}},
+     .type = R"md(number, integer)md",
+     .doc = R"md(for `cg`)md"},
+    {.keys = {{.path = "solver.near_nullspace", .type = T::boolean, .default_json = R"(true)"}},
+     .type = R"md(boolean)md",
+     .doc = R"md(`cg`, elasticity: GAMG gets the rigid-body modes of the DOF points as its near-nullspace (`false`: GAMG's default, translations only; to compare — fem/README.md has the iteration counts))md"},
+    {.keys = {{.path = "output.dir", .type = T::path, .default_json = R"("out")"}},
+     .type = R"md(path)md",
+     .doc = R"md(results: `volume.vtu`, `surface.vtu`, `result.pvd`, `resolved_case.json`, `report.json` (last))md"},
+};
+// clang-format on
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s.precision(15);
+  s << v;
+  return s.str();
+}
+
+std::string default_column(const CaseKeyRow& row) {
+  if (!row.default_text.empty()) return std::string(row.default_text);
+  std::string out;
+  bool any = false;
+  for (const CaseKey& k : row.keys) {
+    if (!out.empty()) out += ", ";
+    if (k.default_json.empty()) {
+      out += "—";
+      continue;
+    }
+    any = true;
+    const bool is_string = k.default_json.front() == '"';
+    out += is_string ? "`" + std::string(k.default_json) + "`" : std::string(k.default_json);
+  }
+  return any ? out : "—";
+}
+
+/// `path` without the `[]` of its components.
+std::string plain(std::string_view path) {
+  std::string out;
+  for (std::size_t i = 0; i < path.size(); ++i)
+    if (!(path[i] == '[' && i + 1 < path.size() && path[i + 1] == ']')) {
+      out += path[i];
+    } else {
+      ++i;
+    }
+  return out;
+}
+
+}  // namespace
+
+std::string CaseKeyRange::text(bool integer) const {
+  auto num = [&](double v) {
+    return integer ? std::to_string(static_cast<long long>(v)) : number_text(v);
+  };
+  const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
+  if (integer && has_lo && has_hi) return num(lo) + ".." + num(hi);
+  if (has_lo && has_hi)
+    return std::string(lo_open ? "(" : "[") + num(lo) + ", " + num(hi) + (hi_open ? ")" : "]");
+  if (has_lo) return std::string(lo_open ? "> " : ">= ") + num(lo);
+  if (has_hi) return std::string(hi_open ? "< " : "<= ") + num(hi);
+  return "any value";
+}
+
+bool CaseKeyRange::contains(double v) const {
+  if (std::isnan(v)) return false;
+  if (lo_open ? !(v > lo) : !(v >= lo)) return false;
+  if (hi_open ? !(v < hi) : !(v <= hi)) return false;
+  return true;
+}
+
+const std::vector<CaseKeyRow>& case_schema() { return k_rows; }
+
+const CaseKey& case_key(std::string_view path) {
+  for (const CaseKeyRow& row : k_rows)
+    for (const CaseKey& k : row.keys)
+      if (k.path == path) return k;
+  throw Error("case schema: no key " + std::string(path) + " (pipeline/case_schema.cpp)");
+}
+
+std::set<std::string> case_section_keys(std::string_view section) {
+  const std::string prefix = section.empty() ? std::string() : std::string(section) + ".";
+  std::set<std::string> keys;
+  for (const CaseKeyRow& row : k_rows)
+    for (const CaseKey& k : row.keys) {
+      if (k.path.substr(0, prefix.size()) != prefix) continue;
+      std::string_view rest = k.path.substr(prefix.size());
+      rest = rest.substr(0, rest.find('.'));
+      keys.insert(plain(rest));
+    }
+  if (keys.empty())
+    throw Error("case schema: no keys under " + std::string(section) +
+                " (pipeline/case_schema.cpp)");
+  return keys;
+}
+
+std::string case_schema_markdown() {
+  std::string out = "| key | type | default | meaning |\n|---|---|---|---|\n";
+  for (const CaseKeyRow& row : k_rows) {
+    std::string keys;
+    for (const CaseKey& k : row.keys)
+      keys += (keys.empty() ? "`" : ", `") + std::string(k.path) + "`";
+    out += "| " + keys + " | " + std::string(row.type) + " | " + default_column(row) + " | " +
+           std::string(row.doc) + " |\n";
+  }
+  return out;
+}
+
+std::string_view to_string(CaseKeyType t) {
+  switch (t) {
+    case T::object:
+      return "object";
+    case T::array:
+      return "array";
+    case T::string:
+      return "string";
+    case T::number:
+      return "number";
+    case T::integer:
+      return "integer";
+    case T::boolean:
+      return "boolean";
+    case T::path:
+      return "path";
+    case T::expression:
+      return "expression";
+    case T::selection:
+      return "selection";
+    case T::number_list:
+      return "number_list";
+    case T::any:
+      return "any";
+  }
+  return "any";
+}
+
+nlohmann::json case_schema_json() {
+  using json = nlohmann::json;
+  json out = json::array();
+  for (const CaseKeyRow& row : k_rows)
+    for (const CaseKey& k : row.keys) {
+      json o = {{"path", std::string(k.path)},
+                {"type", std::string(to_string(k.type))},
+                {"default", k.default_json.empty() ? json() : json::parse(k.default_json)},
+                {"default_text", default_column(row)},
+                {"allowed", json::array()},
+                {"minimum", nullptr},
+                {"maximum", nullptr},
+                {"minimum_exclusive", false},
+                {"maximum_exclusive", false},
+                {"type_text", std::string(row.type)},
+                {"doc", std::string(row.doc)}};
+      for (const auto a : k.allowed) o["allowed"].push_back(std::string(a));
+      if (k.range) {
+        if (std::isfinite(k.range->lo)) o["minimum"] = k.range->lo;
+        if (std::isfinite(k.range->hi)) o["maximum"] = k.range->hi;
+        o["minimum_exclusive"] = k.range->lo_open;
+        o["maximum_exclusive"] = k.range->hi_open;
+      }
+      out.push_back(std::move(o));
+    }
+  return out;
+}
+
+std::string replace_schema_block(const std::string& readme, const std::string& table) {
+  const auto begin = readme.find(k_schema_begin);
+  const auto end = readme.find(k_schema_end);
+  if (begin == std::string::npos || end == std::string::npos || end < begin)
+    throw Error("no " + std::string(k_schema_begin) + " ... " + std::string(k_schema_end) +
+                " block in the text");
+  // Blank lines around the table keep it a Markdown table of its own.
+  return readme.substr(0, begin + k_schema_begin.size()) + "\n\n" + table + "\n" +
+         readme.substr(end);
+}
+
+}  // namespace curvefem::pipeline

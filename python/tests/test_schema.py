@@ -1,0 +1,61 @@
+"""curvefem.schema(): the case keys as data, against what read_case accepts and resolves."""
+
+import pytest
+
+import curvefem
+
+CUBE = {"geometry": {"builtin": {"shape": "cube", "divisions": 1}}}
+
+
+def top_level_sections():
+    return list(dict.fromkeys(k["path"].split(".")[0].removesuffix("[]")
+                              for k in curvefem.schema()))
+
+
+def test_schema_lists_every_key_once_with_its_fields():
+    keys = curvefem.schema()
+    paths = [k["path"] for k in keys]
+    assert len(paths) == len(set(paths))
+    for k in keys:
+        assert set(k) >= {"path", "type", "default", "default_text", "allowed", "minimum",
+                          "maximum", "type_text", "doc"}
+        assert k["doc"], k["path"]
+    meshing = {k["path"]: k for k in curvefem.schema("meshing")}
+    assert all(p.startswith("meshing.") for p in meshing)
+    assert meshing["meshing.eps"]["maximum"] == 0.5 and meshing["meshing.eps"]["minimum_exclusive"]
+    assert "given" in meshing["meshing.method"]["allowed"]
+
+
+def test_every_documented_top_level_section_is_accepted():
+    sections = top_level_sections()
+    assert {"geometry", "meshing", "physics", "solver", "boundary_conditions"} <= set(sections)
+    for section in sections:
+        case = dict(CUBE)
+        case.setdefault(section, "?")
+        try:
+            curvefem.read_case(case)
+        except curvefem.InputError as e:  # a bad value, but not an unknown key
+            assert "/%s: unknown key" % section not in str(e), str(e)
+    with pytest.raises(curvefem.InputError) as info:
+        curvefem.read_case(dict(CUBE, not_a_section={}))
+    assert "/not_a_section: unknown key" in str(info.value)
+    # The parser's list of allowed keys is the schema's.
+    assert "(allowed here: %s)" % ", ".join(sorted(sections)) in str(info.value)
+
+
+def test_schema_defaults_are_what_a_minimal_case_resolves_to():
+    resolved = curvefem.resolved(CUBE)
+    compared = 0
+    for k in curvefem.schema():
+        section, _, key = k["path"].partition(".")
+        if k["default"] is None or section not in ("physics", "discretization", "solver"):
+            continue
+        if key in resolved.get(section, {}):
+            assert resolved[section][key] == k["default"], k["path"]
+            compared += 1
+    assert compared >= 8
+
+
+def test_case_docstring_lists_the_sections():
+    for section in top_level_sections():
+        assert "        %s=" % section in curvefem.case.__doc__

@@ -1,0 +1,281 @@
+// The case schema as data (pipeline/case_schema.hpp): the table is consistent, its defaults are
+// the parser's (resolved_case.json of minimal cases), the parser accepts exactly its keys and
+// checks its enums and ranges, and cases/README.md's key table is the generated one.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "meshing/core/error.hpp"
+#include "pipeline/case_file.hpp"
+#include "pipeline/case_schema.hpp"
+#include "tests/support/test_support.hpp"
+
+using namespace curvefem;
+using namespace curvefem::pipeline;
+using json = nlohmann::json;
+
+namespace {
+
+std::vector<std::string> split(std::string_view path) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto dot = path.find('.', start);
+    out.emplace_back(path.substr(start, dot == std::string_view::npos ? dot : dot - start));
+    if (dot == std::string_view::npos) return out;
+    start = dot + 1;
+  }
+}
+
+/// The value at schema path `path` in `j` (first element of every `[]` array before the last
+/// component; the array itself for a last `[]` component), or nullptr.
+const json* lookup(const json& j, std::string_view path) {
+  const json* at = &j;
+  const auto parts = split(path);
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    std::string key = parts[i];
+    const bool array = key.size() > 2 && key.substr(key.size() - 2) == "[]";
+    if (array) key.resize(key.size() - 2);
+    if (!at->is_object() || !at->contains(key)) return nullptr;
+    at = &(*at)[key];
+    if (array && i + 1 < parts.size()) {
+      if (!at->is_array() || at->empty()) return nullptr;
+      at = &(*at)[0];
+    }
+  }
+  return at;
+}
+
+std::string read_text(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// The InputError message of reading `j`, or "" when it reads.
+std::string error_of(const json& j) {
+  try {
+    read_case_json(j, test::scratch_dir("case_schema") / "case.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// A curved exterior case on the built-in sphere solved on both sides (so that every physics and
+/// meshing key applies).
+json sphere_case(const std::string& physics) {
+  return {{"geometry", {{"builtin_surface", {{"shape", "sphere"}}}}},
+          {"meshing", {{"exterior", true}, {"solve_on", "both"}}},
+          {"physics", {{"type", physics}}}};
+}
+
+}  // namespace
+
+TEST(CaseSchema, TableIsConsistent) {
+  std::set<std::string> paths;
+  for (const CaseKeyRow& row : case_schema()) {
+    ASSERT_FALSE(row.keys.empty());
+    EXPECT_FALSE(row.type.empty()) << row.keys[0].path;
+    EXPECT_FALSE(row.doc.empty()) << row.keys[0].path;
+    // Every allowed value is documented in the row.
+    const std::string text =
+        std::string(row.type) + " " + std::string(row.default_text) + " " + std::string(row.doc);
+    for (const CaseKey& k : row.keys) {
+      SCOPED_TRACE(std::string(k.path));
+      EXPECT_TRUE(paths.insert(std::string(k.path)).second) << "two rows for the key";
+      const auto parts = split(k.path);
+      if (parts.size() > 1) {  // the parent is a key of its own, or a top-level section
+        std::string parent(k.path.substr(0, k.path.rfind('.')));
+        if (parts.size() > 2 || parent.find("[]") != std::string::npos)
+          EXPECT_NO_THROW(case_key(parent)) << "no row for the parent " << parent;
+      }
+      for (const auto a : k.allowed)
+        EXPECT_NE(text.find(std::string(a)), std::string::npos)
+            << "allowed value '" << a << "' is not in the row's documentation";
+      if (k.default_json.empty()) continue;
+      json d;
+      ASSERT_NO_THROW(d = json::parse(k.default_json)) << k.default_json;
+      if (k.range && d.is_number()) {
+        EXPECT_TRUE(k.range->contains(d.get<double>())) << "default outside the range";
+      }
+      if (!k.allowed.empty() && d.is_string())
+        EXPECT_NE(std::find(k.allowed.begin(), k.allowed.end(), d.get<std::string>()),
+                  k.allowed.end())
+            << "default not among the allowed values";
+    }
+  }
+  EXPECT_THROW(case_key("meshing.not_a_key"), Error);
+}
+
+// Minimal cases (only what each needs), read; wherever the resolved case holds a key the case did
+// not give and the table has a default for, the two agree; every such key is checked somewhere.
+TEST(CaseSchema, DefaultsAreTheResolvedCasesDefaults) {
+  const json dirichlet_vector =
+      json::array({{{"type", "dirichlet"}, {"select", {{"all", true}}}, {"value", {0, 0, 0}}}});
+  const json normal_neumann = json::array(
+      {{{"type", "neumann"}, {"select", {{"normal", {{"direction", {0, 0, 1}}}}}}, {"value", 1}}});
+  const std::vector<json> minimal = {
+      {{"geometry", {{"builtin", {{"shape", "cube"}}}}}},
+      {{"geometry", {{"builtin", {{"shape", "ball"}}}}}},
+      {{"geometry", {{"builtin_surface", {{"shape", "sphere"}}}}}},
+      {{"geometry", {{"builtin_surface", {{"shape", "torus"}}}}}},
+      {{"geometry", {{"builtin_surface", {{"shape", "box"}}}}}},
+      {{"geometry", {{"builtin_surface", {{"shape", "sphere"}}}}},
+       {"meshing", {{"exterior", true}}}},
+      {{"geometry", {{"builtin", {{"shape", "cube"}}}}},
+       {"physics", {{"type", "linear_elasticity"}}},
+       {"boundary_conditions", dirichlet_vector}},
+      {{"geometry", {{"builtin", {{"shape", "cube"}}}}}, {"physics", {{"type", "neo_hookean"}}}},
+      {{"geometry", {{"builtin_surface", {{"shape", "sphere"}}}}},
+       {"boundary_conditions", normal_neumann}},
+      {{"geometry", {{"builtin", {{"shape", "cube"}}}}},
+       {"load_cases", json::array({{{"name", "a"}}})}},
+  };
+  const auto dir = test::scratch_dir("case_schema_defaults");
+  std::map<std::string, int> checked;
+  for (const json& m : minimal) {
+    SCOPED_TRACE(m.dump());
+    CaseSpec c;
+    ASSERT_NO_THROW(c = read_case_json(m, dir / "case.json"));
+    for (const CaseKeyRow& row : case_schema())
+      for (const CaseKey& k : row.keys) {
+        if (k.default_json.empty()) continue;
+        const json* given = lookup(m, k.path);
+        const json* resolved = lookup(c.resolved, k.path);
+        if (given || !resolved) continue;
+        json expected = json::parse(k.default_json);
+        if (k.type == CaseKeyType::path)  // relative to the case file's folder
+          expected = (dir / expected.get<std::string>()).string();
+        EXPECT_EQ(*resolved, expected) << k.path;
+        ++checked[std::string(k.path)];
+      }
+  }
+  for (const CaseKeyRow& row : case_schema())
+    for (const CaseKey& k : row.keys)
+      if (!k.default_json.empty())
+        EXPECT_GT(checked[std::string(k.path)], 0)
+            << k.path << " has a default but no minimal case resolves it: add one";
+}
+
+TEST(CaseSchema, ParserAcceptsExactlyTheTablesKeys) {
+  // An unknown key in each object is refused with the table's keys for that object.
+  struct Where {
+    std::string section, pointer;
+    json base;
+  };
+  const json cube = {{"geometry", {{"builtin", {{"shape", "cube"}}}}}};
+  const json bc = {{"type", "dirichlet"}, {"select", {{"all", true}}}, {"value", 0}};
+  std::vector<Where> where;
+  for (const char* section : {"meshing", "physics", "discretization", "solver", "output"})
+    where.push_back({section, std::string("/") + section, cube});
+  where.push_back({"", "", cube});
+  where.push_back({"geometry", "/geometry", cube});
+  where.push_back({"geometry.builtin", "/geometry/builtin", cube});
+  json with_bc = cube;
+  with_bc["boundary_conditions"] = json::array({bc});
+  where.push_back({"boundary_conditions[]", "/boundary_conditions/0", with_bc});
+  where.push_back({"boundary_conditions[].select", "/boundary_conditions/0/select", with_bc});
+  json with_load = cube;
+  with_load["load_cases"] = json::array({{{"name", "a"}}});
+  where.push_back({"load_cases[]", "/load_cases/0", with_load});
+  for (const auto& w : where) {
+    SCOPED_TRACE(w.section);
+    json j = w.base;
+    j[json::json_pointer(w.pointer + "/not_a_key")] = 1;
+    std::string list;
+    for (const auto& k : case_section_keys(w.section)) list += (list.empty() ? "" : ", ") + k;
+    EXPECT_NE(error_of(j).find(w.pointer + "/not_a_key: unknown key (allowed here: " + list + ")"),
+              std::string::npos)
+        << error_of(j);
+  }
+  // Every documented top-level section is accepted.
+  for (const auto& section : case_section_keys("")) {
+    const std::string message = error_of({{section, "?"}});
+    EXPECT_EQ(message.find("/" + section + ": unknown key"), std::string::npos) << message;
+  }
+}
+
+TEST(CaseSchema, ParserChecksTheTablesEnumsAndRanges) {
+  const std::vector<json> bases = {sphere_case("poisson"), sphere_case("linear_elasticity"),
+                                   sphere_case("neo_hookean")};
+  int enums = 0, ranges = 0;
+  for (const CaseKeyRow& row : case_schema())
+    for (const CaseKey& k : row.keys) {
+      const auto parts = split(k.path);
+      if (parts.size() != 2 || k.path.find("[]") != std::string_view::npos) continue;
+      const std::string pointer = "/" + parts[0] + "/" + parts[1];
+      SCOPED_TRACE(pointer);
+      if (!k.allowed.empty()) {
+        json j = bases[0];
+        j[json::json_pointer(pointer)] = "zz";
+        const std::string message = error_of(j);
+        EXPECT_NE(message.find(pointer + ": 'zz': expected "), std::string::npos) << message;
+        for (const auto a : k.allowed)
+          EXPECT_NE(message.find(std::string(a)), std::string::npos) << message;
+        ++enums;
+      }
+      if (k.range && (k.type == CaseKeyType::number || k.type == CaseKeyType::integer) &&
+          std::isfinite(k.range->lo)) {
+        // Just below the range: refused (by at least one of the physics the key is for).
+        const double below = k.range->lo_open ? k.range->lo : k.range->lo - 1;
+        std::string messages;
+        bool refused = false;
+        for (const json& base : bases) {
+          json j = base;
+          if (k.type == CaseKeyType::integer)
+            j[json::json_pointer(pointer)] = static_cast<int>(below);
+          else
+            j[json::json_pointer(pointer)] = below;
+          const std::string message = error_of(j);
+          messages += message + "\n";
+          refused |= message.find(pointer + ": must be") != std::string::npos;
+        }
+        EXPECT_TRUE(refused) << messages;
+        ++ranges;
+      }
+    }
+  EXPECT_GE(enums, 8);
+  EXPECT_GE(ranges, 12);
+}
+
+TEST(CaseSchema, ReadmeKeyTableIsTheGeneratedOne) {
+  const auto readme = test::source_dir() / "cases/README.md";
+  const std::string text = read_text(readme);
+  ASSERT_FALSE(text.empty()) << readme;
+  std::string generated;
+  ASSERT_NO_THROW(generated = replace_schema_block(text, case_schema_markdown()))
+      << readme << " has no " << k_schema_begin << " ... " << k_schema_end << " block";
+  if (generated == text) return;
+  // Name the first line that differs.
+  std::istringstream a(text), b(generated);
+  std::string la, lb;
+  int line = 0;
+  while (true) {
+    ++line;
+    const bool more_a = static_cast<bool>(std::getline(a, la));
+    const bool more_b = static_cast<bool>(std::getline(b, lb));
+    if (la != lb || more_a != more_b) break;
+  }
+  ADD_FAILURE() << "cases/README.md's key table is not the one generated from "
+                   "pipeline/case_schema.cpp (first difference at line "
+                << line << ":\n  README:    " << la << "\n  generated: " << lb
+                << "\nRegenerate it: build/tools/curvefem/curvefem schema --update cases/README.md";
+}
+
+TEST(CaseSchema, MarkdownHasOneRowPerTableRow) {
+  const std::string md = case_schema_markdown();
+  EXPECT_EQ(md.rfind("| key | type | default | meaning |\n|---|---|---|---|\n", 0), 0u);
+  EXPECT_EQ(static_cast<std::size_t>(std::count(md.begin(), md.end(), '\n')),
+            case_schema().size() + 2);
+  // The defaults column comes from the keys' defaults unless the row says otherwise.
+  EXPECT_NE(md.find("| `meshing.order` | 1..4 | 3 |"), std::string::npos);
+  EXPECT_NE(md.find("| `solver.rtol`, `solver.max_iterations` | number, integer | 1e-10, 5000 |"),
+            std::string::npos);
+  EXPECT_THROW(replace_schema_block("no markers", md), Error);
+}
