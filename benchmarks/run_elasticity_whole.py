@@ -15,13 +15,12 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 
 import meshio
 import numpy as np
+from whole_run_common import gmsh_box, timed
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
@@ -30,6 +29,8 @@ ap.add_argument("--length", type=float, default=4.0)
 ap.add_argument("--p", type=int, default=2)
 ap.add_argument("--repeat", type=int, default=3)
 ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+ap.add_argument("--solvers", nargs="+", default=["cg", "auto"])
+ap.add_argument("--peer-solvers", nargs="+", default=["cg-gamg", "direct"])
 ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvefem"))
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/elasticity_whole_run.md"))
 ap.add_argument("--work", default=None)
@@ -39,29 +40,11 @@ args = ap.parse_args()
 work = args.work or tempfile.mkdtemp(prefix="elasticity_whole_")
 os.makedirs(work, exist_ok=True)
 peer = os.path.join(root, "benchmarks/peers/dolfinx_elasticity_msh.py")
-geo, msh = os.path.join(work, "beam.geo"), os.path.join(work, "beam.msh")
-with open(geo, "w") as f:
-    # OpenCASCADE box faces: 1 x = 0, 2 x = L, 3..6 the sides.
-    f.write('SetFactory("OpenCASCADE");\n'
-            f"Box(1) = {{0,0,0,{args.length},1,1}};\n"
-            f"Mesh.CharacteristicLengthMax = {args.h};\nMesh.CharacteristicLengthMin = {args.h};\n"
-            "Physical Volume(1) = {1};\nPhysical Surface(1) = {1};\nPhysical Surface(2) = {2};\n"
-            "Physical Surface(3) = {3,4,5,6};\n")
-subprocess.run(["gmsh", geo, "-3", "-o", msh, "-format", "msh41"], check=True,
-               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-
-
-def timed(cmd):
-    t = time.perf_counter()
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t
-    if r.returncode != 0:
-        sys.exit(f"failed ({r.returncode}): {' '.join(cmd)}\n{r.stderr[-2000:]}")
-    return wall, r.stdout
-
+# OpenCASCADE box faces: 1 x = 0, 2 x = L, 3..6 the sides.
+msh = gmsh_box(work, "beam", (args.length, 1, 1), args.h, {1: [1], 2: [2], 3: [3, 4, 5, 6]})
 
 rows = []
-for solver in ("cg", "auto"):
+for solver in args.solvers:
     case = {"geometry": {"mesh": msh},
             "physics": {"type": "linear_elasticity", "E": 1000.0, "nu": 0.3},
             "discretization": {"degree": args.p},
@@ -86,7 +69,7 @@ for solver in ("cg", "auto"):
                      "dofs": rep["dofs"], "iterations": rep["solver"]["iterations"],
                      "wall": statistics.median(walls), "assembly": ts["assembly"],
                      "solve": ts["solve"], "max_u": float(np.sqrt((u**2).sum(axis=1)).max())})
-for solver in ("cg-gamg", "direct"):
+for solver in args.peer_solvers:
     cmd = ["/usr/bin/python3", peer, msh, str(args.p), solver]
     timed(cmd)  # warm the form cache
     walls, rep = [], None
@@ -104,7 +87,8 @@ with open(args.out + ".tmp", "w") as f:
     f.write("# Whole `curvefem run` against DOLFINx: linear elasticity (issue 24)\n\n")
     f.write(f"Generated {time.strftime('%Y-%m-%d %H:%M')} by `/usr/bin/python3 "
             f"benchmarks/run_elasticity_whole.py --h {args.h} --length {args.length} --p {args.p} "
-            f"--repeat {args.repeat}` on {os.cpu_count()} cores. {args.note}\n\n")
+            f"--repeat {args.repeat} --solvers {' '.join(args.solvers)} --peer-solvers "
+            f"{' '.join(args.peer_solvers)}` on {os.cpu_count()} cores. {args.note}\n\n")
     f.write(f"P{args.p} linear elasticity on the beam [0, {args.length}] x [0, 1] x [0, 1] (Gmsh, "
             f"h = {args.h}), clamped at x = 0, traction (0, 0, -1) on x = {args.length}, E = 1000, "
             "nu = 0.3. CG to rtol 1e-10 with GAMG and the rigid-body modes in both codes. wall = "

@@ -15,10 +15,10 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
+
+from whole_run_common import gmsh_box, timed
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
@@ -36,14 +36,7 @@ os.makedirs(work, exist_ok=True)
 peer = os.path.join(root, "benchmarks/peers/dolfinx_poisson_msh.py")
 qdeg = 2 * args.p + 6  # fem::default_quadrature_degree(p, 1, error)
 
-geo = os.path.join(work, "cube.geo")
-msh = os.path.join(work, "cube.msh")
-with open(geo, "w") as f:
-    f.write('SetFactory("OpenCASCADE");\nBox(1) = {0,0,0,1,1,1};\n'
-            f"Mesh.CharacteristicLengthMax = {args.h};\nMesh.CharacteristicLengthMin = {args.h};\n"
-            "Physical Volume(1) = {1};\nPhysical Surface(1) = {1,2,3,4,5,6};\n")
-subprocess.run(["gmsh", geo, "-3", "-o", msh, "-format", "msh41"], check=True,
-               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+msh = gmsh_box(work, "cube", (1, 1, 1), args.h, {1: [1, 2, 3, 4, 5, 6]})
 
 u = "cos(pi*x)*cos(pi*y)*cos(pi*z)"
 
@@ -59,15 +52,6 @@ def case(solver):
     with open(path, "w") as f:
         json.dump(c, f)
     return path
-
-
-def timed(cmd):
-    t = time.perf_counter()
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t
-    if r.returncode != 0:
-        sys.exit(f"failed ({r.returncode}): {' '.join(cmd)}\n{r.stderr[-2000:]}")
-    return wall, r.stdout
 
 
 rows = []
