@@ -70,14 +70,7 @@ Expression::Expression(std::string text, std::string where, bool normal_allowed)
       const double v = dual->evaluate(x, n, t, &g);
       agree = agree && same(v, (*this)(x, n, t), 1e-12);
       if (!agree) break;
-      Eigen::Vector3d fd;
-      for (int d = 0; d < 3; ++d) {
-        Eigen::Vector3d e = Eigen::Vector3d::Zero();
-        e[d] = 1e-3;
-        fd[d] = (-(*this)(x + 2 * e, n, t) + 8 * (*this)(x + e, n, t) - 8 * (*this)(x - e, n, t) +
-                 (*this)(x - 2 * e, n, t)) /
-                12e-3;
-      }
+      const Eigen::Vector3d fd = difference_gradient(x, n, t);
       for (int d = 0; d < 3 && agree; ++d)
         agree = same(g[d], fd[d], 1e-6) || (std::isnan(fd[d]) && !std::isfinite(v));
     }
@@ -116,11 +109,17 @@ double Expression::value_and_gradient(const Eigen::Vector3d& x, Eigen::Vector3d*
 }
 
 Eigen::Vector3d Expression::difference_gradient(const Eigen::Vector3d& x, double h) const {
+  return difference_gradient(x, Eigen::Vector3d::Zero(), 0.0, h);
+}
+
+Eigen::Vector3d Expression::difference_gradient(const Eigen::Vector3d& x, const Eigen::Vector3d& n,
+                                                double t, double h) const {
   Eigen::Vector3d g;
   for (int d = 0; d < 3; ++d) {
     Eigen::Vector3d e = Eigen::Vector3d::Zero();
     e[d] = h;
-    g[d] = (-(*this)(x + 2 * e) + 8 * (*this)(x + e) - 8 * (*this)(x - e) + (*this)(x - 2 * e)) /
+    g[d] = (-(*this)(x + 2 * e, n, t) + 8 * (*this)(x + e, n, t) - 8 * (*this)(x - e, n, t) +
+            (*this)(x - 2 * e, n, t)) /
            (12 * h);
   }
   return g;

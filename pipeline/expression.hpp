@@ -33,6 +33,9 @@ class Expression {
   double value_and_gradient(const Eigen::Vector3d& x, Eigen::Vector3d* gradient) const;
   /// The same by the finite difference always (what the differentiation is checked against).
   Eigen::Vector3d difference_gradient(const Eigen::Vector3d& x, double h = 1e-3) const;
+  /// The same with the normal bound to nx, ny, nz and time t.
+  Eigen::Vector3d difference_gradient(const Eigen::Vector3d& x, const Eigen::Vector3d& n, double t,
+                                      double h = 1e-3) const;
   /// Whether gradient() differentiates: the text parsed in the grammar of expression_ad.hpp and
   /// its values matched muparser's (relative 1e-12) and its gradient the finite difference
   /// (relative 1e-6) at 6 fixed points (t = 0.37, a fixed unit normal).
