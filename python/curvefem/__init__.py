@@ -29,6 +29,7 @@ meshing by `load_mesh(dir)`; `Domain.to_meshio()` and `RunResult.to_meshio()` gi
 takes its keys from and cases/README.md's key table is generated from.
 """
 
+import difflib as _difflib
 import json as _json
 import os as _os
 
@@ -103,13 +104,58 @@ def _sections_doc():
     return "\n".join(lines)
 
 
+def _children(paths, path):
+    """Immediate child key names (with "[]" for arrays of objects) of `path` in the schema."""
+    prefix = path + "." if path else ""
+    return {p[len(prefix):].split(".")[0] for p in paths if p.startswith(prefix) and p != path}
+
+
+def _check_keys(value, path, paths, where):
+    """InputError for the first key of `value` (at schema path `path`) that the schema lacks."""
+    if path.endswith("load_cases[].boundary_conditions[]"):
+        path = "boundary_conditions[]"  # the same entries as the top-level list
+    if isinstance(value, list) and path.endswith("[]"):
+        for i, item in enumerate(value):
+            _check_keys(item, path, paths, "%s[%d]" % (where, i))
+        return
+    if not isinstance(value, dict):
+        return  # types and values are read_case's to check
+    allowed = _children(paths, path)
+    if not allowed and path:
+        return  # a free-form object (a map of tags, ...)
+    for key, item in value.items():
+        name = where + "." + key if where else key
+        if key in allowed:
+            child = path + "." + key if path else key
+            if path.endswith(".select") and key in ("and", "or") and isinstance(item, list):
+                for i, sel in enumerate(item):
+                    _check_keys(sel, path, paths, "%s[%d]" % (name, i))
+            elif path.endswith(".select") and key == "not":
+                _check_keys(item, path, paths, name)
+            else:
+                _check_keys(item, child, paths, name)
+        elif key + "[]" in allowed:
+            _check_keys(item, (path + "." if path else "") + key + "[]", paths, name)
+        else:
+            known = sorted(k.removesuffix("[]") for k in allowed)
+            close = _difflib.get_close_matches(key, known, n=1)
+            raise InputError("%s: unknown case key %r%s; the keys %s are %s" % (
+                name, key, " (did you mean %r?)" % close[0] if close else "",
+                "under " + where if where else "at the top level", ", ".join(known)))
+
+
 def case(**sections):
     """A case dict from keyword arguments, one per top-level section of a case file:
     case(geometry={...}, meshing={...}, physics={...}, boundary_conditions=[...], ...).
 
+    Every key, at every depth, is checked against the schema at once: an unknown one raises
+    InputError naming it, its place and the nearest known key (values are checked by
+    read_case, which every function taking a case calls).
+
     The sections and their keys (`schema()` has each key's type, default and meaning)::
 
 """
+    _check_keys(sections, "", [k["path"] for k in schema()], "")
     return dict(sections)
 
 

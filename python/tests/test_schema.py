@@ -59,3 +59,35 @@ def test_schema_defaults_are_what_a_minimal_case_resolves_to():
 def test_case_docstring_lists_the_sections():
     for section in top_level_sections():
         assert "        %s=" % section in curvefem.case.__doc__
+
+
+def test_case_keyword_arguments_are_checked_against_the_schema_at_every_depth():
+    ok = curvefem.case(
+        geometry={"builtin": {"shape": "cube", "divisions": 1}},
+        meshing={"method": "given"},
+        physics={"type": "poisson"},
+        boundary_conditions=[{"type": "dirichlet", "select": {"and": [
+            {"box": [[0, 0, 0], [1, 1, 1]]}, {"not": {"plane": {"point": [0, 0, 0],
+                                                                "normal": [1, 0, 0]}}}]},
+            "value": "x"}],
+        load_cases=[{"name": "a", "rhs": "1", "boundary_conditions": [
+            {"type": "dirichlet", "select": {"all": True}, "value": "0"}]}],
+        solver={"type": "direct"})
+    assert ok["meshing"] == {"method": "given"}
+    bad = [
+        (dict(meshng={}), "meshng", "meshing"),
+        (dict(meshing={"epss": 0.01}), "meshing.epss", "eps"),
+        (dict(solver={"preconditoner": "gamg"}), "solver.preconditoner", "preconditioner"),
+        (dict(boundary_conditions=[{"type": "dirichlet", "select": {"boxx": []}}]),
+         "boundary_conditions[0].select.boxx", "box"),
+        (dict(boundary_conditions=[{"type": "neumann", "select": {"or": [
+            {"all": True}, {"plane": {"point": [0, 0, 0], "normall": [1, 0, 0]}}]}}]),
+         "boundary_conditions[0].select.or[1].plane.normall", "normal"),
+        (dict(load_cases=[{"name": "a", "boundary_conditions": [{"tpye": "dirichlet"}]}]),
+         "load_cases[0].boundary_conditions[0].tpye", "type"),
+    ]
+    for kwargs, where, suggestion in bad:
+        with pytest.raises(curvefem.InputError) as info:
+            curvefem.case(**kwargs)
+        assert where in str(info.value), str(info.value)
+        assert "did you mean %r" % suggestion in str(info.value), str(info.value)
