@@ -12,6 +12,7 @@ line of the error output is kept for failed runs.
 Usage (from the repository root):
   /usr/bin/python3 benchmarks/run_robustness.py [--corpus all|none|NAME ...] [--dev] [--orders 3 4]
       [--eps 0.01] [--threads 2] [--timeout 600] [--exe build/tools/curvefem/curvefem]
+      [--extra 'MORE MESH OPTIONS']
 Writes benchmarks/results/robustness.md; raw JSON lines go to WORK/runs.jsonl.
 Standard library only.
 """
@@ -37,6 +38,8 @@ ap.add_argument("--timeout", type=float, default=600)
 ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvefem"))
 ap.add_argument("--work", default="/tmp/robustness")
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/robustness.md"))
+ap.add_argument("--extra", default="", metavar="ARGS",
+                help="more `curvefem mesh` options for every run, e.g. --extra='--shape-slack 0'")
 ap.add_argument("--note", default="", help="a hand-written paragraph for the report")
 ap.add_argument("--render-from", metavar="JSONL",
                 help="run nothing: write --out from these raw records (e.g. of a run cut short)")
@@ -90,7 +93,7 @@ for name, path, kind in inputs:
     for k in args.orders:
         out = os.path.join(args.work, f"{name}_k{k}")
         cmd = [args.exe, "mesh", path, "-o", out, "--order", str(k), "--eps", str(args.eps), "-q",
-               "--threads", str(args.threads)]
+               "--threads", str(args.threads)] + shlex.split(args.extra)
         rc, wall, err = run(cmd, args.timeout)
         rec = dict(name=name, kind=kind, order=k, check=code, exit=rc, wall=wall,
                    error=next((l for l in err.splitlines() if "error" in l), ""))
@@ -104,7 +107,7 @@ for name, path, kind in inputs:
                            below=v.get("tets_scaled_jacobian_below_0.01"),
                            max_mips=v["max_mips"], mean_mips=v["mean_mips"],
                            si=v["boundary_self_intersections"], dist=v["max_distance_rel"],
-                           singular=r.get("singular_vertices"),
+                           singular=r.get("singular_vertices"), coarse=r.get("coarse_faces"),
                            by_tag=v.get("quality_by_tag", {}))
         except (OSError, ValueError, KeyError):
             pass

@@ -93,6 +93,7 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
             {"median_half_thickness_rel", stats.coarse_median_thickness_rel},
             {"min_half_thickness_rel", stats.coarse_min_thickness_rel},
             {"collapses_refused", refused},
+            {"shape_slack", options.shape_slack},
             {"seconds", coarsen_seconds}}},
           {"singular_vertices", stats.singular_vertices},
           {"beveled_faces", stats.beveled_faces},

@@ -237,6 +237,61 @@ SurfaceMesh make_split_ring(double r_in, double r_out, double height, double gap
   return m;
 }
 
+SurfaceMesh make_strip_cylinder(int n_bottom, int n_top, double radius, double height, int rings) {
+  if (n_bottom < 3 || n_top < 3 || rings < 1 || !(radius > 0) || !(height > 0))
+    throw InputError("strip cylinder: n >= 3 on both rims, rings >= 1, radius and height > 0");
+  const double turn = 0.37;  // the top rim's offset, in its own spacing
+  std::vector<Eigen::Vector3d> V;
+  auto angle = [](int i, int n, double offset) { return 2 * std::numbers::pi * (i + offset) / n; };
+  auto ring = [&](int n, double r, double z, double offset) {
+    const int first = int(V.size());
+    for (int i = 0; i < n; ++i)
+      V.push_back({r * std::cos(angle(i, n, offset)), r * std::sin(angle(i, n, offset)), z});
+    return first;
+  };
+  const int bottom = ring(n_bottom, radius, 0.0, 0.0), top = ring(n_top, radius, height, turn);
+  std::vector<Eigen::Vector3i> F;
+  // The side: advance on whichever rim has the next vertex at the smaller angle.
+  for (int i = 0, j = 0; i < n_bottom || j < n_top;) {
+    const bool bottom_next =
+        j >= n_top || (i < n_bottom && angle(i + 1, n_bottom, 0.0) < angle(j + 1, n_top, turn));
+    if (bottom_next) {
+      F.push_back({bottom + i % n_bottom, bottom + (i + 1) % n_bottom, top + j % n_top});
+      ++i;
+    } else {
+      F.push_back({bottom + i % n_bottom, top + (j + 1) % n_top, top + j % n_top});
+      ++j;
+    }
+  }
+  // The caps: bands between concentric rings, then a fan (outward: −z at the bottom).
+  for (int cap = 0; cap < 2; ++cap) {
+    const int n = cap == 0 ? n_bottom : n_top;
+    const double offset = cap == 0 ? 0.0 : turn, z = cap == 0 ? 0.0 : height;
+    int outer = cap == 0 ? bottom : top;
+    for (int q = rings - 1; q >= 1; --q) {
+      const int inner = ring(n, radius * q / rings, z, offset);
+      for (int k = 0; k < n; ++k) {
+        const int l = (k + 1) % n, a = inner + k, b = inner + l, c = outer + l, d = outer + k;
+        if (cap == 0) {
+          F.push_back({a, b, c});
+          F.push_back({a, c, d});
+        } else {
+          F.push_back({a, c, b});
+          F.push_back({a, d, c});
+        }
+      }
+      outer = inner;
+    }
+    const int centre = int(V.size());
+    V.push_back({0, 0, z});
+    for (int k = 0; k < n; ++k) {
+      const int a = outer + k, b = outer + (k + 1) % n;
+      F.push_back(cap == 0 ? Eigen::Vector3i{centre, b, a} : Eigen::Vector3i{centre, a, b});
+    }
+  }
+  return from_lists(V, F);
+}
+
 const std::vector<AdversarialSurface>& adversarial_surfaces() {
   static const std::vector<AdversarialSurface> list = {
       {"knife_disc",
@@ -271,6 +326,9 @@ const std::vector<AdversarialSurface>& adversarial_surfaces() {
       {"torus_coarse", "a 12 x 6 torus: large flat facets, 30° creases"},
       {"cylinder_sharp", "a cylinder with sharp rims (90° curved features)"},
       {"cylinder_flat", "a flat cylinder (height 0.05): two rims close together"},
+      {"strip_cylinder",
+       "a CAD-style cylinder (radius 1, length 4): its side one band of needle triangles between "
+       "rims of 256 and 128 vertices"},
       {"box_sharp", "a unit box, 8 x 8 quads per side (sharp CAD edges and corners)"},
       {"box_thin_long", "a 1 x 0.02 x 0.02 bar: a needle-like CAD part"},
       {"sphere_coarse", "an icosahedron: 20 faces, every vertex a cone point"},
@@ -313,6 +371,7 @@ SurfaceMesh make_adversarial(const std::string& name) {
   if (name == "torus_coarse") return make_torus(1.0, 0.4, 12, 6);
   if (name == "cylinder_sharp") return make_cylinder(48, 8, 4, 2.0);
   if (name == "cylinder_flat") return make_cylinder(64, 2, 6, 0.05);
+  if (name == "strip_cylinder") return make_strip_cylinder(256, 128, 1.0, 4.0, 6);
   if (name == "box_sharp") return make_box({0, 0, 0}, {1, 1, 1}, 8);
   if (name == "box_thin_long") return make_box({0, 0, 0}, {1, 0.02, 0.02}, 4);
   if (name == "sphere_coarse") return make_icosphere(0);

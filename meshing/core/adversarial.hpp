@@ -50,4 +50,10 @@ SurfaceMesh make_radial_noise_sphere(int level, double amplitude, double fractio
 /// other `gap` apart at the inner radius. n sections around.
 SurfaceMesh make_split_ring(double r_in, double r_out, double height, double gap, int n);
 
+/// A closed cylinder (axis z, given radius and height) tessellated the way CAD exporters do it:
+/// the side is ONE band of needle triangles zipped between a bottom rim of n_bottom and a top rim
+/// of n_top vertices (the top turned by 0.37 of its spacing), the caps are `rings` concentric
+/// bands around a centre vertex. Side faces are height long and about 2π radius / n wide.
+SurfaceMesh make_strip_cylinder(int n_bottom, int n_top, double radius, double height, int rings);
+
 }  // namespace curvefem

@@ -865,6 +865,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.rounds = options.simplify_rounds;
   simplify_options.max_distance = eps;
   simplify_options.max_mips = options.max_triangle_mips;
+  simplify_options.shape_slack = options.shape_slack;
   simplify_options.max_edge_per_thickness = options.max_edge_per_thickness;
   simplify_options.flips = options.shell_flips;
   simplify_options.pan = options.shell_pan;

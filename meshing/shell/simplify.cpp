@@ -107,6 +107,7 @@ class ShellMesh : public TriMesh {
            (*strict)[std::size_t(x)];
   }
   double max_mips = 0;
+  double shape_slack = 0;
   double max_edge_per_thickness = 0;
   std::vector<double> thickness;  // per input vertex (thickness guard)
   // Worst edge length / local thickness over the cell's edges (0 without thickness data).
@@ -174,7 +175,9 @@ class ShellMesh : public TriMesh {
     double before = max_mips, after = 0;
     for (Id f : r.old_cells) before = std::max(before, mips(f));
     for (Id f : r.new_cells) after = std::max(after, mips(f));
-    return after <= before;
+    // The slack only where the removed triangles are already worse than the bound (needles):
+    // elsewhere it would let every collapse nudge triangles past the bound itself.
+    return after <= (before > max_mips ? before * (1.0 + shape_slack) : before);
   }
 
   // Prism coordinates of distance point x in face f and its scaled distance to the linear middle
@@ -993,6 +996,9 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.distance_scale = &options.distance_scale;
   }
   m.max_mips = options.max_mips;
+  if (!(options.shape_slack >= 0 && options.shape_slack < 1))
+    throw MeshingError("simplify: shape_slack must be in [0, 1)");
+  m.shape_slack = options.shape_slack;
   if (options.curved_order >= 2) {
     if (!(options.max_distance > 0))
       throw MeshingError(

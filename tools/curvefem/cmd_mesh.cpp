@@ -56,6 +56,7 @@ struct MeshArgs {
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
+  double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
@@ -203,6 +204,11 @@ void register_mesh(CLI::App& app) {
                   "coarsening keeps every coarse edge at most this many times the object's local "
                   "thickness at its ends (thin parts get flat slab tets otherwise; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--shape-slack", args->shape_slack,
+                  "relative slack of the coarsening's triangle-shape guard: a collapse may raise "
+                  "its star's worst 2-D MIPS by this factor (lets needle strips such as CAD "
+                  "cylinders coarsen; 0: strict)")
+      ->check(CLI::Range(0.0, 0.99));
   sub->add_option("--thin-refine", args->thin_refine_ratio,
                   "before the shell, bisect input edges longer than this many times the object's "
                   "local thickness (same surface; where the input itself is too coarse for "
@@ -261,6 +267,7 @@ void register_mesh(CLI::App& app) {
     options.shell_split_mips = args->split_mips;
     options.max_edge_per_thickness = args->max_edge_per_thickness;
     options.thin_refine_ratio = args->thin_refine_ratio;
+    options.shape_slack = args->shape_slack;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {
