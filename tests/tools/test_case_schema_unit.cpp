@@ -60,7 +60,10 @@ std::string read_text(const std::filesystem::path& p) {
 /// The InputError message of reading `j`, or "" when it reads.
 std::string error_of(const json& j) {
   try {
-    read_case_json(j, test::scratch_dir("case_schema") / "case.json");
+    // One folder per test: ctest runs this file's tests as parallel processes, and scratch_dir
+    // empties the folder it returns.
+    const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    read_case_json(j, test::scratch_dir("case_schema_" + name) / "case.json");
   } catch (const InputError& e) {
     return e.what();
   }
