@@ -97,21 +97,7 @@ def fem(mesh_dir):
             return {"error": (p.stderr.strip().splitlines() or ["?"])[-1][:100]}
         with open(os.path.join(out, "report.json")) as f:
             r = json.load(f)
-    def find(d, key):
-        if isinstance(d, dict):
-            if key in d:
-                return d[key]
-            for v in d.values():
-                x = find(v, key)
-                if x is not None:
-                    return x
-        if isinstance(d, list):
-            for v in d:
-                x = find(v, key)
-                if x is not None:
-                    return x
-        return None
-    solver = find(r, "solver") or {}
+    solver = r.get("solver", {})
     l2 = r.get("l2_error") / r["l2_norm_exact"] if r.get("l2_norm_exact") else None
     return {"iterations": solver.get("iterations"), "l2": l2, "dofs": r.get("dofs")}
 

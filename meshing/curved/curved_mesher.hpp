@@ -79,9 +79,10 @@ struct CurvedMeshOptions {
   bool low_degree_slabs = false;
   // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
   double max_triangle_mips = 10;
-  // SimplifyOptions::shape_slack: the shape guard lets a collapse raise its star's worst MIPS by
-  // this factor, so needle strips (CAD cylinders) coarsen instead of reaching the slab as needle
-  // tets (0: the strict guard).
+  // SimplifyOptions::shape_slack: where the removed triangles are already worse than
+  // max_triangle_mips, the shape guard lets a collapse raise its star's worst MIPS by this factor,
+  // so needle strips (CAD cylinders) coarsen instead of reaching the slab as needle tets (0: the
+  // strict guard everywhere).
   double shape_slack = 0.02;
   // Thickness guard of the coarsening (SimplifyOptions::max_edge_per_thickness; 0: off): no
   // coarse edge longer than this many times the object's local thickness at its ends, so slab
