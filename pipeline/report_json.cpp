@@ -117,6 +117,8 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
             {"deferred_outer", stats.curve_deferred_outer},
             {"deferred_undecided", stats.curve_deferred_undecided}}},
           {"faces_recurved", stats.faces_recurved},
+          {"faces_lowered_for_quality", stats.faces_lowered_for_quality},
+          {"quality_floor", options.curve_quality_floor},
           {"faces_sheared", stats.faces_sheared},
           {"fiber_misses", stats.fiber_misses},
           {"linear_max_distance_rel", stats.linear_max_distance_rel},

@@ -542,6 +542,7 @@ class Builder {
                          "self-intersections with certified slabs in 40 rounds");
     if (recurve) raise_alpha(eps);
     raise_smooth(eps);
+    if (quality_floor > 0) lower_for_quality(eps);
     int moved = 0;
     pulled_above.assign(nv, 0);
     for (int v = 0; v < nv; ++v) {
@@ -615,6 +616,62 @@ class Builder {
   }
   int alpha_raised = 0;
   bool recurve = true;
+
+  // Worst sampled scaled Jacobian (min_scaled_jacobian) of the bottom slab tets of f (and, with
+  // an exterior, the top ones).
+  double slab_quality(int f) const {
+    double q = HUGE_VAL;
+    const auto d = node_displacements(f);
+    for (int layer = 0; layer < (exterior ? 2 : 1); ++layer)
+      for (const auto& t : slab_tets(f, d, layer == 1))
+        q = std::min(q, min_scaled_jacobian(k, t.nodes));
+    return q;
+  }
+  // Certified slabs and the distance bound may still leave a face's slab tets near-degenerate:
+  // where the slab layer stays shallow (thin parts, concave regions the thickening could not
+  // deepen) a curved edge shears into its slab tets by about their depth and pinches them
+  // (homer, K = 3: a slab tet of scaled Jacobian 7.8e-4 that no smoothing could lift, its
+  // straight shape 0.06). Each face whose slab tets are below quality_floor tries α / 2, α / 4,
+  // ..., 0, every step checked like raise_alpha (its slabs and those across its edges certified,
+  // ε held); it keeps the first α whose worst slab tet over the face and its neighbours reaches
+  // the floor, else the best one if it at least doubles that worst value, else its α.
+  // Sequential and deterministic; faces that need full curving for ε keep it.
+  void lower_for_quality(double eps) {
+    int lowered = 0;
+    for (int f = 0; f < nf; ++f) {
+      if (alpha[f] == 0 || (!needs_full.empty() && needs_full[f])) continue;
+      if (!(slab_quality(f) < quality_floor)) continue;
+      const std::vector<int> around = across(f);  // includes f
+      auto worst = [&] {
+        double q = HUGE_VAL;
+        for (int g : around) q = std::min(q, slab_quality(g));
+        return q;
+      };
+      const double old = alpha[f], before = worst();
+      double best_alpha = old, best = before;
+      for (double a = old > 1.0 / 64 ? old / 2 : 0.0;; a = a > 1.0 / 64 ? a / 2 : 0.0) {
+        alpha[f] = a;
+        bool ok = true;
+        for (std::size_t i = 0; i < around.size() && ok; ++i) ok = face_check(around[i], eps) == 0;
+        if (ok) {
+          const double q = worst();
+          if (q > best) best = q, best_alpha = a;
+          if (q >= quality_floor) break;
+        }
+        if (a == 0) break;
+      }
+      alpha[f] = (best >= quality_floor || best >= 2 * before) ? best_alpha : old;
+      if (alpha[f] < old) {
+        ++lowered;
+        quality_before = std::min(quality_before, before);
+        quality_after = std::min(quality_after, best);
+      }
+    }
+    alpha_lowered_for_quality = lowered;
+  }
+  double quality_floor = 0;
+  int alpha_lowered_for_quality = 0;
+  double quality_before = HUGE_VAL, quality_after = HUGE_VAL;
 
   // Certified slab tets and the distance bound at the face's input vertices: 0 when both hold,
   // 1 when the slabs are not certified, 2 when an input vertex is farther than eps.
@@ -1081,6 +1138,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   Builder b(shell, surface, k);
   b.exterior = options.exterior;
   b.recurve = options.recurve;
+  b.quality_floor = options.curve_quality_floor;
   b.low_degree = options.low_degree_slabs;
   b.extra = points;
   b.point_scale = &point_scale;
@@ -1223,6 +1281,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.outer_raised_vertices = b.outer_raised;
     stats.outer_lowered_vertices = b.outer_lowered;
     stats.faces_recurved = b.alpha_raised;
+    stats.faces_lowered_for_quality = b.alpha_lowered_for_quality;
     stats.faces_sheared = b.shear_faces();
     stats.stage_seconds.emplace_back(attempt ? "thicken (retry)" : "thicken", watch.seconds());
     watch = Stopwatch();

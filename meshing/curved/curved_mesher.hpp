@@ -70,6 +70,18 @@ struct CurvedMeshOptions {
   // Once the slab layer is deeper, faces curved below α = 1 try a larger α again (Builder::
   // raise_alpha in curved_mesher.cpp).
   bool recurve = true;
+  // Then faces whose slab tets (still without the smoothing) are below this sampled scaled
+  // Jacobian try a smaller α, checked like the recurving (certified, within ε), keeping the first
+  // that lifts their slabs and their neighbours' to it, or the best if it doubles their worst
+  // (Builder::lower_for_quality; 0: off). Off by default: measured at K = 3, ε = 1% (off → 0.01;
+  // min scaled Jacobian, tets below 0.01, max curved MIPS) it helps some organic meshes
+  // (fertility 6.3e-3 → 9.0e-3, 3 → 1; knight 7.7e-3 → 1.4e-2, 1 → 0) but not where the pinching
+  // edge is held curved by a neighbour that needs full curving for ε (homer's worst tet 7.8e-4 →
+  // 7.6e-4), and not on CAD parts (anchor 17 → 18 below 0.01, max MIPS 3.5e3 → 4.2e3; hinge min
+  // 2.1e-3 → 1.5e-3, 17 → 21 below, max MIPS 2.7e4 → 1.4e4); igea, spot, fandisk unchanged. It
+  // judges slabs before the smoothing, which fixes most of them anyway, and costs fidelity
+  // (homer: 51 of 726 faces less curved).
+  double curve_quality_floor = 0;
   // Slab nodes (slab_nodes.hpp): false (default) the full shear t·d of the patch; true the
   // low-degree nodes (the patch's quadratic part at degree 2, the rest sheared), with the shear as
   // a per-face fallback. Measured at K = 3 (issue 20): less cubic content and a lower pure
@@ -195,6 +207,8 @@ struct CurvedMeshStats {
   int curve_deferred_undecided = 0;
   // Faces whose α rose again once the slab layer was deepened (the counts above are final).
   int faces_recurved = 0;
+  // Faces whose α the quality floor lowered after the recurving (curve_quality_floor).
+  int faces_lowered_for_quality = 0;
   // Faces whose slab keeps the full shear t · d (slab_nodes.hpp): the low-degree slab nodes were
   // not certified there (thin slabs under an inward bulge). 0 at K ≤ 2.
   int faces_sheared = 0;

@@ -57,6 +57,7 @@ struct MeshArgs {
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
   double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
+  double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
@@ -217,6 +218,11 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
                 "(meshing/curved/README.md, step 7; off: the full shear)");
+  sub->add_option("--curve-quality-floor", args->curve_quality_floor,
+                  "faces whose slab tets have a sampled scaled Jacobian below Q after the curving "
+                  "try a smaller blend (certified, within eps) that lifts them to Q (default 0: "
+                  "off; measured mixed, meshing/curved/curved_mesher.hpp)")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -268,6 +274,7 @@ void register_mesh(CLI::App& app) {
     options.max_edge_per_thickness = args->max_edge_per_thickness;
     options.thin_refine_ratio = args->thin_refine_ratio;
     options.shape_slack = args->shape_slack;
+    options.curve_quality_floor = args->curve_quality_floor;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {

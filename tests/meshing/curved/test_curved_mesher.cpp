@@ -446,6 +446,31 @@ TEST(CurvedMesher, DeeperSlabsLetRefusedFacesCurveAgain) {
   EXPECT_GT(stats[1].faces_fully_curved, stats[0].faces_fully_curved);
 }
 
+// The quality floor of the curving (off by default): faces whose slab tets are below it take a
+// smaller α where that stays certified and within ε; the result is still a valid mesh.
+TEST(CurvedMesher, TheQualityFloorLowersTheCurvingOfPinchedSlabsAndStaysValid) {
+  const SurfaceMesh torus = curvefem::make_torus(1.0, 0.25, 48, 12);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.eps_rel = 1e-2;
+  o.threads = 2;
+  o.curved_coarsening = false;  // linear bound: every face may go down to α = 0
+  std::array<cv::CurvedMeshStats, 2> stats;
+  for (int on = 0; on < 2; ++on) {
+    o.curve_quality_floor = on ? 0.3 : 0.0;
+    cv::CurvedMeshStats& s = stats[std::size_t(on)];
+    const cv::CurvedMesh m = cv::build_curved_mesh(torus, o, s);
+    const cv::CurvedValidation check = cv::validate_curved_mesh(m.mesh, m.map, torus);
+    SCOPED_TRACE("floor " + std::to_string(o.curve_quality_floor));
+    EXPECT_TRUE(check.valid(1e-2));
+    EXPECT_EQ(s.faces_fully_curved + s.faces_blended + s.faces_linear, s.coarse_faces);
+  }
+  EXPECT_EQ(stats[0].faces_lowered_for_quality, 0);
+  EXPECT_GT(stats[1].faces_lowered_for_quality, 0);
+  EXPECT_EQ(stats[0].coarse_faces, stats[1].coarse_faces);  // the same coarse shell
+  EXPECT_LT(stats[1].faces_fully_curved, stats[0].faces_fully_curved);
+}
+
 namespace {
 // Max |p − φ(p)| / bbox edge over the degree-L lattice points of every input triangle, φ(p)
 // through the returned shell's projection (P⁻¹ gives the prism coordinates; boundary triangle f
