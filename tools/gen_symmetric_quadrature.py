@@ -524,25 +524,33 @@ def expand_points(dim, gen):
 
 
 def monomial_check(dim, degree, rule):
-    """rule: [(generator floats, weight float)]. Worst relative monomial error, exact arithmetic."""
-    pts = []
-    for gen, w in rule:
-        for p in expand_points(dim, gen):
-            pts.append(([Fraction(x) for x in p], Fraction(w)))
-    worst = 0.0
-    fact = [math.factorial(i) for i in range(degree + dim + 1)]
-    powers = [[[Fraction(1)] for _ in range(dim)] for _ in pts]
-    for q, (p, _) in enumerate(pts):
+    """rule: [(generator floats, weight float)]. Worst relative monomial error, exact arithmetic
+    (every double is an integer over a power of two: integers over common powers of two)."""
+    pts = [(p, w) for gen, w in rule for p in expand_points(dim, gen)]
+    shift = max(Fraction(x).denominator for p, w in pts for x in p).bit_length() - 1
+    wshift = max(Fraction(w).denominator for _, w in pts).bit_length() - 1
+    coords = [[int(Fraction(x) * (1 << shift)) for x in p] for p, _ in pts]
+    weights = [int(Fraction(w) * (1 << wshift)) for _, w in pts]
+    powers = [[[1] for _ in range(dim)] for _ in pts]
+    for q, c in enumerate(coords):
         for d in range(dim):
             for _ in range(degree):
-                powers[q][d].append(powers[q][d][-1] * p[d])
+                powers[q][d].append(powers[q][d][-1] * c[d])
+    fact = [math.factorial(i) for i in range(degree + dim + 1)]
+    worst = 0.0
     for exps in itertools.product(range(degree + 1), repeat=dim):
-        if sum(exps) > degree:
+        total = sum(exps)
+        if total > degree:
             continue
-        s = sum(w * math.prod((powers[q][d][exps[d]] for d in range(dim)), start=Fraction(1))
-                for q, (_, w) in enumerate(pts))
-        exact = Fraction(math.prod(fact[e] for e in exps), fact[sum(exps) + dim])
-        worst = max(worst, abs(float((s - exact) / exact)))
+        s = 0
+        for q, w in enumerate(weights):
+            term = w
+            for d in range(dim):
+                term *= powers[q][d][exps[d]]
+            s += term
+        value = Fraction(s, 1 << (wshift + shift * total))
+        exact = Fraction(math.prod(fact[e] for e in exps), fact[total + dim])
+        worst = max(worst, abs(float((value - exact) / exact)))
     return worst, len(pts)
 
 
