@@ -40,9 +40,10 @@ struct IterationStats {
   double step = 0;       ///< accepted line-search parameter t (0 for iteration 0)
   double max_step = 0;   ///< flip-free bound (0.8 × first root, ≤ 1)
   int backtracks = 0;
-  int slivers = 0;          ///< scaffold triangles whose rest was the ε equilateral
-  int fallbacks = 0;        ///< 1 if the iteration was redone without the sliver replacement
-  double min_singular = 0;  ///< over chart triangles, after the step
+  int slivers = 0;            ///< scaffold triangles whose rest was the ε equilateral
+  int fallbacks = 0;          ///< 1 if the iteration was redone without the sliver replacement
+  double regularisation = 0;  ///< δ of the proximal term the factorisation needed (0: none)
+  double min_singular = 0;    ///< over chart triangles, after the step
   double max_singular = 0;
   int scaffold_vertices = 0, scaffold_faces = 0;
   double seconds = 0;  ///< wall time of this iteration (scaffold + assembly + solve + search)

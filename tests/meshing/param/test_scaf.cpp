@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
 #include "meshing/param/cut_mesh.hpp"
 #include "meshing/param/scaf.hpp"
 #include "meshing/param/symmetric_dirichlet.hpp"
@@ -229,4 +230,36 @@ TEST(ParamScaf, LongSpiralStrip) {
   const CheckedRun run = run_checked(cut, 60);
   // The strip is flat: the strip itself is a bijective isometry, so the minimum is exactly 4.
   expect_valid(cut, run, 4.0);
+}
+
+// A closed sphere cut along one edge path (a "dev mesh cut to a disk" in miniature): the whole
+// sphere is squeezed into the disk by Tutte's map (E 6.48 here, 4.59 after 40 iterations).
+TEST(ParamScaf, SphereCutAlongAPath) {
+  const SurfaceMesh sphere = make_icosphere(3);
+  // BFS over edges from vertex 0 to the last vertex reached: a simple path of edges.
+  std::vector<std::vector<int>> adj(sphere.num_vertices());
+  for (int f = 0; f < sphere.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) adj[sphere.F(f, k)].push_back(sphere.F(f, (k + 1) % 3));
+  std::vector<int> prev(sphere.num_vertices(), -2), order{0};
+  prev[0] = -1;
+  for (std::size_t i = 0; i < order.size(); ++i)
+    for (int w : adj[order[i]])
+      if (prev[w] == -2) {
+        prev[w] = order[i];
+        order.push_back(w);
+      }
+  std::vector<std::array<int, 2>> seams;
+  for (int v = order.back(); prev[v] >= 0; v = prev[v]) seams.push_back({prev[v], v});
+  ASSERT_GE(seams.size(), 4u);
+  const CutMesh cut = cut_into_charts(sphere, seams);
+  ASSERT_EQ(cut.num_charts, 1);
+  const CheckedRun run = run_checked(cut, 40);
+  const auto& h = run.result.history;
+  EXPECT_EQ(run.worst_flips, 0);
+  EXPECT_EQ(run.worst_overlaps, 0);
+  EXPECT_EQ(run.worst_scaffold_flips, 0);
+  for (std::size_t i = 1; i < h.size(); ++i) EXPECT_LE(h[i].energy, h[i - 1].energy);
+  EXPECT_LT(h.back().energy, 0.75 * h.front().energy);
+  EXPECT_GT(h.back().min_singular, 0);
+  EXPECT_TRUE(check_uv_map(run.result.uv, cut.F).bijective());
 }
