@@ -238,6 +238,7 @@ else:
         cases.append((name, "dev, path cut (%d edges)" % len(seams),
                       os.path.join(args.data, row["file"]), sp))
 
+load_start = os.getloadavg()[0]
 rows = []
 for name, kind, obj, seams in cases:
     r = run(name, obj, seams, args.iterations, 1e-6, work)
@@ -264,6 +265,7 @@ try:
 except (OSError, StopIteration):
     pass
 out = []
+load_end = os.getloadavg()[0]
 out.append("# SCAF bijective parameterization — `curvefem param` (issue 25, part 1)\n")
 out.append("Written by `benchmarks/run_param.py` on %s (%s, 2 cores shared; CHOLMOD may use "
            "both through OpenBLAS), %s. Every run: %d iterations at most, tolerance 1e-6 on the "
@@ -272,9 +274,10 @@ out.append("Written by `benchmarks/run_param.py` on %s (%s, 2 cores shared; CHOL
            "predicates). Energy = area-weighted mean symmetric Dirichlet (≥ 4). Reference = the "
            "same input run to %d iterations / tolerance 1e-9 (omitted above %d faces). "
            "s/it = mean wall time of one iteration (scaffold rebuild + assembly + CHOLMOD + "
-           "line search), without the checks.\n" % (
+           "line search), without the checks. 1-minute load average %.1f at the start, %.1f at the "
+           "end (other work shares the machine: timings are upper bounds).\n" % (
                time.strftime("%Y-%m-%d"), cpu or "unknown CPU", dev_note or "dev meshes from "
-               "../shared/data/dev", args.iterations, args.ref_iterations, args.ref_max_faces))
+               "../shared/data/dev", args.iterations, args.ref_iterations, args.ref_max_faces, load_start, load_end))
 out.append("| input | kind | #F | charts | #F scaffold first/last | it. (stop) | E initial | "
            "E final | E reference | final / ref | max flips | max overlaps | s/it | "
            "scaf total s | solve s/it |")
@@ -298,7 +301,7 @@ out.append("""
 ## Thesis Table 3.1 (for comparison, not measured here)
 
 The thesis' timings (Table 3.1, single thread on a 4 GHz i7, libigl reference implementation),
-2D rows quoted as "#F, it., total s, s/it": Nefertiti 2,823 F, 50 it., 0.71 s, 0.01 s/it;
+rows quoted as "#F, it., total s, s/it" (Nefertiti and Maneki-Neko are its atlas rows): Nefertiti 2,823 F, 50 it., 0.71 s, 0.01 s/it;
 Hand 4,046 F, 7 it., 0.14 s, 0.02; Camel 3,576 F, 30 it., 0.52 s, 0.02; Cow 5,804 F, 30 it.,
 0.81 s, 0.03; Horse 39,698 F, 30 it., 8.26 s, 0.28; Animal 39,040 F, 50 it., 15.36 s, 0.31;
 Maneki-Neko 43,648 F, 50 it., 16.81 s, 0.34; Thai Statue 79,970 F, 50 it., 28.28 s, 0.56;
