@@ -1,11 +1,13 @@
 // `curvefem param IN -o OUT.obj [--seams FILE] [--iterations N] [--tolerance T] [--weights W]
-// [--report report.json] [--no-check-iterations] [--quiet]`: bijective UV parameterization (SCAF,
-// meshing/param). Charts: OBJ groups, then cut along the seams (0-based vertex id pairs); each
-// must be a disk. Output: the OBJ with `vt` (a seam vertex has several) and, with --report, the
-// energy, singular values, step, scaffold size and time of every iteration, and flips / overlaps
-// counted by the independent exact checker (meshing/param/uv_check.hpp) after every iteration
-// (only at the end with --no-check-iterations). Exit 0 when the final map is verified bijective,
-// 3 when not, 2 for bad input (e.g. a chart that is not a disk).
+// [--init-uv] [--report report.json] [--no-check-iterations] [--quiet]`: bijective UV
+// parameterization (SCAF, meshing/param). Charts: OBJ groups, then cut along the seams (0-based
+// vertex id pairs); each must be a disk. Initial map: Tutte on a circle per chart, or with
+// --init-uv the input OBJ's vt (verified bijective by the exact checker first, else InputError).
+// Output: the OBJ with `vt` (a seam vertex has several) and, with --report, the energy, singular
+// values, step, scaffold size and time of every iteration, and flips / overlaps counted by the
+// independent exact checker (meshing/param/uv_check.hpp) after every iteration (only at the end
+// with --no-check-iterations). Exit 0 when the final map is verified bijective, 3 when not, 2 for
+// bad input (e.g. a chart that is not a disk).
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -34,6 +36,7 @@ struct ParamArgs {
   int iterations = 50;
   double tolerance = 1e-6;
   bool no_check_iterations = false;
+  bool init_uv = false;
   GlobalOptions global;
 };
 
@@ -64,6 +67,10 @@ void register_param(CLI::App& app) {
   sub->add_option("--weights", args->weights, "Tutte weights: mean-value or uniform")
       ->check(CLI::IsMember({"mean-value", "uniform"}));
   sub->add_option("--report", args->report, "write report.json here");
+  sub->add_flag(
+      "--init-uv", args->init_uv,
+      "start from the input OBJ's texture coordinates (vt; must be a bijective map of the "
+      "charts) instead of Tutte's embedding");
   sub->add_flag("--no-check-iterations", args->no_check_iterations,
                 "run the exact flip/overlap check on the final map only");
   add_global_options(*sub, args->global);
@@ -77,8 +84,19 @@ void register_param(CLI::App& app) {
     const pa::CutMesh cut = pa::cut_into_charts(mesh, seams);
     const double cut_s = stage.seconds();
     stage.reset();
-    const Eigen::MatrixXd uv0 = pa::tutte_layout(
-        cut, args->weights == "uniform" ? pa::TutteWeights::uniform : pa::TutteWeights::mean_value);
+    Eigen::MatrixXd uv0;
+    if (args->init_uv) {
+      uv0 = pa::uv_from_texture(cut, pa::read_obj_texture(args->input));
+      const pa::UvCheck given = pa::check_uv_map(uv0, cut.F);
+      if (!given.bijective())
+        throw InputError("--init-uv: the input's texture coordinates are not a bijective map: " +
+                         std::to_string(given.flips) + " flipped or degenerate faces, " +
+                         std::to_string(given.overlaps) + " intersecting boundary edge pairs, " +
+                         std::to_string(given.nested_charts) + " nested charts");
+    } else {
+      uv0 = pa::tutte_layout(cut, args->weights == "uniform" ? pa::TutteWeights::uniform
+                                                             : pa::TutteWeights::mean_value);
+    }
     const double tutte_s = stage.seconds();
 
     pa::ScafOptions options;
@@ -145,7 +163,9 @@ void register_param(CLI::App& app) {
           {"faces", mesh.num_faces()},
           {"uv_vertices", cut.num_uv_vertices()},
           {"charts", cut.num_charts},
-          {"tutte_weights", args->weights},
+          {"initial_map", args->init_uv ? "input vt" : "tutte"},
+          {"tutte_weights",
+           args->init_uv ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(args->weights)},
           {"solver", result.solver},
           {"iterations", done},
           {"stop_reason", result.stop_reason},

@@ -151,3 +151,54 @@ TEST(ParamCli, TorusNeedsSeams) {
   EXPECT_EQ(r["overlaps"], 0);
   EXPECT_LT(r["energy"].get<double>(), 4.3);
 }
+
+// --init-uv: the output of one run restarts the next from its own vt (same energy: the vt are
+// written in round-trip precision); vt that are not a bijective map are refused (exit 2).
+TEST(ParamCli, InitialMapFromTheInputTextureCoordinates) {
+  const auto dir = test::scratch_dir("param_cli_init_uv");
+  io::write_surface(dir / "disk.obj", test::bump_disk(8, 32, 1.0, 0.3), io::SurfaceFormat::obj);
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " param -q " + (dir / "disk.obj").string() + " -o " +
+                                  (dir / "uv.obj").string() + " --iterations 5 --report " +
+                                  (dir / "r1.json").string(),
+                              &out),
+            0)
+      << out;
+  ASSERT_EQ(test::run_command(cli() + " param -q --init-uv " + (dir / "uv.obj").string() + " -o " +
+                                  (dir / "uv2.obj").string() + " --iterations 5 --report " +
+                                  (dir / "r2.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto r1 = read_json(dir / "r1.json"), r2 = read_json(dir / "r2.json");
+  EXPECT_EQ(r2["initial_map"], "input vt");
+  // the same map (up to the summation order of the energy)
+  EXPECT_NEAR(r2["initial_energy"].get<double>(), r1["energy"].get<double>(),
+              1e-12 * r1["energy"].get<double>());
+  EXPECT_LE(r2["energy"].get<double>(), r1["energy"].get<double>());
+  // mirror the map: every face flips
+  std::ifstream in(dir / "uv.obj");
+  std::ofstream mirrored(dir / "mirrored.obj");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("vt ", 0) == 0) {
+      std::istringstream s(line.substr(3));
+      double u = 0, v = 0;
+      s >> u >> v;
+      std::ostringstream m;
+      m.precision(17);
+      m << "vt " << -u << ' ' << v;
+      line = m.str();
+    }
+    mirrored << line << '\n';
+  }
+  mirrored.close();
+  EXPECT_EQ(test::run_command(cli() + " param --init-uv " + (dir / "mirrored.obj").string() +
+                                  " -o " + (dir / "uv3.obj").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("not a bijective map"), std::string::npos) << out;
+  const int faces = test::bump_disk(8, 32, 1.0, 0.3).num_faces();
+  EXPECT_NE(out.find(std::to_string(faces) + " flipped"), std::string::npos) << out;
+}
