@@ -21,6 +21,7 @@ void register_mesh(CLI::App& app);      // cmd_mesh.cpp
 void register_validate(CLI::App& app);  // cmd_validate.cpp
 void register_study(CLI::App& app);     // cmd_study.cpp
 void register_schema(CLI::App& app);    // cmd_schema.cpp
+void register_param(CLI::App& app);     // cmd_param.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
@@ -34,6 +35,7 @@ inline void register_commands(CLI::App& app) {
   register_validate(app);
   register_study(app);
   register_schema(app);
+  register_param(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

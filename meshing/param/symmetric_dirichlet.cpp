@@ -1,0 +1,20 @@
+// SLIM reweighting of the symmetric Dirichlet energy (see the header for the formulas).
+#include "meshing/param/symmetric_dirichlet.hpp"
+
+#include <Eigen/SVD>
+
+namespace curvefem::meshing::param {
+
+void slim_weights(const Eigen::Matrix2d& J, Eigen::Matrix2d& W, Eigen::Matrix2d& R) {
+  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix2d& U = svd.matrixU();
+  const Eigen::Vector2d s = svd.singularValues();
+  // det J > 0: det U = det V, so U Vᵀ is a rotation; W does not depend on the signs of U's columns.
+  R = U * svd.matrixV().transpose();
+  Eigen::Vector2d w;
+  for (int i = 0; i < 2; ++i)
+    w[i] = std::sqrt((1 + s[i]) * (1 + s[i] * s[i]) / (s[i] * s[i] * s[i]));
+  W = U * w.asDiagonal() * U.transpose();
+}
+
+}  // namespace curvefem::meshing::param

@@ -1,0 +1,42 @@
+// Symmetric Dirichlet energy of a 2 × 2 Jacobian and SLIM's reweighting (thesis §3.2.1 "Solver";
+// Smith & Schaefer 2015; Rabinovich et al. 2017).
+//
+// D(J) = ‖J‖²_F + ‖J⁻¹‖²_F = σ₁² + σ₂² + σ₁⁻² + σ₂⁻² ≥ 4 (= 4 iff J is a rotation); for 2 × 2
+// matrices ‖J⁻¹‖_F = ‖J‖_F / |det J|. D = +∞ when det J ≤ 0 (flipped or degenerate).
+// SLIM weights: with J = U Σ Vᵀ (signed SVD, det U = det V = 1), the proxy ‖W (J − R)‖²_F with
+// R = U Vᵀ and W = U diag(w₁, w₂) Uᵀ, w_i² = D'(σ_i) / (2 (σ_i − 1)) = (1 + σ_i)(1 + σ_i²) / σ_i³
+// has the gradient of D at J.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <cmath>
+#include <limits>
+
+namespace curvefem::meshing::param {
+
+inline double symmetric_dirichlet(const Eigen::Matrix2d& J) {
+  const double det = J.determinant();
+  if (!(det > 0)) return std::numeric_limits<double>::infinity();
+  const double f2 = J.squaredNorm();
+  return f2 * (1.0 + 1.0 / (det * det));
+}
+
+/// ∂D/∂J = 2J − 2 J⁻ᵀ J⁻¹ J⁻ᵀ (det J > 0).
+inline Eigen::Matrix2d symmetric_dirichlet_gradient(const Eigen::Matrix2d& J) {
+  const Eigen::Matrix2d Jit = J.inverse().transpose();
+  return 2.0 * J - 2.0 * Jit * Jit.transpose() * Jit;
+}
+
+/// Singular values σ₁ ≥ σ₂ > 0 (det J > 0) in closed form.
+inline Eigen::Vector2d singular_values(const Eigen::Matrix2d& J) {
+  const double e = 0.5 * (J(0, 0) + J(1, 1)), f = 0.5 * (J(0, 0) - J(1, 1));
+  const double g = 0.5 * (J(1, 0) + J(0, 1)), h = 0.5 * (J(1, 0) - J(0, 1));
+  const double q = std::hypot(e, h), r = std::hypot(f, g);
+  return {q + r, std::abs(q - r)};
+}
+
+/// SLIM's weight matrix W and closest rotation R of J (det J > 0).
+void slim_weights(const Eigen::Matrix2d& J, Eigen::Matrix2d& W, Eigen::Matrix2d& R);
+
+}  // namespace curvefem::meshing::param

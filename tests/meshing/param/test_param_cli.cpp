@@ -1,0 +1,204 @@
+// `curvefem param` on generated inputs: exit codes, the OBJ with vt (re-read here and re-checked
+// with the exact verifier, independently of the CLI's own report), report.json fields.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "meshing/io/surface_io.hpp"
+#include "meshing/param/uv_check.hpp"
+#include "tests/meshing/param/param_inputs.hpp"
+#include "tests/support/test_support.hpp"
+
+using namespace curvefem;
+
+namespace {
+
+std::string cli() { return test::curvefem_executable().string(); }
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+// vt rows and the vt ids of the faces of an OBJ written by `curvefem param`.
+void read_uv_obj(const std::filesystem::path& p, Eigen::MatrixXd& uv, Eigen::MatrixXi& F,
+                 Eigen::MatrixXi& Fv) {
+  std::ifstream in(p);
+  std::string line;
+  std::vector<Eigen::Vector2d> vt;
+  std::vector<Eigen::Vector3i> f, fv;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string kind;
+    s >> kind;
+    if (kind == "vt") {
+      Eigen::Vector2d x;
+      s >> x.x() >> x.y();
+      vt.push_back(x);
+    } else if (kind == "f") {
+      Eigen::Vector3i a, b;
+      for (int k = 0; k < 3; ++k) {
+        char slash;
+        s >> a[k] >> slash >> b[k];
+      }
+      fv.push_back(a.array() - 1);
+      f.push_back(b.array() - 1);
+    }
+  }
+  uv.resize(Eigen::Index(vt.size()), 2);
+  for (std::size_t i = 0; i < vt.size(); ++i) uv.row(Eigen::Index(i)) = vt[i].transpose();
+  F.resize(Eigen::Index(f.size()), 3);
+  Fv.resize(Eigen::Index(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    F.row(Eigen::Index(i)) = f[i].transpose();
+    Fv.row(Eigen::Index(i)) = fv[i].transpose();
+  }
+}
+
+}  // namespace
+
+TEST(ParamCli, GroupsBecomeChartsAndTheOutputIsBijective) {
+  const auto dir = test::scratch_dir("param_cli_groups");
+  SurfaceMesh disk = test::bump_disk(10, 40, 1.2, 0.3);
+  disk.tags.resize(disk.num_faces());
+  for (int f = 0; f < disk.num_faces(); ++f)
+    disk.tags[f] =
+        disk.V(disk.F(f, 0), 0) + disk.V(disk.F(f, 1), 0) + disk.V(disk.F(f, 2), 0) > 0 ? 1 : 2;
+  disk.tag_names = {{1, "east"}, {2, "west"}};
+  io::write_surface(dir / "disk.obj", disk, io::SurfaceFormat::obj);
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " param -q " + (dir / "disk.obj").string() + " -o " +
+                                  (dir / "uv.obj").string() + " --iterations 20 --report " +
+                                  (dir / "report.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "report.json");
+  EXPECT_EQ(r["charts"], 2);
+  EXPECT_EQ(r["faces"], disk.num_faces());
+  EXPECT_EQ(r["flips"], 0);
+  EXPECT_EQ(r["overlaps"], 0);
+  EXPECT_EQ(r["bijective"], true);
+  EXPECT_EQ(r["max_flips_over_iterations"], 0);
+  EXPECT_EQ(r["max_overlaps_over_iterations"], 0);
+  const auto& h = r["history"];
+  ASSERT_EQ(h.size(), std::size_t(r["iterations"].get<int>() + 1));
+  for (std::size_t i = 1; i < h.size(); ++i) {
+    EXPECT_LE(h[i]["energy"].get<double>(), h[i - 1]["energy"].get<double>());
+    EXPECT_EQ(h[i]["flips"], 0);
+    EXPECT_EQ(h[i]["overlaps"], 0);
+    EXPECT_GT(h[i]["min_singular_value"].get<double>(), 0);
+    EXPECT_GT(h[i]["time_s"]["iteration"].get<double>(), 0);
+  }
+  EXPECT_GE(r["energy"].get<double>(), 4.0);
+  EXPECT_LT(r["energy"].get<double>(), r["initial_energy"].get<double>());
+  // The OBJ: same v and faces, a vt per UV vertex; checked again here from the file.
+  Eigen::MatrixXd uv;
+  Eigen::MatrixXi F, Fv;
+  read_uv_obj(dir / "uv.obj", uv, F, Fv);
+  EXPECT_EQ(uv.rows(), r["uv_vertices"].get<int>());
+  EXPECT_GT(uv.rows(), disk.num_vertices());  // the group border is cut
+  EXPECT_EQ(Fv, disk.F);
+  const auto check = meshing::param::check_uv_map(uv, F);
+  EXPECT_TRUE(check.bijective());
+  EXPECT_EQ(check.components, 2);
+  const SurfaceMesh back = io::read_surface(dir / "uv.obj");
+  EXPECT_EQ(back.F, disk.F);
+  EXPECT_EQ(back.tag_names.size(), 2u);
+}
+
+TEST(ParamCli, TorusNeedsSeams) {
+  const auto dir = test::scratch_dir("param_cli_torus");
+  auto [torus, seams] = test::cut_torus(2, 0.8, 30, 12);
+  io::write_surface(dir / "torus.obj", torus, io::SurfaceFormat::obj);
+  {
+    std::ofstream s(dir / "seams.txt");
+    s << "# meridian and longitude\n";
+    for (const auto& e : seams) s << e[0] << ' ' << e[1] << '\n';
+  }
+  std::string out;
+  // without seams: not a disk, exit 2, no output
+  EXPECT_EQ(test::run_command(cli() + " param " + (dir / "torus.obj").string() + " -o " +
+                                  (dir / "uv.obj").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("chart 0"), std::string::npos) << out;
+  EXPECT_NE(out.find("Euler characteristic 0"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "uv.obj"));
+  // a malformed seam file: exit 2 naming file and line
+  std::ofstream(dir / "bad.txt") << "0 1\n3 x\n";
+  EXPECT_EQ(
+      test::run_command(cli() + " param " + (dir / "torus.obj").string() + " -o " +
+                            (dir / "uv.obj").string() + " --seams " + (dir / "bad.txt").string(),
+                        &out),
+      2)
+      << out;
+  EXPECT_NE(out.find("bad.txt:2"), std::string::npos) << out;
+  ASSERT_EQ(
+      test::run_command(cli() + " param -q " + (dir / "torus.obj").string() + " -o " +
+                            (dir / "uv.obj").string() + " --seams " + (dir / "seams.txt").string() +
+                            " --iterations 15 --report " + (dir / "report.json").string(),
+                        &out),
+      0)
+      << out;
+  const auto r = read_json(dir / "report.json");
+  EXPECT_EQ(r["charts"], 1);
+  EXPECT_EQ(r["uv_vertices"], 30 * 12 + 30 + 12 + 1);
+  EXPECT_EQ(r["flips"], 0);
+  EXPECT_EQ(r["overlaps"], 0);
+  EXPECT_LT(r["energy"].get<double>(), 4.3);
+}
+
+// --init-uv: the output of one run restarts the next from its own vt (same energy: the vt are
+// written in round-trip precision); vt that are not a bijective map are refused (exit 2).
+TEST(ParamCli, InitialMapFromTheInputTextureCoordinates) {
+  const auto dir = test::scratch_dir("param_cli_init_uv");
+  io::write_surface(dir / "disk.obj", test::bump_disk(8, 32, 1.0, 0.3), io::SurfaceFormat::obj);
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " param -q " + (dir / "disk.obj").string() + " -o " +
+                                  (dir / "uv.obj").string() + " --iterations 5 --report " +
+                                  (dir / "r1.json").string(),
+                              &out),
+            0)
+      << out;
+  ASSERT_EQ(test::run_command(cli() + " param -q --init-uv " + (dir / "uv.obj").string() + " -o " +
+                                  (dir / "uv2.obj").string() + " --iterations 5 --report " +
+                                  (dir / "r2.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto r1 = read_json(dir / "r1.json"), r2 = read_json(dir / "r2.json");
+  EXPECT_EQ(r2["initial_map"], "input vt");
+  // the same map (up to the summation order of the energy)
+  EXPECT_NEAR(r2["initial_energy"].get<double>(), r1["energy"].get<double>(),
+              1e-12 * r1["energy"].get<double>());
+  EXPECT_LE(r2["energy"].get<double>(), r1["energy"].get<double>());
+  // mirror the map: every face flips
+  std::ifstream in(dir / "uv.obj");
+  std::ofstream mirrored(dir / "mirrored.obj");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("vt ", 0) == 0) {
+      std::istringstream s(line.substr(3));
+      double u = 0, v = 0;
+      s >> u >> v;
+      std::ostringstream m;
+      m.precision(17);
+      m << "vt " << -u << ' ' << v;
+      line = m.str();
+    }
+    mirrored << line << '\n';
+  }
+  mirrored.close();
+  EXPECT_EQ(test::run_command(cli() + " param --init-uv " + (dir / "mirrored.obj").string() +
+                                  " -o " + (dir / "uv3.obj").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("not a bijective map"), std::string::npos) << out;
+  const int faces = test::bump_disk(8, 32, 1.0, 0.3).num_faces();
+  EXPECT_NE(out.find(std::to_string(faces) + " flipped"), std::string::npos) << out;
+}
