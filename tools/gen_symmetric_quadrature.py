@@ -28,10 +28,12 @@ parameters must be at least as many. Each structure gets a batch of random start
 solved by Levenberg-Marquardt in variables that keep every iterate feasible (weights exp(v),
 barycentric generators softmax of tied logits). Converged rules are polished by Newton in decimal
 arithmetic (60 digits) to residuals far below double precision, then rounded, and accepted only
-if weights > 0, every barycentric coordinate > 0, points distinct, and every monomial
-x^a y^b z^c of total degree <= d integrates (with the rounded doubles, in exact rational
-arithmetic) to a relative error < 1e-14. The first structure that yields such a rule is kept, so
-the rule has the fewest points the search found, not necessarily the fewest that exist.
+if every weight is at least 1e-2 of the mean weight, every barycentric coordinate at least 1e-3
+(MIN_BARYCENTRIC: no point next to a face, where a curved element's geometry is at its worst),
+points are distinct, and every monomial x^a y^b z^c of total degree <= d integrates (with the
+rounded doubles, in exact rational arithmetic) to a relative error < 1e-14. The first structure
+that yields such a rule is kept, so the rule has the fewest points the search found, not
+necessarily the fewest that exist.
 
 Output: per rule, the orbit generators (barycentric coordinates, weight per point, 17 significant
 digits). The C++ side expands each generator to its distinct permutations.
@@ -66,6 +68,11 @@ except ImportError:
 REPO_ROOT = Path(__file__).resolve().parent.parent
 OUTPUT = REPO_ROOT / "fem" / "quadrature" / "generated" / "symmetric_rules.inc"
 PRIME = (1 << 61) - 1
+# Acceptance margins: a point nearer than this to a face (in barycentric terms) samples the
+# element's boundary, where curved geometry is at its worst; a weight below this fraction of the
+# mean weight is a wasted point. (The collapsed Gauss-Jacobi rules of degree <= 12 keep > 1.2e-4.)
+MIN_BARYCENTRIC = 1e-3
+MIN_WEIGHT_FRACTION = 1e-2
 getcontext().prec = 60
 
 # Orbit types: name -> (orbit size, logit pattern). The generator is softmax(logits) where
@@ -566,9 +573,10 @@ def finalize(system, layout, theta):
     if res is None or not res < 1e-30:
         return None
     rule = []
+    min_weight = MIN_WEIGHT_FRACTION * float(VOLUME[dim]) / layout.points
     for name, params, w in orbits:
         lam = natural_lam(dim, name, params)
-        if w <= 0 or min(lam) <= 0:
+        if w < min_weight or min(lam) < MIN_BARYCENTRIC:
             return None
         rule.append((tuple(float(x) for x in lam), float(w)))
     pts = np.array([p for gen, _ in rule for p in expand_points(dim, gen)])
@@ -715,8 +723,10 @@ def parse_inc(text):
 
 def verify(rule):
     err, count = monomial_check(rule["dim"], rule["degree"], rule["rule"])
-    ok = (count == rule["points"] and err < 1e-14 and all(w > 0 for _, w in rule["rule"])
-          and all(min(g) > 0 for g, _ in rule["rule"]))
+    min_weight = MIN_WEIGHT_FRACTION * float(VOLUME[rule["dim"]]) / rule["points"]
+    ok = (count == rule["points"] and err < 1e-14
+          and all(w >= min_weight for _, w in rule["rule"])
+          and all(min(g) >= MIN_BARYCENTRIC for g, _ in rule["rule"]))
     return ok, err, count
 
 
