@@ -10,11 +10,14 @@ DOLFINx's form compilation is warmed by one run first (its cache then holds the 
 
 Writes benchmarks/results/fem_whole_run.md. Run by hand on a quiet machine:
   /usr/bin/python3 benchmarks/run_fem_whole.py [--h 0.04] [--p 2] [--repeat 3]
+Subsets (e.g. a before/after of one binary): --exe B --solvers auto --threads 1,2 --no-peer
+--out F.
 """
 import argparse
 import json
 import os
 import statistics
+import sys
 import tempfile
 import time
 
@@ -29,6 +32,10 @@ ap.add_argument("--exe", default=os.path.join(root, "build/tools/curvefem/curvef
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/fem_whole_run.md"))
 ap.add_argument("--work", default=None)
 ap.add_argument("--note", default="")
+ap.add_argument("--solvers", default="auto,direct,cg",
+                help="curvefem solver types, comma-separated")
+ap.add_argument("--threads", default="1,2", help="curvefem thread counts, comma-separated")
+ap.add_argument("--no-peer", action="store_true", help="skip DOLFINx (curvefem rows only)")
 args = ap.parse_args()
 
 work = args.work or tempfile.mkdtemp(prefix="fem_whole_")
@@ -90,17 +97,18 @@ def dolfinx(solver):
                  "l2": rep["l2_error"], "h1": rep["h1_semi_error"]})
 
 
-for solver in ("auto", "direct", "cg"):
-    for threads in (1, 2):
+for solver in args.solvers.split(","):
+    for threads in (int(t) for t in args.threads.split(",")):
         curvefem(solver, threads)
-for solver in ("cg-boomeramg", "cg-gamg", "direct"):
-    dolfinx(solver)
+if not args.no_peer:
+    for solver in ("cg-boomeramg", "cg-gamg", "direct"):
+        dolfinx(solver)
 
-best_peer = min(r["wall"] for r in rows if r["code"] == "dolfinx")
+best_peer = min((r["wall"] for r in rows if r["code"] == "dolfinx"), default=float("nan"))
 with open(args.out + ".tmp", "w") as f:
     f.write("# Whole `curvefem run` against DOLFINx (issue 24)\n\n")
     f.write(f"Generated {time.strftime('%Y-%m-%d %H:%M')} by `/usr/bin/python3 "
-            f"benchmarks/run_fem_whole.py --h {args.h} --p {args.p} --repeat {args.repeat}`"
+            f"benchmarks/run_fem_whole.py {' '.join(sys.argv[1:])}`"
             f" on {os.cpu_count()} cores. {args.note}\n\n")
     f.write(f"P{args.p} Poisson on the unit cube (Gmsh, h = {args.h}), u = cos πx cos πy cos πz, "
             "Dirichlet everywhere; both codes compute the L2 and H1-semi errors with quadrature "

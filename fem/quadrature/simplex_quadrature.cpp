@@ -6,10 +6,15 @@
 #include <cmath>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "meshing/core/error.hpp"
 
 namespace curvefem::fem {
+namespace generated {
+#include "fem/quadrature/generated/symmetric_rules.inc"
+}  // namespace generated
+
 namespace {
 
 // Recurrence coefficients of the monic Jacobi polynomials for the weight (1 − t)^alpha on
@@ -51,7 +56,47 @@ void check_degree(int degree) {
 
 int points_per_direction(int degree) { return (degree + 2) / 2; }  // ceil((degree + 1) / 2)
 
+const generated::SymmetricRule* find_symmetric(int dimension, int degree) {
+  for (const auto& rule : generated::k_symmetric_rules)
+    if (rule.dimension == dimension && rule.degree == degree) return &rule;
+  return nullptr;
+}
+
+// Every generator expanded to its distinct permutations (std::next_permutation from the sorted
+// tuple visits each distinct one once); Cartesian point = barycentric entries 1..dimension.
+QuadratureRule expand_symmetric(const generated::SymmetricRule& table) {
+  const int dim = table.dimension;
+  QuadratureRule rule;
+  rule.degree = table.degree;
+  rule.points.resize(table.points, dim);
+  rule.weights.resize(table.points);
+  int q = 0;
+  for (int o = 0; o < table.orbit_count; ++o) {
+    const generated::SymmetricOrbit& orbit = table.orbits[o];
+    std::vector<double> lambda(orbit.barycentric, orbit.barycentric + dim + 1);
+    std::sort(lambda.begin(), lambda.end());
+    do {
+      CF_VERIFY(q < table.points, "generated symmetric rule has more points than declared");
+      for (int d = 0; d < dim; ++d) rule.points(q, d) = lambda[d + 1];
+      rule.weights[q] = orbit.weight;
+      ++q;
+    } while (std::next_permutation(lambda.begin(), lambda.end()));
+  }
+  CF_VERIFY(q == table.points, "generated symmetric rule has fewer points than declared");
+  return rule;
+}
+
+// The symmetric rule of this degree if the table has one with fewer points than the collapsed
+// rule (n^dimension points).
+const generated::SymmetricRule* preferred_symmetric(int dimension, int degree) {
+  const generated::SymmetricRule* table = find_symmetric(dimension, degree);
+  int collapsed = 1;
+  for (int d = 0; d < dimension; ++d) collapsed *= points_per_direction(degree);
+  return table != nullptr && table->points < collapsed ? table : nullptr;
+}
+
 QuadratureRule build_triangle(int degree) {
+  if (const auto* table = preferred_symmetric(2, degree)) return expand_symmetric(*table);
   const int n = points_per_direction(degree);
   Eigen::VectorXd u, wu, v, wv;
   gauss_jacobi_01(n, 1, u, wu);
@@ -71,6 +116,7 @@ QuadratureRule build_triangle(int degree) {
 }
 
 QuadratureRule build_tetrahedron(int degree) {
+  if (const auto* table = preferred_symmetric(3, degree)) return expand_symmetric(*table);
   const int n = points_per_direction(degree);
   Eigen::VectorXd u, wu, v, wv, w, ww;
   gauss_jacobi_01(n, 2, u, wu);

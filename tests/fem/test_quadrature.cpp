@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <thread>
 #include <vector>
 
@@ -50,6 +53,70 @@ double max_relative_error(const QuadratureRule& rule, int max_degree) {
 
 int expected_points_per_direction(int degree) { return (degree + 2) / 2; }
 
+int collapsed_points(int dim, int degree) {
+  const int n = expected_points_per_direction(degree);
+  return dim == 3 ? n * n * n : n * n;
+}
+
+// Point counts of the rules in use, by degree 0, 1, ..: the generated symmetric rule
+// (fem/quadrature/generated/symmetric_rules.inc) where it has fewer points than the collapsed one,
+// else the collapsed n^dim (degree 0: 1 point; tetrahedron 1 and 3, triangle 1 and 3: collapsed
+// equals or beats the symmetric rule). Beyond the tables: collapsed.
+constexpr std::array k_tet_points = {1, 1, 4, 8, 14, 14, 24, 35, 46, 61, 79, 102, 134};
+constexpr std::array k_tri_points = {1,  1,  3,  4,  6,  7,  12, 15, 16, 19, 25,
+                                     28, 33, 37, 42, 49, 55, 60, 69, 73, 79};
+
+int expected_points(int dim, int degree) {
+  if (dim == 3 && degree < static_cast<int>(k_tet_points.size())) return k_tet_points[degree];
+  if (dim == 2 && degree < static_cast<int>(k_tri_points.size())) return k_tri_points[degree];
+  return collapsed_points(dim, degree);
+}
+
+bool uses_symmetric_rule(int dim, int degree) {
+  return expected_points(dim, degree) < collapsed_points(dim, degree);
+}
+
+const QuadratureRule& rule_of(int dim, int degree) {
+  return dim == 3 ? tetrahedron_quadrature(degree) : triangle_quadrature(degree);
+}
+
+// Barycentric coordinates (l0 = 1 - x - y - z, l1 = x, ..) of point q.
+std::vector<double> barycentric(const QuadratureRule& rule, int q) {
+  const int dim = rule.dimension();
+  std::vector<double> lambda(dim + 1);
+  lambda[0] = 1.0;
+  for (int d = 0; d < dim; ++d) {
+    lambda[d + 1] = rule.points(q, d);
+    lambda[0] -= rule.points(q, d);
+  }
+  return lambda;
+}
+
+// Largest distance from a permuted point to the nearest rule point of the same weight (relative
+// 1e-12), over every point and every permutation of the barycentric coordinates; infinity when a
+// permuted point has no partner of that weight.
+double symmetry_defect(const QuadratureRule& rule) {
+  const int dim = rule.dimension();
+  std::vector<int> perm(dim + 1);
+  for (int i = 0; i <= dim; ++i) perm[i] = i;
+  double worst = 0.0;
+  do {
+    for (int q = 0; q < rule.size(); ++q) {
+      const std::vector<double> lambda = barycentric(rule, q);
+      double nearest = std::numeric_limits<double>::infinity();
+      for (int r = 0; r < rule.size(); ++r) {
+        if (std::abs(rule.weights[r] - rule.weights[q]) > 1e-12 * rule.weights[q]) continue;
+        double dist = 0.0;
+        for (int d = 0; d < dim; ++d)
+          dist = std::max(dist, std::abs(rule.points(r, d) - lambda[perm[d + 1]]));
+        nearest = std::min(nearest, dist);
+      }
+      worst = std::max(worst, nearest);
+    }
+  } while (std::next_permutation(perm.begin(), perm.end()));
+  return worst;
+}
+
 }  // namespace
 
 TEST(SimplexQuadrature, TetrahedronExactOnEveryMonomialUpToDegree20) {
@@ -75,22 +142,77 @@ TEST(SimplexQuadrature, TriangleExactOnEveryMonomialUpToMaxDegree) {
 }
 
 TEST(SimplexQuadrature, NotExactBeyondTheConstruction) {
-  // n points per direction integrate u^(2n-1) but not u^(2n): x^(2n) must fail. This proves the
-  // exactness check above can fail (for even degree d, 2n = d + 2).
-  for (int degree : {2, 4, 5, 10, 20}) {
+  // Collapsed rules: n points per direction integrate u^(2n-1) but not u^(2n), so x^(2n) must
+  // fail. This proves the exactness check above can fail (for even degree d, 2n = d + 2).
+  for (int degree : {1, 3, 20}) {
     const int n = expected_points_per_direction(degree);
+    ASSERT_FALSE(uses_symmetric_rule(3, degree));
     EXPECT_GT(max_relative_error(tetrahedron_quadrature(degree), 2 * n), 1e-8) << degree;
+  }
+  for (int degree : {1, 3, 25}) {
+    const int n = expected_points_per_direction(degree);
+    ASSERT_FALSE(uses_symmetric_rule(2, degree));
     EXPECT_GT(max_relative_error(triangle_quadrature(degree), 2 * n), 1e-8) << degree;
   }
 }
 
+TEST(SimplexQuadrature, SymmetricRulesFailWhenPerturbedOrBeyondTheirDegree) {
+  // Moving one point of a symmetric rule by 1e-6 breaks exactness: the check above can fail on
+  // these rules too. And none of the committed rules happens to be exact one degree above its
+  // own, so degree + 1 must fail as well.
+  int checked = 0;
+  for (int dim : {2, 3})
+    for (int degree = 1; degree <= k_max_quadrature_degree; ++degree) {
+      if (!uses_symmetric_rule(dim, degree)) continue;
+      ++checked;
+      QuadratureRule moved = rule_of(dim, degree);
+      moved.points(0, 0) += 1e-6;
+      EXPECT_GT(max_relative_error(moved, degree), 1e-10) << dim << "D degree " << degree;
+      EXPECT_GT(max_relative_error(rule_of(dim, degree), degree + 1), 1e-8)
+          << dim << "D degree " << degree;
+    }
+  EXPECT_GE(checked, 25);
+}
+
+TEST(SimplexQuadrature, SymmetricRulesKeepAwayFromTheFacesAndWasteNoPoint) {
+  // The generator's acceptance margins: every barycentric coordinate ≥ 1e-3 (a point next to a
+  // face samples a curved element's geometry where it is worst: a first table had points 1e-13
+  // from a face and made a Neo-Hookean Newton fail on a k = 4 torus), every weight ≥ 1e-2 of the
+  // mean weight.
+  for (int dim : {2, 3})
+    for (int degree = 0; degree <= k_max_quadrature_degree; ++degree) {
+      if (!uses_symmetric_rule(dim, degree)) continue;
+      const QuadratureRule& rule = rule_of(dim, degree);
+      double nearest_face = 1.0;
+      for (int q = 0; q < rule.size(); ++q)
+        for (double lambda : barycentric(rule, q)) nearest_face = std::min(nearest_face, lambda);
+      EXPECT_GE(nearest_face, 1e-3 - 1e-15) << dim << "D degree " << degree;
+      EXPECT_GE(rule.weights.minCoeff(), 1e-2 * rule.weights.mean())
+          << dim << "D degree " << degree;
+    }
+}
+
+TEST(SimplexQuadrature, SymmetricRulesAreInvariantUnderVertexPermutations) {
+  int checked = 0;
+  for (int dim : {2, 3})
+    for (int degree = 0; degree <= k_max_quadrature_degree; ++degree) {
+      if (!uses_symmetric_rule(dim, degree)) continue;
+      EXPECT_LT(symmetry_defect(rule_of(dim, degree)), 1e-14) << dim << "D degree " << degree;
+      ++checked;
+    }
+  EXPECT_GE(checked, 25);
+  // The check can fail: the collapsed rule of degree 20 is not symmetric.
+  EXPECT_GT(symmetry_defect(rule_of(3, 20)), 1e-3);
+}
+
 TEST(SimplexQuadrature, PointCountsWeightsAndInteriorPoints) {
   for (int degree = 0; degree <= k_max_quadrature_degree; ++degree) {
-    const int n = expected_points_per_direction(degree);
     const QuadratureRule& tet = tetrahedron_quadrature(degree);
     const QuadratureRule& tri = triangle_quadrature(degree);
-    ASSERT_EQ(tet.size(), n * n * n);
-    ASSERT_EQ(tri.size(), n * n);
+    ASSERT_EQ(tet.size(), expected_points(3, degree)) << "degree " << degree;
+    ASSERT_EQ(tri.size(), expected_points(2, degree)) << "degree " << degree;
+    EXPECT_LE(tet.size(), collapsed_points(3, degree));
+    EXPECT_LE(tri.size(), collapsed_points(2, degree));
     ASSERT_EQ(tet.dimension(), 3);
     ASSERT_EQ(tri.dimension(), 2);
     EXPECT_NEAR(tet.weights.sum(), 1.0 / 6.0, 1e-15);
