@@ -259,6 +259,32 @@ const std::vector<CaseKeyRow> k_rows = {
      .type = R"md(path)md",
      .doc = R"md(results: `volume.vtu`, `surface.vtu`, `result.pvd`, `resolved_case.json`, `report.json` (last))md"},
 };
+// The study file of `curvefem study` (cases/README.md, Studies; parsed by study_file.cpp).
+const std::vector<CaseKeyRow> k_study_rows = {
+    {.keys = {{.path = "base", .type = T::any}},
+     .type = R"md(path \| object)md",
+     .doc = R"md(the case: a case file (relative to the study file) or an inline case object (its relative paths then resolve against the study file's folder). It must be a valid case by itself and have `exact`; its `output` is ignored)md"},
+    {.keys = {{.path = "sweep", .type = T::object}},
+     .type = R"md(object)md",
+     .doc = R"md(JSON pointer ([RFC 6901](https://www.rfc-editor.org/rfc/rfc6901)) into the case → non-empty array of distinct numbers, strings or booleans. Each value is written at its pointer (missing objects are created). The runs are the cartesian product, first key outermost. E.g. `/discretization/degree` (p), `/meshing/order` (k), `/meshing/eps` (ε), `/geometry/builtin_surface/level`, `/geometry/builtin/size`, `/geometry/builtin/divisions`, `/geometry/builtin/order`, `/meshing/method`. Pointers under `/output` are refused)md"},
+    {.keys = {{.path = "refine", .type = T::string}},
+     .type = R"md(string)md",
+     .default_text = R"md(the last sweep key)md",
+     .doc = R"md(the key that varies along each curve (its pointer or its name); every combination of the other keys is one curve (a *series*))md"},
+    {.keys = {{.path = "x", .type = T::string, .default_json = R"("dofs")", .allowed = {"dofs", "tets"}}},
+     .type = R"md(`"dofs"` \| `"tets"`)md",
+     .doc = R"md(horizontal axis of `study.png` and the rate shown in its legend)md"},
+    {.keys = {{.path = "description", .type = T::string}},
+     .type = R"md(string)md",
+     .doc = R"md(free text, echoed into `study.json`)md"},
+    {.keys = {{.path = "output", .type = T::object}},
+     .type = R"md(object)md",
+     .doc = R"md(`{"dir": ...}`)md"},
+    {.keys = {{.path = "output.dir", .type = T::path}},
+     .type = R"md(path)md",
+     .default_text = R"md(`"out/<study file name>"`)md",
+     .doc = R"md(relative to the study file; `-o DIR` overrides)md"},
+};
 // clang-format on
 
 std::string number_text(double v) {
@@ -319,8 +345,6 @@ bool CaseKeyRange::contains(double v) const {
   return true;
 }
 
-const std::vector<CaseKeyRow>& case_schema() { return k_rows; }
-
 const CaseKey& case_key(std::string_view path) {
   for (const CaseKeyRow& row : k_rows)
     for (const CaseKey& k : row.keys)
@@ -328,10 +352,13 @@ const CaseKey& case_key(std::string_view path) {
   throw Error("case schema: no key " + std::string(path) + " (pipeline/case_schema.cpp)");
 }
 
-std::set<std::string> case_section_keys(std::string_view section) {
+namespace {
+
+std::set<std::string> section_keys(const std::vector<CaseKeyRow>& rows, std::string_view section,
+                                   const char* table) {
   const std::string prefix = section.empty() ? std::string() : std::string(section) + ".";
   std::set<std::string> keys;
-  for (const CaseKeyRow& row : k_rows)
+  for (const CaseKeyRow& row : rows)
     for (const CaseKey& k : row.keys) {
       if (k.path.substr(0, prefix.size()) != prefix) continue;
       std::string_view rest = k.path.substr(prefix.size());
@@ -339,14 +366,14 @@ std::set<std::string> case_section_keys(std::string_view section) {
       keys.insert(plain(rest));
     }
   if (keys.empty())
-    throw Error("case schema: no keys under " + std::string(section) +
+    throw Error(std::string(table) + ": no keys under " + std::string(section) +
                 " (pipeline/case_schema.cpp)");
   return keys;
 }
 
-std::string case_schema_markdown() {
+std::string schema_markdown(const std::vector<CaseKeyRow>& rows) {
   std::string out = "| key | type | default | meaning |\n|---|---|---|---|\n";
-  for (const CaseKeyRow& row : k_rows) {
+  for (const CaseKeyRow& row : rows) {
     std::string keys;
     for (const CaseKey& k : row.keys)
       keys += (keys.empty() ? "`" : ", `") + std::string(k.path) + "`";
@@ -355,6 +382,36 @@ std::string case_schema_markdown() {
   }
   return out;
 }
+
+nlohmann::json schema_json(const std::vector<CaseKeyRow>& rows) {
+  using json = nlohmann::json;
+  json out = json::array();
+  for (const CaseKeyRow& row : rows)
+    for (const CaseKey& k : row.keys) {
+      json o = {{"path", std::string(k.path)},
+                {"type", std::string(to_string(k.type))},
+                {"default", k.default_json.empty() ? json() : json::parse(k.default_json)},
+                {"default_text", default_column(row)},
+                {"allowed", json::array()},
+                {"minimum", nullptr},
+                {"maximum", nullptr},
+                {"minimum_exclusive", false},
+                {"maximum_exclusive", false},
+                {"type_text", std::string(row.type)},
+                {"doc", std::string(row.doc)}};
+      for (const auto a : k.allowed) o["allowed"].push_back(std::string(a));
+      if (k.range) {
+        if (std::isfinite(k.range->lo)) o["minimum"] = k.range->lo;
+        if (std::isfinite(k.range->hi)) o["maximum"] = k.range->hi;
+        o["minimum_exclusive"] = k.range->lo_open;
+        o["maximum_exclusive"] = k.range->hi_open;
+      }
+      out.push_back(std::move(o));
+    }
+  return out;
+}
+
+}  // namespace
 
 std::string_view to_string(CaseKeyType t) {
   switch (t) {
@@ -384,43 +441,29 @@ std::string_view to_string(CaseKeyType t) {
   return "any";
 }
 
-nlohmann::json case_schema_json() {
-  using json = nlohmann::json;
-  json out = json::array();
-  for (const CaseKeyRow& row : k_rows)
-    for (const CaseKey& k : row.keys) {
-      json o = {{"path", std::string(k.path)},
-                {"type", std::string(to_string(k.type))},
-                {"default", k.default_json.empty() ? json() : json::parse(k.default_json)},
-                {"default_text", default_column(row)},
-                {"allowed", json::array()},
-                {"minimum", nullptr},
-                {"maximum", nullptr},
-                {"minimum_exclusive", false},
-                {"maximum_exclusive", false},
-                {"type_text", std::string(row.type)},
-                {"doc", std::string(row.doc)}};
-      for (const auto a : k.allowed) o["allowed"].push_back(std::string(a));
-      if (k.range) {
-        if (std::isfinite(k.range->lo)) o["minimum"] = k.range->lo;
-        if (std::isfinite(k.range->hi)) o["maximum"] = k.range->hi;
-        o["minimum_exclusive"] = k.range->lo_open;
-        o["maximum_exclusive"] = k.range->hi_open;
-      }
-      out.push_back(std::move(o));
-    }
-  return out;
-}
+const std::vector<CaseKeyRow>& case_schema() { return k_rows; }
+const std::vector<CaseKeyRow>& study_schema() { return k_study_rows; }
 
-std::string replace_schema_block(const std::string& readme, const std::string& table) {
-  const auto begin = readme.find(k_schema_begin);
-  const auto end = readme.find(k_schema_end);
+std::set<std::string> case_section_keys(std::string_view section) {
+  return section_keys(k_rows, section, "case schema");
+}
+std::set<std::string> study_section_keys(std::string_view section) {
+  return section_keys(k_study_rows, section, "study schema");
+}
+std::string case_schema_markdown() { return schema_markdown(k_rows); }
+std::string study_schema_markdown() { return schema_markdown(k_study_rows); }
+nlohmann::json case_schema_json() { return schema_json(k_rows); }
+nlohmann::json study_schema_json() { return schema_json(k_study_rows); }
+
+std::string replace_schema_block(const std::string& readme, const std::string& table,
+                                 std::string_view begin_marker, std::string_view end_marker) {
+  const auto begin = readme.find(begin_marker);
+  const auto end = readme.find(end_marker);
   if (begin == std::string::npos || end == std::string::npos || end < begin)
-    throw Error("no " + std::string(k_schema_begin) + " ... " + std::string(k_schema_end) +
+    throw Error("no " + std::string(begin_marker) + " ... " + std::string(end_marker) +
                 " block in the text");
   // Blank lines around the table keep it a Markdown table of its own.
-  return readme.substr(0, begin + k_schema_begin.size()) + "\n\n" + table + "\n" +
-         readme.substr(end);
+  return readme.substr(0, begin + begin_marker.size()) + "\n\n" + table + "\n" + readme.substr(end);
 }
 
 }  // namespace curvefem::pipeline

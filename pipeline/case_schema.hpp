@@ -91,9 +91,22 @@ nlohmann::json case_schema_json();
 inline constexpr std::string_view k_schema_begin = "<!-- schema:begin -->";
 inline constexpr std::string_view k_schema_end = "<!-- schema:end -->";
 
+/// The study file of `curvefem study` as a table of the same form (paths from the study's root;
+/// `sweep` holds JSON pointers into the case, not fixed keys): it gives the keys study_file.cpp
+/// accepts and the table of cases/README.md's "Studies" between the study markers.
+const std::vector<CaseKeyRow>& study_schema();
+std::set<std::string> study_section_keys(std::string_view section);
+std::string study_schema_markdown();
+nlohmann::json study_schema_json();
+
+inline constexpr std::string_view k_study_schema_begin = "<!-- study-schema:begin -->";
+inline constexpr std::string_view k_study_schema_end = "<!-- study-schema:end -->";
+
 /// `readme` with the part between the markers replaced by a blank line, `table` and a blank
 /// line; throws curvefem::Error if a marker is missing.
-std::string replace_schema_block(const std::string& readme, const std::string& table);
+std::string replace_schema_block(const std::string& readme, const std::string& table,
+                                 std::string_view begin_marker = k_schema_begin,
+                                 std::string_view end_marker = k_schema_end);
 
 std::string_view to_string(CaseKeyType t);
 

@@ -25,6 +25,8 @@
 #include "pipeline/report_json.hpp"
 #include "pipeline/run_case.hpp"
 #include "pipeline/stages.hpp"
+#include "pipeline/study.hpp"
+#include "pipeline/study_file.hpp"
 
 namespace py = pybind11;
 using namespace curvefem;
@@ -408,4 +410,32 @@ PYBIND11_MODULE(_curvefem, m) {
       },
       py::arg("case"), py::arg("threads") = 0, py::arg("paraview") = false, py::arg("write") = true,
       py::arg("progress") = py::none());
+
+  m.def(
+      "run_study",
+      [](const std::string& text, const std::string& path, const std::string& output, int threads,
+         const py::object& progress) {
+        const ProgressFn fn = progress_of(progress);
+        // A file path (text empty) or a study already as JSON text (path names it).
+        const StudySpec study =
+            text.empty() ? read_study(path, output)
+                         : read_study_json(nlohmann::ordered_json::parse(text), path, output);
+        py::gil_scoped_release release;
+        const auto limit = limit_threads(threads);
+        const int total = static_cast<int>(study.runs.size());
+        StudyCallbacks callbacks;
+        if (fn)
+          callbacks.start = [fn, total](int i, const StudyRun& run) -> ProgressFn {
+            const std::string prefix =
+                "[" + std::to_string(i + 1) + "/" + std::to_string(total) + "] " + run.name + ": ";
+            return [fn, prefix](std::string_view stage, double fraction) {
+              fn(prefix + std::string(stage), fraction);
+            };
+          };
+        const StudyOutcome outcome = run_study(study, {.threads = threads}, callbacks);
+        return std::make_tuple(outcome.report.dump(), outcome.exit_code());
+      },
+      py::arg("text"), py::arg("path"), py::arg("output") = "", py::arg("threads") = 0,
+      py::arg("progress") = py::none(),
+      "Runs a study (pipeline/study.hpp); returns (study.json text, exit code).");
 }

@@ -53,7 +53,7 @@ __all__ = [
     "Case", "Domain", "Discretization", "Error", "InputError", "IoError", "MeshingError",
     "RunResult", "SolverError", "Surface", "case", "check", "compute_errors", "discretize",
     "load_mesh", "load_surface", "mesh", "read_case", "resolved", "run", "schema", "set_log_level",
-    "solve", "transfer_to_input",
+    "solve", "study", "transfer_to_input",
 ]
 
 # A library should not chatter: warnings and errors only, until set_log_level says otherwise.
@@ -178,6 +178,26 @@ def read_case(case, output_dir=None, base_dir=None):
     return _curvefem.read_case(_os.fspath(case), output)
 
 
+def study(study, output_dir=None, threads=0, progress=None, base_dir=None):
+    """A convergence study, as `curvefem study` runs it (cases/README.md, Studies): every run of
+    the sweep through the pipeline, then study.csv, study.png and study.json in output_dir
+    (default: the study's output.dir). `study` is a study file path, or a dict (its relative
+    paths resolve against `base_dir`, default the working directory). Returns study.json as a
+    dict, with "exit_code" added (3 when a run failed; the other runs still ran). A bad study
+    raises InputError naming its JSON path before anything runs. `progress(stage, fraction)`
+    gets stages prefixed by "[i/n] run-name: "."""
+    output = "" if output_dir is None else _os.fspath(output_dir)
+    if isinstance(study, dict):
+        base = _os.fspath(base_dir) if base_dir is not None else _os.getcwd()
+        text, code = _curvefem.run_study(_json.dumps(study), _os.path.join(base, "study.json"),
+                                         output, threads, progress)
+    else:
+        text, code = _curvefem.run_study("", _os.fspath(study), output, threads, progress)
+    report = _json.loads(text)
+    report["exit_code"] = code
+    return report
+
+
 def resolved(case):
     """The case as run, every default filled in (resolved_case.json), as a dict."""
     return _json.loads(read_case(case).resolved_json)
@@ -287,7 +307,7 @@ _HIGH_ORDER_DOC = """
     the curved geometry and the higher-order values in between are dropped), and
     `high_order="lagrange"` gives meshio's "VTK_LAGRANGE_TETRAHEDRON" cells in VTK's node order
     with every node — written only by meshio's VTU / VTK writers. "corners" also turns order 2
-    into straight tets. meshio's XDMF writer needs python3-h5py."""
+    into straight tets. meshio's XDMF writer needs python3-h5py (tools/bootstrap installs it)."""
 
 
 def _domain_to_meshio(self, high_order="auto"):

@@ -176,6 +176,20 @@ def test_run_result_to_meshio_writes_vtu_and_reads_back(saved_run, tmp_path):
     assert np.array_equal(s.point_data["u"], run.surface_values[:, 0])
 
 
+def test_run_result_to_meshio_writes_xdmf_and_reads_back(saved_run, tmp_path):
+    # meshio's XDMF writer stores the heavy data in HDF5 (Debian's python3-h5py, in tools/bootstrap).
+    _, run = saved_run
+    m = run.to_meshio()
+    path = tmp_path / "run.xdmf"
+    m.write(path)
+    assert (tmp_path / "run.h5").is_file()
+    back = meshio.read(path)
+    assert back.cells[0].type == "tetra10" and np.array_equal(back.cells[0].data,
+                                                               m.cells[0].data)
+    assert np.allclose(back.points, m.points, rtol=0, atol=0)
+    assert np.array_equal(np.ravel(back.point_data["u"]), run.solution.values[:, 0])
+
+
 def test_order_3_gives_corner_tets_or_vtk_lagrange_cells_matching_volume_vtu(tmp_path):
     run = curvefem.run(sphere_case(order=3, degree=3), output_dir=tmp_path / "p3")
     tets = run.report["tets"]

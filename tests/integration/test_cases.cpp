@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "pipeline/case_file.hpp"
+#include "pipeline/study_file.hpp"
 #include "tests/support/test_support.hpp"
-#include "tools/curvefem/study_file.hpp"
 
 using namespace curvefem;
 
@@ -36,7 +36,7 @@ TEST(Cases, EveryShippedCaseAndStudyParses) {
     SCOPED_TRACE(file.filename().string());
     try {
       if (is_study(file)) {
-        const auto study = cli::read_study(file, test::scratch_dir("cases_parse").string());
+        const auto study = pipeline::read_study(file, test::scratch_dir("cases_parse").string());
         EXPECT_FALSE(study.runs.empty());
         continue;
       }
@@ -52,7 +52,7 @@ TEST(Cases, EveryShippedCaseAndStudyParses) {
           g["builtin_surface"] = {{"shape", "box"}};
         }
       }
-      const auto spec = cli::read_case_json(j, file);
+      const auto spec = pipeline::read_case_json(j, file);
       EXPECT_FALSE(spec.output_dir.empty());
     } catch (const std::exception& e) {
       ADD_FAILURE() << e.what();

@@ -254,6 +254,10 @@ TEST(CaseSchema, ReadmeKeyTableIsTheGeneratedOne) {
   std::string generated;
   ASSERT_NO_THROW(generated = replace_schema_block(text, case_schema_markdown()))
       << readme << " has no " << k_schema_begin << " ... " << k_schema_end << " block";
+  ASSERT_NO_THROW(generated = replace_schema_block(generated, study_schema_markdown(),
+                                                   k_study_schema_begin, k_study_schema_end))
+      << readme << " has no " << k_study_schema_begin << " ... " << k_study_schema_end
+      << " block (Studies)";
   if (generated == text) return;
   // Name the first line that differs.
   std::istringstream a(text), b(generated);
@@ -265,7 +269,7 @@ TEST(CaseSchema, ReadmeKeyTableIsTheGeneratedOne) {
     const bool more_b = static_cast<bool>(std::getline(b, lb));
     if (la != lb || more_a != more_b) break;
   }
-  ADD_FAILURE() << "cases/README.md's key table is not the one generated from "
+  ADD_FAILURE() << "cases/README.md's key tables are not the ones generated from "
                    "pipeline/case_schema.cpp (first difference at line "
                 << line << ":\n  README:    " << la << "\n  generated: " << lb
                 << "\nRegenerate it: build/tools/curvefem/curvefem schema --update cases/README.md";
@@ -281,4 +285,17 @@ TEST(CaseSchema, MarkdownHasOneRowPerTableRow) {
   EXPECT_NE(md.find("| `solver.rtol`, `solver.max_iterations` | number, integer | 1e-10, 5000 |"),
             std::string::npos);
   EXPECT_THROW(replace_schema_block("no markers", md), Error);
+}
+
+TEST(StudySchema, TheStudyTableHasTheKeysTheStudyParserAccepts) {
+  EXPECT_EQ(study_section_keys(""),
+            (std::set<std::string>{"base", "description", "output", "refine", "sweep", "x"}));
+  EXPECT_EQ(study_section_keys("output"), std::set<std::string>{"dir"});
+  const std::string md = study_schema_markdown();
+  EXPECT_EQ(static_cast<std::size_t>(std::count(md.begin(), md.end(), '\n')),
+            study_schema().size() + 2);
+  EXPECT_NE(md.find("| `x` | `\"dofs\"` \\| `\"tets\"` | `\"dofs\"` |"), std::string::npos) << md;
+  const auto j = study_schema_json();
+  ASSERT_TRUE(j.is_array());
+  EXPECT_EQ(j.size(), 7u);
 }

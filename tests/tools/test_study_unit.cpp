@@ -3,10 +3,9 @@
 
 #include <cmath>
 
+#include "pipeline/convergence_fit.hpp"
 #include "pipeline/paraview_script.hpp"
-#include "tools/curvefem/convergence_fit.hpp"
 
-using namespace curvefem::cli;
 using namespace curvefem::pipeline;
 
 TEST(ConvergenceFit, RecoversAnExactPowerLaw) {

@@ -1,9 +1,10 @@
-// Study files of `curvefem study` (format in cases/README.md, "Studies"): a base case with an
-// exact solution, and a sweep — JSON pointers into the case, each with a list of values; the runs
-// are the cartesian product (first key outermost). Parsing is strict and complete before anything
-// runs: every run's case is built and validated with the case-file reader, so a bad study is an
-// InputError naming its JSON path (e.g. "/sweep/~1discretization~1degree/2: 7 gives an invalid
-// case: /discretization/degree: must be in 1..4"; a "/" inside a key is "~1", RFC 6901).
+// Study files of `curvefem study` (format in cases/README.md, "Studies"; the keys are the study
+// table of case_schema.hpp): a base case with an exact solution, and a sweep — JSON pointers into
+// the case, each with a list of values; the runs are the cartesian product (first key
+// outermost). Parsing is strict and complete before anything runs: every run's case is built and
+// validated with the case-file reader, so a bad study is an InputError naming its JSON path (e.g.
+// "/sweep/~1discretization~1degree/2: 7 gives an invalid case: /discretization/degree: must be in
+// 1..4"; a "/" inside a key is "~1", RFC 6901).
 #pragma once
 
 #include <filesystem>
@@ -13,10 +14,7 @@
 
 #include "pipeline/case_file.hpp"
 
-namespace curvefem::cli {
-
-using pipeline::CaseSpec;
-using pipeline::read_case_json;
+namespace curvefem::pipeline {
 
 /// One swept parameter.
 struct SweepKey {
@@ -47,8 +45,14 @@ struct StudySpec {
 /// Reads and validates a study file; `output_override` replaces output.dir when non-empty.
 StudySpec read_study(const std::filesystem::path& file, const std::string& output_override = {});
 
+/// The same for a study already parsed (e.g. a Python dict); `file` plays the study file's role:
+/// errors name it, relative paths (base, output.dir) resolve against its folder, and the default
+/// output folder is out/<its stem>.
+StudySpec read_study_json(const nlohmann::ordered_json& j, const std::filesystem::path& file,
+                          const std::string& output_override = {});
+
 /// The text of a sweep value as used in run names and CSV cells: numbers as JSON writes them
 /// (shortest round trip: 0.35, 1e-05), strings without quotes, true/false.
 std::string sweep_value_text(const nlohmann::json& value);
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

@@ -1,8 +1,8 @@
-#include "tools/curvefem/convergence_fit.hpp"
+#include "pipeline/convergence_fit.hpp"
 
 #include <cmath>
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 namespace {
 bool usable(double n, double e) { return std::isfinite(n) && std::isfinite(e) && n > 0 && e > 0; }
 }  // namespace
@@ -47,4 +47,4 @@ std::vector<double> pairwise_rates_h(const std::vector<double>& n,
   return rates;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

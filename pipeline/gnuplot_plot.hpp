@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 struct PlotCurve {
   std::string title;  ///< legend entry (printed literally: no enhanced-text markup)
@@ -30,4 +30,4 @@ std::string gnuplot_script(const LogLogPlot& plot);
 /// otherwise why not (gnuplot missing, its error output, its exit status).
 std::string run_gnuplot(const std::filesystem::path& dir, const std::string& script_name);
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

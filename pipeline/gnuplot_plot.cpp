@@ -1,4 +1,4 @@
-#include "tools/curvefem/gnuplot_plot.hpp"
+#include "pipeline/gnuplot_plot.hpp"
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -14,7 +14,7 @@
 
 extern char** environ;
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 namespace {
 
 /// A single-quoted gnuplot string ('' stands for one quote; no other escapes in single quotes).
@@ -112,4 +112,4 @@ std::string run_gnuplot(const std::filesystem::path& dir, const std::string& scr
          ")" + (messages.empty() ? "" : ": " + messages);
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

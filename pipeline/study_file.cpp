@@ -1,4 +1,4 @@
-#include "tools/curvefem/study_file.hpp"
+#include "pipeline/study_file.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -6,8 +6,9 @@
 #include <set>
 
 #include "meshing/core/error.hpp"
+#include "pipeline/case_schema.hpp"
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 namespace {
 
 using json = nlohmann::json;
@@ -88,12 +89,23 @@ StudySpec read_study(const std::filesystem::path& file, const std::string& outpu
   } catch (const ordered_json::parse_error& e) {
     throw InputError(std::string("invalid JSON: ") + e.what(), {.file = file.string()});
   }
+  return read_study_json(j, file, output_override);
+}
+
+StudySpec read_study_json(const ordered_json& j, const std::filesystem::path& file,
+                          const std::string& output_override) {
   if (!j.is_object()) fail("", "expected an object with \"base\" and \"sweep\"", file);
-  const std::set<std::string> allowed = {"description", "base", "sweep", "refine", "x", "output"};
-  for (const auto& [key, value] : j.items())
-    if (!allowed.count(key))
-      fail("/" + key, "unknown key (allowed here: base, description, output, refine, sweep, x)",
-           file);
+  // The keys of an object, from the study table (case_schema.hpp).
+  auto only_keys = [&](const ordered_json& o, const std::string& path, std::string_view section) {
+    const std::set<std::string> allowed = study_section_keys(section);
+    for (const auto& [key, value] : o.items())
+      if (!allowed.count(key)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(path + "/" + key, "unknown key (allowed here: " + list + ")", file);
+      }
+  };
+  only_keys(j, "", "");
 
   StudySpec s;
   s.file = file;
@@ -195,16 +207,24 @@ StudySpec read_study(const std::filesystem::path& file, const std::string& outpu
     if (s.refine < 0) fail("/refine", "'" + r + "' is not a key of /sweep", file);
   }
   if (j.contains("x")) {
-    if (!j["x"].is_string()) fail("/x", "expected \"dofs\" or \"tets\"", file);
+    const auto& allowed = [] {
+      for (const auto& row : study_schema())
+        for (const auto& k : row.keys)
+          if (k.path == "x") return k.allowed;
+      throw Error("study schema: no key x");
+    }();
+    std::string list;
+    for (const auto a : allowed) list += (list.empty() ? "" : " or ") + std::string(a);
+    if (!j["x"].is_string()) fail("/x", "expected " + list, file);
     s.x = j["x"].get<std::string>();
-    if (s.x != "dofs" && s.x != "tets") fail("/x", "'" + s.x + "': expected dofs or tets", file);
+    if (std::find(allowed.begin(), allowed.end(), s.x) == allowed.end())
+      fail("/x", "'" + s.x + "': expected " + list, file);
   }
   std::string out = "out/" + file.stem().string();
   if (j.contains("output")) {
     const ordered_json& o = j["output"];
     if (!o.is_object()) fail("/output", "expected an object {\"dir\": ...}", file);
-    for (const auto& [key, value] : o.items())
-      if (key != "dir") fail("/output/" + key, "unknown key (allowed here: dir)", file);
+    only_keys(o, "/output", "output");
     if (o.contains("dir")) {
       if (!o["dir"].is_string()) fail("/output/dir", "expected a string", file);
       out = o["dir"].get<std::string>();
@@ -286,4 +306,4 @@ StudySpec read_study(const std::filesystem::path& file, const std::string& outpu
   return s;
 }
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline

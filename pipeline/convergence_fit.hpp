@@ -6,7 +6,7 @@
 #include <optional>
 #include <vector>
 
-namespace curvefem::cli {
+namespace curvefem::pipeline {
 
 struct PowerLawFit {
   int points = 0;        ///< pairs used (n > 0, error > 0, both finite)
@@ -25,4 +25,4 @@ std::optional<PowerLawFit> fit_power_law(const std::vector<double>& n,
 std::vector<double> pairwise_rates_h(const std::vector<double>& n,
                                      const std::vector<double>& error);
 
-}  // namespace curvefem::cli
+}  // namespace curvefem::pipeline
