@@ -661,8 +661,7 @@ class ShellMesh : public TriMesh {
   // only known as an edge between two frozen vertices, and none of those flips.
   bool swap_edge_before(const Tuple& t) override {
     const Id a = t.vid, b = other_vertex(t);
-    if (chain_vertex.empty() ? frozen_vertex(a) && frozen_vertex(b)
-                             : get_edge(chain, t).feature)
+    if (chain_vertex.empty() ? frozen_vertex(a) && frozen_vertex(b) : get_edge(chain, t).feature)
       return false;
     for (Id f : vertex_cells(a))
       for (Id v : cell(f))
