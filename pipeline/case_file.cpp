@@ -94,6 +94,11 @@ struct Reader {
       list += (i == 0 ? "" : i + 1 == k.allowed.size() ? " or " : ", ") + std::string(k.allowed[i]);
     fail(path, "'" + s + "': expected " + list, file);
   }
+  /// The enum value of a choice (the schema's allowed spellings are the enum's).
+  template <class E>
+  E choice_of(const json& j, const std::string& path, std::string_view key) const {
+    return enum_from<E>(choice(j, path, key));
+  }
   /// An integer in the schema key's range.
   int integer(const json& j, const std::string& path, std::string_view key) const {
     const CaseKey& k = case_key(key);
@@ -277,18 +282,18 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
       BoundaryConditionSpec bc;
       const json* type = r.get(b, "type");
       if (!type) fail(p + "/type", "missing (dirichlet, neumann or robin)", r.file);
-      bc.type = r.choice(*type, p + "/type", "boundary_conditions[].type");
-      if (bc.type == "robin" && comps != 1)
+      bc.type = r.choice_of<BoundaryType>(*type, p + "/type", "boundary_conditions[].type");
+      if (bc.type == BoundaryType::robin && comps != 1)
         fail(p + "/type", "robin (convective) conditions are for physics poisson", r.file);
       for (const char* key : {"h", "u_inf"})
-        if (r.get(b, key) && bc.type != "robin")
+        if (r.get(b, key) && bc.type != BoundaryType::robin)
           fail(p + "/" + key, "only for robin conditions", r.file);
       const json* select = r.get(b, "select");
       if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
       bc.select = read_selection(r, *select, p + "/select");
       if (!c.exterior && mapping::uses_outer_box(bc.select))
         fail(p + "/select", "outer_box needs meshing.exterior: true", r.file);
-      if (c.solve_on == "both" && !mapping::uses_outer_box(bc.select))
+      if (c.solve_on == SolveOn::both && !mapping::uses_outer_box(bc.select))
         fail(p + "/select",
              "with meshing.solve_on \"both\" the input surface is inside the domain: only the "
              "outer box is boundary (select it with outer_box)",
@@ -302,7 +307,7 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
                "meshing.method curved or dense",
                r.file);
       }
-      if (bc.type == "robin") {
+      if (bc.type == BoundaryType::robin) {
         // −κ ∂u/∂n = h (u − u_inf): value holds u_inf.
         if (r.get(b, "value"))
           fail(p + "/value", "a robin condition takes h and u_inf, not value", r.file);
@@ -319,7 +324,7 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
       const json* value = r.get(b, "value");
       if (!value) fail(p + "/value", "missing", r.file);
       bc.value = r.expressions(*value, p + "/value", comps, /*normal=*/true);
-      if (bc.type == "dirichlet")
+      if (bc.type == BoundaryType::dirichlet)
         for (std::size_t k = 0; k < bc.value.size(); ++k)
           if (bc.value[k].uses_normal())
             fail(p + "/value" + (comps == 1 ? "" : "/" + std::to_string(k)),
@@ -327,7 +332,7 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
                  "values: a Dirichlet node on an edge has no single normal",
                  r.file);
       if (const json* m = r.get(b, "components")) {
-        if (comps == 1 || bc.type != "dirichlet")
+        if (comps == 1 || bc.type != BoundaryType::dirichlet)
           fail(p + "/components", "only for vector Dirichlet conditions", r.file);
         if (!m->is_array() || m->size() != 3)
           fail(p + "/components", "expected [bool, bool, bool]", r.file);
@@ -411,13 +416,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     r.only_keys(*builtin, "/geometry/builtin", "geometry.builtin");
     const json* shape = r.get(*builtin, "shape");
     if (!shape) fail("/geometry/builtin/shape", "missing (ball or cube)", r.file);
-    c.builtin = r.choice(*shape, "/geometry/builtin/shape", "geometry.builtin.shape");
+    c.builtin =
+        r.choice_of<BuiltinVolume>(*shape, "/geometry/builtin/shape", "geometry.builtin.shape");
     if (const json* v = r.get(*builtin, "size")) {
-      if (c.builtin != "ball") fail("/geometry/builtin/size", "only for the ball", r.file);
+      if (c.builtin != BuiltinVolume::ball)
+        fail("/geometry/builtin/size", "only for the ball", r.file);
       c.builtin_size = r.number(*v, "/geometry/builtin/size", "geometry.builtin.size");
     }
     if (const json* v = r.get(*builtin, "divisions")) {
-      if (c.builtin != "cube") fail("/geometry/builtin/divisions", "only for the cube", r.file);
+      if (c.builtin != BuiltinVolume::cube)
+        fail("/geometry/builtin/divisions", "only for the cube", r.file);
       c.builtin_divisions =
           r.integer(*v, "/geometry/builtin/divisions", "geometry.builtin.divisions");
     }
@@ -435,14 +443,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     r.only_keys(b, p, "geometry.builtin_surface");
     const json* shape = r.get(b, "shape");
     if (!shape) fail(p + "/shape", "missing (sphere, torus or box)", r.file);
-    c.builtin_surface = r.choice(*shape, p + "/shape", "geometry.builtin_surface.shape");
+    c.builtin_surface =
+        r.choice_of<BuiltinSurface>(*shape, p + "/shape", "geometry.builtin_surface.shape");
+    const std::string shape_name = to_string(c.builtin_surface);
     const std::map<std::string, std::set<std::string>> keys = {{"sphere", {"level", "radius"}},
                                                                {"torus", {"R", "r", "nu", "nv"}},
                                                                {"box", {"lo", "hi", "divisions"}}};
-    CF_VERIFY(keys.count(c.builtin_surface), "builtin_surface shape without parameters");
+    CF_VERIFY(keys.count(shape_name), "builtin_surface shape without parameters");
     for (const auto& [key, value] : b.items())
-      if (key != "shape" && !keys.at(c.builtin_surface).count(key))
-        fail(p + "/" + key, "not a parameter of the " + c.builtin_surface, r.file);
+      if (key != "shape" && !keys.at(shape_name).count(key))
+        fail(p + "/" + key, "not a parameter of the " + shape_name, r.file);
     const std::string k = "geometry.builtin_surface.";
     if (const json* v = r.get(b, "level"))
       c.sphere_level = r.integer(*v, p + "/level", k + "level");
@@ -464,21 +474,22 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (!surface && !builtin_surface)
       fail(p, "only with a dense surface (geometry.surface or geometry.builtin_surface)", r.file);
     if (f->is_string()) {
-      c.features = f->get<std::string>();
+      const std::string name = f->get<std::string>();
       const auto& allowed = case_key("geometry.features").allowed;
-      if (std::find(allowed.begin(), allowed.end(), c.features) == allowed.end())
+      if (std::find(allowed.begin(), allowed.end(), name) == allowed.end())
         fail(p,
-             "'" + c.features + "': expected \"auto\", \"none\", {\"angle\": DEG} or " +
+             "'" + name + "': expected \"auto\", \"none\", {\"angle\": DEG} or " +
                  "{\"file\": \"edges.json\"}",
              r.file);
+      c.features = enum_from<FeatureMode>(name);
     } else {
       r.only_keys(*f, p, "geometry.features");
       if (f->size() != 1) fail(p, "give exactly one of angle, file", r.file);
       if (const json* v = r.get(*f, "angle")) {
-        c.features = "angle";
+        c.features = FeatureMode::angle;
         c.feature_angle = r.number(*v, p + "/angle", "geometry.features.angle");
       } else {
-        c.features = "file";
+        c.features = FeatureMode::file;
         c.feature_file = resolve(r.string(*r.get(*f, "file"), p + "/file"));
         if (!std::filesystem::is_regular_file(c.feature_file))
           fail(p + "/file", "file not found: " + c.feature_file.string(), r.file);
@@ -486,7 +497,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     }
   }
   const bool dense_input = surface || builtin_surface || mesh_dir;
-  c.method = dense_input ? "curved" : "given";
+  c.method = dense_input ? MeshingMethod::curved : MeshingMethod::given;
 
   if (const json* m = r.get(j, "meshing")) {
     r.only_keys(*m, "/meshing", "meshing");
@@ -498,21 +509,21 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                "validate may be given)",
                r.file);
     if (const json* v = r.get(*m, "method"))
-      c.method = r.choice(*v, "/meshing/method", "meshing.method");
-    if (mesh_dir && c.method != "curved")
+      c.method = r.choice_of<MeshingMethod>(*v, "/meshing/method", "meshing.method");
+    if (mesh_dir && c.method != MeshingMethod::curved)
       fail("/meshing/method", "geometry.mesh_dir holds a curved mesh: method \"curved\"", r.file);
-    if (c.method == "given" && dense_input)
+    if (c.method == MeshingMethod::given && dense_input)
       fail("/meshing/method",
            "\"given\" takes a tet mesh (geometry.mesh or geometry.builtin), not a surface", r.file);
-    if (c.method != "given" && !dense_input)
+    if (c.method != MeshingMethod::given && !dense_input)
       fail("/meshing/method",
-           "\"" + c.method +
+           "\"" + to_string(c.method) +
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
     for (const char* key :
          {"order", "eps", "eps_field", "eps_by_tag", "thickness", "thickness_per_edge",
           "eps_samples", "feature_chains", "curved_coarsening", "validate", "deterministic"})
-      if (r.get(*m, key) && c.method != "curved")
+      if (r.get(*m, key) && c.method != MeshingMethod::curved)
         fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order"))
       c.order = r.integer(*v, "/meshing/order", "meshing.order");
@@ -584,7 +595,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     }
     if (const json* v = r.get(*m, "solve_on")) {
       if (!c.exterior) fail("/meshing/solve_on", "only with \"exterior\": true", r.file);
-      c.solve_on = r.choice(*v, "/meshing/solve_on", "meshing.solve_on");
+      c.solve_on = r.choice_of<SolveOn>(*v, "/meshing/solve_on", "meshing.solve_on");
     }
     if (const json* v = r.get(*m, "padding")) {
       if (!c.exterior) fail("/meshing/padding", "only with \"exterior\": true", r.file);
@@ -595,15 +606,15 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (const json* p = r.get(j, "physics")) {
     r.only_keys(*p, "/physics", "physics");
     if (const json* v = r.get(*p, "type"))
-      c.physics = r.choice(*v, "/physics/type", "physics.type");
-    const bool elastic = c.physics != "poisson";
+      c.physics = r.choice_of<Physics>(*v, "/physics/type", "physics.type");
+    const bool elastic = c.physics != Physics::poisson;
     if (const json* v = r.get(*p, "kappa")) {
       if (elastic) fail("/physics/kappa", "only for poisson", r.file);
       c.kappa = r.expression(*v, "/physics/kappa");
     }
     if (const json* v = r.get(*p, "kappa_inside")) {
       if (elastic) fail("/physics/kappa_inside", "only for poisson", r.file);
-      if (c.solve_on != "both")
+      if (c.solve_on != SolveOn::both)
         fail("/physics/kappa_inside", "only with meshing.solve_on \"both\"", r.file);
       c.kappa_inside = r.expression(*v, "/physics/kappa_inside");
     }
@@ -617,29 +628,33 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       if (!v) continue;
       const std::string path = std::string("/physics/") + key;
       if (!elastic) fail(path, "only for elasticity", r.file);
-      if (c.solve_on != "both") fail(path, "only with meshing.solve_on \"both\"", r.file);
+      if (c.solve_on != SolveOn::both) fail(path, "only with meshing.solve_on \"both\"", r.file);
       (key[0] == 'E' ? c.E_inside : c.nu_inside) =
           r.number(*v, path, std::string("physics.") + key);
     }
     if (const json* v = r.get(*p, "load_steps")) {
-      if (c.physics != "neo_hookean") fail("/physics/load_steps", "only for neo_hookean", r.file);
+      if (c.physics != Physics::neo_hookean)
+        fail("/physics/load_steps", "only for neo_hookean", r.file);
       c.load_steps = r.integer(*v, "/physics/load_steps", "physics.load_steps");
     }
   }
-  if (c.kappa.empty() && c.physics == "poisson") c.kappa = Expression("1", "/physics/kappa");
+  if (c.kappa.empty() && c.physics == Physics::poisson) c.kappa = Expression("1", "/physics/kappa");
 
+  bool partial_dirichlet_given = false;
   if (const json* d = r.get(j, "discretization")) {
     r.only_keys(*d, "/discretization", "discretization");
     if (const json* v = r.get(*d, "target_error")) {
       c.target_error = r.number(*v, "/discretization/target_error", "discretization.target_error");
     }
     if (const json* v = r.get(*d, "geometry")) {
-      c.geometry = r.choice(*v, "/discretization/geometry", "discretization.geometry");
+      c.geometry =
+          r.choice_of<SolveGeometry>(*v, "/discretization/geometry", "discretization.geometry");
     }
     if (const json* v = r.get(*d, "partial_dirichlet")) {
-      c.partial_dirichlet =
-          r.choice(*v, "/discretization/partial_dirichlet", "discretization.partial_dirichlet");
-      if (c.partial_dirichlet == "nitsche" && c.physics == "neo_hookean")
+      partial_dirichlet_given = true;
+      c.partial_dirichlet = r.choice_of<PartialDirichlet>(*v, "/discretization/partial_dirichlet",
+                                                          "discretization.partial_dirichlet");
+      if (c.partial_dirichlet == PartialDirichlet::nitsche && c.physics == Physics::neo_hookean)
         fail("/discretization/partial_dirichlet",
              "Neo-Hookean imposes Dirichlet data nodally only (\"nodal\")", r.file);
     }
@@ -651,8 +666,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
         c.quadrature = r.integer(*v, "/discretization/quadrature", "discretization.quadrature");
     }
   }
-  if (c.partial_dirichlet.empty())  // measured trade-off: cases/README.md
-    c.partial_dirichlet = c.physics == "poisson" ? "nitsche" : "nodal";
+  if (!partial_dirichlet_given)  // measured trade-off: cases/README.md
+    c.partial_dirichlet =
+        c.physics == Physics::poisson ? PartialDirichlet::nitsche : PartialDirichlet::nodal;
   if (const json* lc = r.get(j, "load_cases")) {
     for (const char* key : {"rhs", "boundary_conditions", "exact", "exact_gradient"})
       if (r.get(j, key))
@@ -692,7 +708,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
 
   if (const json* s = r.get(j, "solver")) {
     r.only_keys(*s, "/solver", "solver");
-    if (const json* v = r.get(*s, "type")) c.solver = r.choice(*v, "/solver/type", "solver.type");
+    if (const json* v = r.get(*s, "type"))
+      c.solver = r.choice_of<SolverType>(*v, "/solver/type", "solver.type");
     if (const json* v = r.get(*s, "rtol"))
       c.solver_rtol = r.number(*v, "/solver/rtol", "solver.rtol");
     if (const json* v = r.get(*s, "max_iterations"))
@@ -702,7 +719,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
       c.solver_near_nullspace = v->get<bool>();
     }
     if (const json* v = r.get(*s, "preconditioner")) {
-      c.solver_preconditioner = r.choice(*v, "/solver/preconditioner", "solver.preconditioner");
+      c.solver_preconditioner =
+          r.choice_of<Preconditioner>(*v, "/solver/preconditioner", "solver.preconditioner");
     }
   }
   std::string out = "out";
@@ -723,10 +741,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
   if (!c.mesh.empty())
     res["geometry"] = {{"mesh", c.mesh.string()}};
-  else if (c.builtin == "ball")
+  else if (c.builtin == BuiltinVolume::ball)
     res["geometry"] = {
         {"builtin", {{"shape", "ball"}, {"size", c.builtin_size}, {"order", c.builtin_order}}}};
-  else if (c.builtin == "cube")
+  else if (c.builtin == BuiltinVolume::cube)
     res["geometry"] = {
         {"builtin",
          {{"shape", "cube"}, {"divisions", c.builtin_divisions}, {"order", c.builtin_order}}}};
@@ -734,10 +752,10 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     res["geometry"] = {{"surface", c.surface.string()}};
   else if (!c.mesh_dir.empty())
     res["geometry"] = {{"mesh_dir", c.mesh_dir.string()}};
-  else if (c.builtin_surface == "sphere")
+  else if (c.builtin_surface == BuiltinSurface::sphere)
     res["geometry"] = {{"builtin_surface",
                         {{"shape", "sphere"}, {"level", c.sphere_level}, {"radius", c.radius}}}};
-  else if (c.builtin_surface == "torus")
+  else if (c.builtin_surface == BuiltinSurface::torus)
     res["geometry"] = {{"builtin_surface",
                         {{"shape", "torus"},
                          {"R", c.torus_R},
@@ -751,9 +769,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                          {"hi", vec(c.box_hi)},
                          {"divisions", c.box_divisions}}}};
   if (c.dense_surface() && c.mesh_dir.empty()) {
-    if (c.features == "angle")
+    if (c.features == FeatureMode::angle)
       res["geometry"]["features"] = {{"angle", c.feature_angle}};
-    else if (c.features == "file")
+    else if (c.features == FeatureMode::file)
       res["geometry"]["features"] = {{"file", c.feature_file.string()}};
     else
       res["geometry"]["features"] = c.features;
@@ -763,7 +781,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (!c.mesh_dir.empty()) {
     res["meshing"]["reused"] = true;
     res["meshing"]["validate"] = c.validate;
-  } else if (c.method == "curved") {
+  } else if (c.method == MeshingMethod::curved) {
     res["meshing"]["order"] = c.order;
     if (c.eps_levels.empty())
       res["meshing"]["eps"] = c.eps;
@@ -785,18 +803,18 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (c.exterior) res["meshing"]["solve_on"] = c.solve_on;
   }
   res["physics"] = {{"type", c.physics}};
-  if (c.physics == "poisson") {
+  if (c.physics == Physics::poisson) {
     res["physics"]["kappa"] = c.kappa.text();
-    if (c.solve_on == "both")
+    if (c.solve_on == SolveOn::both)
       res["physics"]["kappa_inside"] = (c.kappa_inside.empty() ? c.kappa : c.kappa_inside).text();
   } else {
     res["physics"]["E"] = c.E, res["physics"]["nu"] = c.nu;
-    if (c.solve_on == "both") {
+    if (c.solve_on == SolveOn::both) {
       res["physics"]["E_inside"] = c.E_inside.value_or(c.E);
       res["physics"]["nu_inside"] = c.nu_inside.value_or(c.nu);
     }
   }
-  if (c.physics == "neo_hookean") res["physics"]["load_steps"] = c.load_steps;
+  if (c.physics == Physics::neo_hookean) res["physics"]["load_steps"] = c.load_steps;
   res["discretization"] = {{"degree", c.degree},
                            {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
                            {"partial_dirichlet", c.partial_dirichlet},
@@ -811,14 +829,14 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     out["boundary_conditions"] = json::array();
     for (const auto& bc : bcs) {
       json b = {{"type", bc.type}};
-      if (bc.type == "robin") {
+      if (bc.type == BoundaryType::robin) {
         b["h"] = exprs(bc.h);
         b["u_inf"] = exprs(bc.value);
       } else {
         b["value"] = exprs(bc.value);
       }
       b["select"] = selection_json(bc.select);
-      if (comps == 3 && bc.type == "dirichlet") b["components"] = bc.components;
+      if (comps == 3 && bc.type == BoundaryType::dirichlet) b["components"] = bc.components;
       out["boundary_conditions"].push_back(b);
     }
     if (!exact.empty()) out["exact"] = exprs(exact);

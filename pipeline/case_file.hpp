@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "mapping/selection.hpp"
+#include "pipeline/case_enums.hpp"
 #include "pipeline/expression.hpp"
 
 namespace curvefem::pipeline {
@@ -24,7 +25,7 @@ namespace curvefem::pipeline {
 using Selection = mapping::Selection;
 
 struct BoundaryConditionSpec {
-  std::string type;  ///< dirichlet | neumann | robin
+  BoundaryType type = BoundaryType::dirichlet;
   Selection select;
   std::vector<Expression> value;  ///< 1 (scalar) or 3 (vector) expressions; robin: u_inf
   std::vector<Expression> h;      ///< robin: the coefficient h of −κ ∂u/∂n = h (u − u_inf)
@@ -48,15 +49,15 @@ struct CaseSpec {
   /// geometry.data_surface, resolved (given meshes): boundary values are read at the closest
   /// point of this surface, as for data painted on a dense surface the mesh approximates.
   std::filesystem::path data_surface;
-  std::string builtin;        ///< geometry.builtin.shape: "" | ball | cube
-  double builtin_size = 0.3;  ///< ball: target edge length (radius 1)
-  int builtin_divisions = 4;  ///< cube: n³ cubes of 6 tets on [0,1]³
-  int builtin_order = 1;      ///< geometric order k of the built-in mesh
+  BuiltinVolume builtin = BuiltinVolume::none;  ///< geometry.builtin.shape
+  double builtin_size = 0.3;                    ///< ball: target edge length (radius 1)
+  int builtin_divisions = 4;                    ///< cube: n³ cubes of 6 tets on [0,1]³
+  int builtin_order = 1;                        ///< geometric order k of the built-in mesh
   // Dense-surface pipelines (meshing.method curved | dense):
   std::filesystem::path surface;  ///< geometry.surface, resolved (empty for a built-in surface)
-  std::string builtin_surface;    ///< geometry.builtin_surface.shape: "" | sphere | torus | box
-  int sphere_level = 3;           ///< icosphere subdivisions (20·4^level faces)
-  double radius = 1.0;            ///< sphere radius
+  BuiltinSurface builtin_surface = BuiltinSurface::none;  ///< geometry.builtin_surface.shape
+  int sphere_level = 3;  ///< icosphere subdivisions (20·4^level faces)
+  double radius = 1.0;   ///< sphere radius
   double torus_R = 1.0, torus_r = 0.4;
   int torus_nu = 48, torus_nv = 24;
   Eigen::Vector3d box_lo = Eigen::Vector3d::Zero(), box_hi = Eigen::Vector3d::Ones();
@@ -65,12 +66,12 @@ struct CaseSpec {
   /// (mesh.msh + boundary_map.json), reused without meshing; the input it was made from is read
   /// from the path saved with it and must still have the saved checksum.
   std::filesystem::path mesh_dir;
-  std::string features = "auto";  ///< auto | none | angle | file
+  FeatureMode features = FeatureMode::automatic;
   double feature_angle = 60.0;
   std::filesystem::path feature_file;
-  std::string method = "given";  ///< given | curved | dense
-  int order = 3;                 ///< curved: geometric order k
-  double eps = 1e-2;             ///< curved: distance bound, relative to the bbox edge
+  MeshingMethod method = MeshingMethod::given;
+  int order = 3;      ///< curved: geometric order k
+  double eps = 1e-2;  ///< curved: distance bound, relative to the bbox edge
   /// curved, meshing.eps a list: the bounds, coarsest first (eps is then the finest). The run
   /// meshes them all from one coarsening and solves coarse to fine (run_case.hpp).
   std::vector<double> eps_levels;
@@ -91,10 +92,12 @@ struct CaseSpec {
   double padding = 0.25;
   /// With exterior: "outside" (the domain is outside the surface) or "both" (the whole box; the
   /// surface is an interface, the outer box the only boundary).
-  std::string solve_on = "outside";
-  bool dense_surface() const { return method == "curved" || method == "dense"; }
-  std::string physics = "poisson";  ///< poisson | linear_elasticity | neo_hookean
-  Expression kappa;                 ///< poisson
+  SolveOn solve_on = SolveOn::outside;
+  bool dense_surface() const {
+    return method == MeshingMethod::curved || method == MeshingMethod::dense;
+  }
+  Physics physics = Physics::poisson;
+  Expression kappa;          ///< poisson
   Expression kappa_inside;   ///< poisson, solve_on both: κ inside the surface (empty: kappa)
   double E = 1.0, nu = 0.3;  ///< elasticity
   /// Elasticity, solve_on both: the inside's material (unset: E, nu).
@@ -108,11 +111,11 @@ struct CaseSpec {
   /// Dirichlet faces a selection covers in part: "nitsche" (weakly; Poisson's default, linear
   /// elasticity on request) or "nodal" (the DOFs the selection covers are fixed; elasticity's
   /// default, Neo-Hookean's only mode).
-  std::string partial_dirichlet;
+  PartialDirichlet partial_dirichlet = PartialDirichlet::nitsche;
   /// "iso" (default): a mesh of order k > p is solved on the degree-p interpolant of its maps
   /// (meshing/core/geometry_degree.hpp), certified first; "mesh": on the mesh's own maps
   /// (super-parametric).
-  std::string geometry = "iso";
+  SolveGeometry geometry = SolveGeometry::iso;
   std::vector<Expression> rhs;  ///< empty, 1 or 3
   std::vector<BoundaryConditionSpec> boundary_conditions;
   std::vector<Expression> exact;  ///< empty, 1 or 3
@@ -127,14 +130,14 @@ struct CaseSpec {
     if (!load_cases.empty()) return load_cases;
     return {LoadCase{"", rhs, boundary_conditions, exact, exact_gradient}};
   }
-  std::string solver = "auto";
+  SolverType solver = SolverType::automatic;
   double solver_rtol = 1e-10;
   int solver_max_iterations = 5000;
-  bool solver_near_nullspace = true;           ///< cg: rigid-body modes for GAMG (elasticity)
-  std::string solver_preconditioner = "gamg";  ///< cg: gamg | hypre | ml
-  std::filesystem::path output_dir;            ///< resolved
-  nlohmann::json resolved;                     ///< the case with defaults, as run
-  int components() const { return physics == "poisson" ? 1 : 3; }
+  bool solver_near_nullspace = true;  ///< cg: rigid-body modes for GAMG (elasticity)
+  Preconditioner solver_preconditioner = Preconditioner::gamg;  ///< cg
+  std::filesystem::path output_dir;                             ///< resolved
+  nlohmann::json resolved;                                      ///< the case with defaults, as run
+  int components() const { return physics == Physics::poisson ? 1 : 3; }
 };
 
 /// Reads and validates a case file; `output_override` replaces output.dir when non-empty.

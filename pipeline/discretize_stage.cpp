@@ -95,7 +95,7 @@ std::vector<int> cube_face_tags(const LagrangeMesh& mesh, const fem::FunctionSpa
 
 json lower_geometry_for_solve(const CaseSpec& spec, LagrangeMesh& mesh) {
   json r = {{"mode", spec.geometry}, {"mesh_order", mesh.order}, {"degree", mesh.order}};
-  if (spec.geometry != "iso" || spec.degree >= mesh.order) return r;
+  if (spec.geometry != SolveGeometry::iso || spec.degree >= mesh.order) return r;
   int kept = 0;
   mesh = lower_geometry_degree(
       mesh, spec.degree,
@@ -126,8 +126,9 @@ Discretization discretize(const CaseSpec& spec, const Domain& domain, const Stag
   disc.solve_geometry = lower_geometry_for_solve(spec, disc.mesh);
   disc.space = fem::build_function_space(disc.mesh, spec.degree);
   if (!domain.on_input()) {
-    disc.face_tags = spec.builtin == "cube" ? cube_face_tags(disc.mesh, disc.space)
-                                            : boundary_face_tags(spec.mesh, disc.mesh, disc.space);
+    disc.face_tags = spec.builtin == BuiltinVolume::cube
+                         ? cube_face_tags(disc.mesh, disc.space)
+                         : boundary_face_tags(spec.mesh, disc.mesh, disc.space);
   } else if (domain.curved_map) {
     const BoundaryMap* map = &*domain.curved_map;
     if (disc.solve_geometry["degree"] != disc.solve_geometry["mesh_order"]) {

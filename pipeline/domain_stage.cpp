@@ -140,7 +140,7 @@ void finish_curved(const CaseSpec& spec, const StageContext& ctx, Domain& d, cv:
     ctx.update("validate mesh", 0.0);
     validate_domain(d, options.eps_rel);
   }
-  if (spec.exterior && spec.solve_on != "both") {
+  if (spec.exterior && spec.solve_on != SolveOn::both) {
     // The domain is the outside: the outer slab layer and the exterior (tags 3, 4; the whole
     // mesh was validated above). The map's triangles are faces of outer slab tets too.
     std::vector<int> old_to_new;
@@ -187,7 +187,7 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
     F.topRows(input.num_faces()) = input.F.rowwise().reverse();
     F.bottomRows(box.num_faces()) = box.F.array() + nv;
     fill = meshing::tetfill::fill_interior(V, F, options);
-    if (spec.solve_on == "both") {
+    if (spec.solve_on == SolveOn::both) {
       // The inside too, sharing the input's vertices (both fills keep them first and keep the
       // input's triangles): its other vertices go after the outside's, its tets first.
       const meshing::tetfill::TetFillResult inside =
@@ -229,16 +229,17 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
   if (ctx.timings) t.emplace(*ctx.timings, "load_surface");
   ctx.update("load surface", 0.0);
   SurfaceMesh input;
-  if (spec.builtin_surface == "sphere")
+  if (spec.builtin_surface == BuiltinSurface::sphere)
     input = make_icosphere(spec.sphere_level, spec.radius);
-  else if (spec.builtin_surface == "torus")
+  else if (spec.builtin_surface == BuiltinSurface::torus)
     input = make_torus(spec.torus_R, spec.torus_r, spec.torus_nu, spec.torus_nv);
-  else if (spec.builtin_surface == "box")
+  else if (spec.builtin_surface == BuiltinSurface::box)
     input = make_box(spec.box_lo, spec.box_hi, spec.box_divisions);
   else
     input = io::read_surface(spec.surface);
-  const std::string where =
-      spec.builtin_surface.empty() ? "/geometry/surface" : "/geometry/builtin_surface";
+  const std::string where = (spec.builtin_surface == BuiltinSurface::none)
+                                ? "/geometry/surface"
+                                : "/geometry/builtin_surface";
   const check::CheckReport report = check::check_surface(input, {});
   if (!report.acceptable)
     throw InputError(where + ": not a valid meshing input: " +
@@ -256,9 +257,10 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
 }
 
 std::vector<std::array<int, 2>> case_feature_edges(const CaseSpec& spec, const SurfaceMesh& input) {
-  if (spec.features == "none") return {};
-  if (spec.features != "file")
-    return cv::detect_feature_edges(input, spec.features == "angle" ? spec.feature_angle : 60.0);
+  if (spec.features == FeatureMode::none) return {};
+  if (spec.features != FeatureMode::file)
+    return cv::detect_feature_edges(
+        input, spec.features == FeatureMode::angle ? spec.feature_angle : 60.0);
   const std::string where = "/geometry/features/file";
   std::ifstream f(spec.feature_file);
   if (!f) throw InputError(where + ": cannot open " + spec.feature_file.string());
@@ -289,9 +291,9 @@ Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& 
     std::optional<ScopedTimer> t;
     if (ctx.timings) t.emplace(*ctx.timings, "load_mesh");
     ctx.update("load mesh", 0.0);
-    if (spec.builtin == "ball")
+    if (spec.builtin == BuiltinVolume::ball)
       d.mesh = io::make_ball_mesh(1.0, spec.builtin_size, spec.builtin_order);
-    else if (spec.builtin == "cube")
+    else if (spec.builtin == BuiltinVolume::cube)
       d.mesh = elevate_order(make_cube_tets(spec.builtin_divisions), spec.builtin_order,
                              [](const Eigen::Vector3d& x) { return x; });
     else
@@ -319,7 +321,7 @@ Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& 
   d.report["input_faces"] = d.input.num_faces();
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "meshing");
-  if (spec.method == "curved")
+  if (spec.method == MeshingMethod::curved)
     mesh_curved(spec, ctx, d);
   else
     mesh_dense(spec, ctx, d);
@@ -328,7 +330,7 @@ Domain mesh_domain(const CaseSpec& spec, SurfaceMesh input, const StageContext& 
 
 std::vector<Domain> mesh_domain_levels(const CaseSpec& spec, SurfaceMesh input,
                                        const StageContext& ctx) {
-  if (spec.method != "curved" || spec.eps_levels.empty() || !spec.mesh_dir.empty())
+  if (spec.method != MeshingMethod::curved || spec.eps_levels.empty() || !spec.mesh_dir.empty())
     throw InputError("mesh levels: a curved case with meshing.eps a list of bounds");
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "meshing");

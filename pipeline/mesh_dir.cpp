@@ -89,7 +89,7 @@ Domain load_mesh_dir(const CaseSpec& spec, const StageContext& ctx) {
                          ", saved " + saved.input_checksum + "): mesh it again",
                      {.file = input_path.string()});
   Domain d;
-  d.method = "curved";
+  d.method = MeshingMethod::curved;
   d.input = io::read_surface(input_path);
   d.mesh = io::read_msh(dir / "mesh.msh");
   if (d.mesh.kind != CellKind::tetrahedron)

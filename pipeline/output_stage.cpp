@@ -205,7 +205,7 @@ InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
   out.report["surface_unmapped_vertices"] = unmapped;
   for (std::size_t i = 0; i < spec.boundary_conditions.size(); ++i) {
     const auto& bc = spec.boundary_conditions[i];
-    Field f{"bc" + std::to_string(i) + "_" + bc.type, 1, {}};
+    Field f{"bc" + std::to_string(i) + "_" + to_string(bc.type), 1, {}};
     for (int k = 0; k < input.num_faces(); ++k)
       f.values.push_back(mapping::face_coverage(bc.select, input, k));
     out.fields.cell_data.push_back(f);
@@ -267,7 +267,7 @@ std::vector<Field> volume_fields(const CaseSpec& spec, const Discretization& dis
     fields.push_back(ef);
     fields.push_back(err);
   }
-  if (spec.physics == "linear_elasticity") {
+  if (spec.physics == Physics::linear_elasticity) {
     const Eigen::VectorXd vm =
         fem::von_mises_at_dofs(disc.mesh, out_space, {spec.E, spec.nu},
                                values.transpose().reshaped(), l.solution.cell_material);
@@ -297,11 +297,12 @@ json run_report(const CaseSpec& spec, const Domain& domain, const Discretization
   report["method"] = spec.method;
   if (domain.on_input()) {
     report["surface"] =
-        spec.surface.empty() ? "builtin " + spec.builtin_surface : spec.surface.string();
+        spec.surface.empty() ? "builtin " + to_string(spec.builtin_surface) : spec.surface.string();
     report["meshing"] = domain.report;
     report["mesh_valid"] = domain.valid;
   } else {
-    report["mesh"] = spec.builtin.empty() ? spec.mesh.string() : "builtin " + spec.builtin;
+    report["mesh"] = (spec.builtin == BuiltinVolume::none) ? spec.mesh.string()
+                                                           : "builtin " + to_string(spec.builtin);
     if (domain.report.contains("data_surface"))
       report["data_surface"] = domain.report["data_surface"];
   }

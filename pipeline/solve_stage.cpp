@@ -62,7 +62,7 @@ BoundCondition bind_on_input(const BoundaryConditionSpec& bc, const Domain& doma
   out.spec = &bc;
   out.faces.assign(disc.space.boundary_faces.size(), 1);
   out.where = mapping::input_selection_filter(s, domain.input, disc.inverse,
-                                              /*closed=*/bc.type == "dirichlet");
+                                              /*closed=*/bc.type == BoundaryType::dirichlet);
   if (domain.outer_box) {
     // Exterior runs: points of the outer box are selected there (selects_point: only through
     // outer_box), the others on the input as above.
@@ -76,7 +76,8 @@ BoundCondition bind_on_input(const BoundaryConditionSpec& bc, const Domain& doma
   }
   // A Neumann selection, or a Dirichlet one imposed by Nitsche on faces it cuts, acts at the
   // face quadrature points the assembly uses; a nodal Dirichlet one at nodes.
-  const bool at_points = bc.type == "neumann" || bc.type == "robin" || weak_dirichlet;
+  const bool at_points =
+      bc.type == BoundaryType::neumann || bc.type == BoundaryType::robin || weak_dirichlet;
   long long count = 0;
   fem::for_each_boundary_dof(disc.space, out.faces, out.where, [&](int) { ++count; });
   if (count == 0 && at_points)
@@ -101,9 +102,10 @@ BoundaryData bind_boundary(const CaseSpec& spec,
   BoundaryData data;
   const std::string file = spec.case_file.string();
   for (const auto& bc : conditions)
-    data.conditions.push_back(domain.on_input() ? bind_on_input(bc, domain, disc, file,
-                                                                spec.partial_dirichlet == "nitsche")
-                                                : bind_on_mesh(bc, disc, file));
+    data.conditions.push_back(
+        domain.on_input() ? bind_on_input(bc, domain, disc, file,
+                                          spec.partial_dirichlet == PartialDirichlet::nitsche)
+                          : bind_on_mesh(bc, disc, file));
   if (domain.on_input()) {
     std::optional<OuterBox> box = domain.outer_box;
     data.data_point = [box, inverse = disc.inverse](const Eigen::Vector3d& x) -> Eigen::Vector3d {
@@ -129,8 +131,8 @@ BoundaryData bind_boundary(const CaseSpec& spec,
 // Poisson P1-P3 and elasticity P1, direct faster at ~20k unknowns and CG from ~36k; elasticity P2
 // even at 36-47k; elasticity P3 direct up to 89k, CG from 152k. P4 was not measured (P3's values).
 namespace {
-int auto_direct_max_unknowns(const std::string& physics, int degree) {
-  if (physics == "poisson") return 25000;
+int auto_direct_max_unknowns(Physics physics, int degree) {
+  if (physics == Physics::poisson) return 25000;
   if (degree <= 1) return 25000;
   if (degree == 2) return 40000;
   return 120000;
@@ -142,16 +144,16 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
                std::shared_ptr<fem::FactorizationCache> cache) {
   const LagrangeMesh& mesh = disc.mesh;
   const fem::FunctionSpace& space = disc.space;
-  ctx.update("solve " + spec.physics, 0.0);
+  ctx.update("solve " + to_string(spec.physics), 0.0);
   fem::LinearSolverOptions solver;
-  solver.type = spec.solver;
+  solver.type = to_string(spec.solver);
   solver.rtol = spec.solver_rtol;
   solver.max_iterations = spec.solver_max_iterations;
   solver.use_near_nullspace = spec.solver_near_nullspace;
-  solver.preconditioner = spec.solver_preconditioner;
+  solver.preconditioner = to_string(spec.solver_preconditioner);
   solver.auto_direct_max_dofs = auto_direct_max_unknowns(spec.physics, disc.space.degree);
-  if (spec.physics != "neo_hookean") solver.factorization_cache = std::move(cache);
-  const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == "nodal"
+  if (spec.physics != Physics::neo_hookean) solver.factorization_cache = std::move(cache);
+  const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == PartialDirichlet::nodal
                                                       ? fem::PartialDirichlet::nodal
                                                       : fem::PartialDirichlet::nitsche;
   // Boundary values are read at data_point(x): φ⁻¹(x) on a dense input, x on a given mesh. The
@@ -163,11 +165,11 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
     if (ctx.timings)
       for (const auto& [stage, s] : t.stages()) ctx.timings->add(stage, s);
   };
-  if (spec.physics == "poisson") {
+  if (spec.physics == Physics::poisson) {
     fem::PoissonProblem problem;
     const Expression kappa = spec.kappa;
     problem.kappa = [kappa](const Eigen::Vector3d& x) { return kappa(x); };
-    if (spec.solve_on == "both" && !spec.kappa_inside.empty()) {
+    if (spec.solve_on == SolveOn::both && !spec.kappa_inside.empty()) {
       // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
       const Expression inside = spec.kappa_inside;
       const Eigen::VectorXi* tags = &mesh.cell_tags;
@@ -183,10 +185,10 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
     problem.partial_dirichlet = partial_dirichlet;
     for (const BoundCondition& bc : data.conditions) {
       const Expression e = bc.spec->value[0];
-      if (bc.spec->type == "dirichlet")
+      if (bc.spec->type == BoundaryType::dirichlet)
         problem.dirichlet.push_back(
             {bc.faces, [e, point](const Eigen::Vector3d& x) { return e(point(x)); }, bc.where});
-      else if (bc.spec->type == "robin")
+      else if (bc.spec->type == BoundaryType::robin)
         problem.robin.push_back(
             {bc.faces,
              [h = bc.spec->h[0], point](const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
@@ -226,7 +228,7 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   } else {
     fem::ElasticityProblem problem;
     problem.material = {spec.E, spec.nu};
-    if (spec.solve_on == "both") {
+    if (spec.solve_on == SolveOn::both) {
       // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
       const fem::ElasticMaterial inside{spec.E_inside.value_or(spec.E),
                                         spec.nu_inside.value_or(spec.nu)};
@@ -245,7 +247,7 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
       };
     for (const BoundCondition& bc : data.conditions) {
       const std::vector<Expression> e = bc.spec->value;
-      if (bc.spec->type == "dirichlet")
+      if (bc.spec->type == BoundaryType::dirichlet)
         problem.dirichlet.push_back({bc.faces, bc.spec->components,
                                      [e, point](const Eigen::Vector3d& x) {
                                        const Eigen::Vector3d y = point(x);
@@ -261,7 +263,7 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
                                     bc.where});
     }
     fem::ElasticitySolution sol;
-    if (spec.physics == "linear_elasticity") {
+    if (spec.physics == Physics::linear_elasticity) {
       sol = fem::solve_linear_elasticity(mesh, space, problem, solver);
     } else {
       fem::NewtonOptions newton;
@@ -299,8 +301,8 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
       // Equilibrium, recomputed from u: the supports' force against the applied load.
       std::optional<ScopedTimer> t;
       if (ctx.timings) t.emplace(*ctx.timings, "force_balance");
-      const fem::ForceBalance fb =
-          fem::force_balance(mesh, space, problem, out.u, spec.physics != "linear_elasticity");
+      const fem::ForceBalance fb = fem::force_balance(mesh, space, problem, out.u,
+                                                      spec.physics != Physics::linear_elasticity);
       out.physics["force_balance"] = {{"applied", vec(fb.applied)},
                                       {"reaction", vec(fb.reaction)},
                                       {"supported_unknowns", fb.supported_unknowns},
@@ -310,11 +312,12 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
                   " of the load (the solve did not converge to equilibrium)");
     }
     out.physics["free_unknowns"] = sol.free_unknowns;
-    if (spec.physics == "linear_elasticity") out.physics["nitsche_faces"] = sol.nitsche_faces;
+    if (spec.physics == Physics::linear_elasticity)
+      out.physics["nitsche_faces"] = sol.nitsche_faces;
     out.physics["E"] = spec.E;
     out.physics["nu"] = spec.nu;
   }
-  ctx.update("solve " + spec.physics, 1.0);
+  ctx.update("solve " + to_string(spec.physics), 1.0);
   return out;
 }
 

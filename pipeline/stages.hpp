@@ -78,8 +78,8 @@ struct OuterBox {
 
 /// The mesh the physics runs on and what ties its boundary to the dense input.
 struct Domain {
-  std::string method;  ///< given | curved | dense
-  LagrangeMesh mesh;   ///< as meshed (order k); volume.vtu's geometry
+  MeshingMethod method = MeshingMethod::given;
+  LagrangeMesh mesh;  ///< as meshed (order k); volume.vtu's geometry
   // curved | dense:
   SurfaceMesh input;
   std::optional<BoundaryMap> curved_map;  ///< curved: φ
@@ -95,7 +95,7 @@ struct Domain {
   /// closest point of it.
   std::shared_ptr<const meshing::shell::InputSurfaceIndex> data_surface;
   const BoundaryMap& map() const { return curved_map ? *curved_map : identity_map; }
-  bool on_input() const { return method != "given"; }
+  bool on_input() const { return method != MeshingMethod::given; }
 };
 
 /// curved: build_curved_mesh + validate_curved_mesh, or the saved mesh of geometry.mesh_dir

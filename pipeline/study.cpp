@@ -78,7 +78,7 @@ SharedMeshing mesh_shared(const StudySpec& study, int threads) {
   std::map<std::string, std::vector<std::size_t>> groups;
   for (std::size_t i = 0; i < study.runs.size(); ++i) {
     const CaseSpec& c = study.runs[i].spec;
-    if (c.method != "curved" || !c.mesh_dir.empty() || !c.eps_levels.empty()) continue;
+    if (c.method != MeshingMethod::curved || !c.mesh_dir.empty() || !c.eps_levels.empty()) continue;
     json key = {{"geometry", c.resolved.value("geometry", json())},
                 {"meshing", c.resolved.value("meshing", json())}};
     key["meshing"].erase("eps");

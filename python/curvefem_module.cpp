@@ -126,8 +126,8 @@ PYBIND11_MODULE(_curvefem, m) {
   py::class_<CaseSpec, std::shared_ptr<CaseSpec>>(m, "Case")
       .def_property_readonly("resolved_json", [](const CaseSpec& c) { return c.resolved.dump(); })
       .def_property_readonly("output_dir", [](const CaseSpec& c) { return c.output_dir.string(); })
-      .def_property_readonly("method", [](const CaseSpec& c) { return c.method; })
-      .def_property_readonly("physics", [](const CaseSpec& c) { return c.physics; })
+      .def_property_readonly("method", [](const CaseSpec& c) { return to_string(c.method); })
+      .def_property_readonly("physics", [](const CaseSpec& c) { return to_string(c.physics); })
       .def_property_readonly("degree", [](const CaseSpec& c) { return c.degree; })
       .def_property_readonly("order", [](const CaseSpec& c) { return c.order; })
       .def_property_readonly("eps", [](const CaseSpec& c) { return c.eps; })
@@ -170,7 +170,7 @@ PYBIND11_MODULE(_curvefem, m) {
       "The mesh a case runs on (stage 2: curvefem.mesh or curvefem.load_mesh): the tetrahedra of "
       "order k and, for curved | dense meshes, the dense input and the boundary map phi.")
       .def_property_readonly(
-          "method", [](const Domain& d) { return d.method; }, "curved | dense | given")
+          "method", [](const Domain& d) { return to_string(d.method); }, "curved | dense | given")
       .def_property_readonly(
           "nodes", [](const Domain& d) { return d.mesh.nodes; },
           "#N x 3 Lagrange node coordinates of the tet mesh (order k).")
@@ -237,7 +237,7 @@ PYBIND11_MODULE(_curvefem, m) {
       "load_mesh_dir",
       [](const std::string& dir, bool validate, int threads, const py::object& progress) {
         CaseSpec spec;
-        spec.method = "curved";
+        spec.method = MeshingMethod::curved;
         spec.mesh_dir = std::filesystem::absolute(dir).lexically_normal();
         spec.validate = validate;
         for (const char* name : {"mesh.msh", "boundary_map.json", "report.json"})

@@ -31,8 +31,9 @@ int run_command(const RunOptions& o) {
   const json& report = outcome.report;
   if (!o.global.quiet) {
     std::printf("curvefem run: %s (%s), degree %d on %d tets of order %d: %lld unknowns\n",
-                spec.physics.c_str(), spec.method.c_str(), spec.degree, report["tets"].get<int>(),
-                report["order"].get<int>(), report["dofs"].get<long long>());
+                pipeline::to_string(spec.physics).c_str(), pipeline::to_string(spec.method).c_str(),
+                spec.degree, report["tets"].get<int>(), report["order"].get<int>(),
+                report["dofs"].get<long long>());
     auto errors = [](const json& r, const char* indent) {
       if (r.contains("l2_error"))
         std::printf("%sL2 error %.3e   H1-semi error %.3e\n", indent, r["l2_error"].get<double>(),
