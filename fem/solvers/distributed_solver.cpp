@@ -430,8 +430,12 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
         qr.householderQ() * Eigen::MatrixXd::Identity(n, options.near_nullspace_vectors.cols());
   }
   Stopwatch watch;
-  SparseMatrix C = A;
-  C.makeCompressed();
+  SparseMatrix copy;  // only when A is not compressed (the assemblies' matrices are)
+  if (!A.isCompressed()) {
+    copy = A;
+    copy.makeCompressed();
+  }
+  const SparseMatrix& C = A.isCompressed() ? A : copy;
   // The node graph: node i = rows i*bs .. i*bs+bs-1; neighbours from the (symmetric) pattern.
   const long long nodes = n / bs;
   std::vector<int> ptr(std::size_t(nodes) + 1, 0), adj;
@@ -516,7 +520,7 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
       else
         send_part(part, p);
     }
-    C = SparseMatrix();
+    copy = SparseMatrix();
     const double distribute_s = watch.seconds() - partition_s;
     out = solve_part(h, own);
     info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + options.preconditioner;

@@ -151,3 +151,35 @@ TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
   EXPECT_EQ(r1["solver"]["method"], "cholmod-supernodal");
   expect_two_rank_report(r1, r2, "petsc-mumps-cholesky");
 }
+
+// Failures on rank 0 end every rank: a bad case file (exit 2) and a CG that does not converge in
+// its iteration limit (a SolverError after the collective solve, exit 3); no rank hangs, nothing is
+// written.
+TEST(MpiRun, ErrorsOnRankZeroEndEveryRank) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_errors");
+  auto run = [&](const std::string& text, std::string& log) {
+    std::ofstream(dir / "case.json") << text;
+    return test::run_command("timeout 60 " + k_mpiexec +
+                                 " --allow-run-as-root --oversubscribe -n 2 " +
+                                 test::curvefem_executable().string() + " run -q " +
+                                 (dir / "case.json").string() + " -o " + (dir / "out").string(),
+                             &log);
+  };
+  std::string log;
+  EXPECT_EQ(run(R"json({"physics": {"type": "poisson"}})json", log), 2) << log;
+  EXPECT_NE(log.find("/geometry: missing"), std::string::npos) << log;
+  EXPECT_EQ(run(R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "discretization": {"degree": 2}, "rhs": "1",
+    "boundary_conditions": [{"type": "dirichlet", "select": {"tag": 1}, "value": "0"}],
+    "solver": {"type": "cg", "rtol": 1e-14, "max_iterations": 2}
+  })json",
+                log),
+            3)
+      << log;
+  EXPECT_NE(log.find("did not converge"), std::string::npos) << log;
+  EXPECT_NE(log.find("on 2 ranks"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
