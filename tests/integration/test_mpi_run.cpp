@@ -152,6 +152,46 @@ TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
   expect_two_rank_report(r1, r2, "petsc-mumps-cholesky");
 }
 
+// Pure Neumann Poisson (CG on the singular system with its kernel, and MUMPS after pinning) and
+// elasticity with a component fixed alone (block size 1, the six modes as explicit vectors).
+TEST(MpiRun, SingularSystemsAndExplicitNearNullspaceVectors) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const std::string neumann = R"json(
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "physics": {"type": "poisson"}, "discretization": {"degree": 2}, "rhs": "0",
+    "boundary_conditions": [{"type": "neumann", "select": {"tag": 1}, "value": "1"},
+                            {"type": "neumann", "select": {"tag": 2}, "value": "-1"}],)json";
+  for (const std::string solver : {"cg", "direct"}) {
+    const auto dir = test::scratch_dir("mpi_singular_" + solver);
+    const std::string text = "{" + neumann + R"json("solver": {"type": ")json" + solver +
+                             R"json(", "rtol": 1e-12}})json";
+    const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+    EXPECT_LT(relative_difference(one, two), 1e-8) << solver;
+    const auto r2 = report(two);
+    EXPECT_EQ(r2["solver"]["null_space_dim"], 1) << solver;
+    EXPECT_EQ(r2["solver"]["ranks"], 2) << solver;
+  }
+  const auto dir = test::scratch_dir("mpi_vectors");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "linear_elasticity", "E": 1000, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0],
+       "components": [true, false, false]},
+      {"type": "dirichlet", "select": {"box": [[-1, -1, -1], [0.01, 0.01, 2]]}, "value": [0, 0, 0]},
+      {"type": "neumann", "select": {"tag": 2}, "value": [1, 0, "-1"]}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+  EXPECT_LT(relative_difference(one, two), 1e-8);
+  const auto r1 = report(one), r2 = report(two);
+  EXPECT_EQ(r1["solver"]["near_nullspace"], "vectors");
+  expect_two_rank_report(r1, r2, "petsc-cg-gamg");
+  EXPECT_EQ(r2["solver"]["near_nullspace"], "vectors");
+}
+
 // Failures on rank 0 end every rank: a bad case file (exit 2) and a CG that does not converge in
 // its iteration limit (a SolverError after the collective solve, exit 3); no rank hangs, nothing is
 // written.
