@@ -77,6 +77,12 @@ std::vector<T> receive_vector() {
   return v;
 }
 
+/// Frees v's storage (`v = {}` keeps the capacity).
+template <class T>
+void release(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
 /// What every rank needs to know about a solve (rank 0 broadcasts it).
 struct Header {
   long long n = 0;  // global rows
@@ -212,9 +218,9 @@ SolveOutcome solve_part(const Header& h, LocalPart& part) {
   check(MatSetType(M, MATMPIAIJ), "MatSetType");
   check(MatMPIAIJSetPreallocationCSR(M, part.row_ptr.data(), part.cols.data(), part.values.data()),
         "MatMPIAIJSetPreallocationCSR");
-  part.row_ptr = {};
-  part.cols = {};
-  part.values = {};
+  release(part.row_ptr);
+  release(part.cols);
+  release(part.values);
   check(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
   if (h.kernel_columns == 0) check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
   if (h.coordinates) {
@@ -472,8 +478,8 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     wait(request);
     std::string partitioner;
     const std::vector<int> owner = partition(ptr, adj, nodes, partitioner);
-    ptr = {};
-    adj = {};
+    release(ptr);
+    release(adj);
     const Renumbering r = renumber_by_owner(owner, g_size);
     auto new_row = [&](int old) { return r.new_of[std::size_t(old / bs)] * bs + old % bs; };
     const double partition_s = watch.seconds();
