@@ -7,6 +7,7 @@
 #include "fem/problems/elasticity.hpp"
 #include "fem/problems/interpolation.hpp"
 #include "fem/problems/null_space.hpp"
+#include "fem/solvers/distributed.hpp"
 #include "mapping/selection.hpp"
 #include "mapping/surface_transfer.hpp"
 #include "meshing/core/atomic_file.hpp"
@@ -231,6 +232,13 @@ json load_report(const LoadResult& l) {
                       {"near_nullspace", s.near_nullspace},
                       {"null_space_dim", s.null_space_dim},
                       {"reused_factorization", s.reused_factorization}};
+  if (s.ranks > 1) {
+    report["solver"]["ranks"] = s.ranks;
+    report["solver"]["rows_per_rank"] = s.rows_per_rank;
+    report["solver"]["partitioner"] = s.partitioner;
+    report["solver"]["partition_s"] = s.partition_s;
+    report["solver"]["distribute_s"] = s.distribute_s;
+  }
   return report;
 }
 
@@ -432,6 +440,12 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
       report["time_s"] = timings_json(*ctx.timings);
     }
     report["peak_rss_mb"] = peak_rss_mb();
+    if (fem::distributed::active()) {
+      // Several ranks (fem/solvers/distributed.hpp): only the linear solves are distributed.
+      report["mpi"] = {{"ranks", fem::distributed::size()},
+                       {"distributed", "linear solves (assembly and all other stages on rank 0)"},
+                       {"peak_rss_mb_per_rank", fem::distributed::peak_rss_mb_per_rank()}};
+    }
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
   } catch (...) {

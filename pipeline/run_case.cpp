@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "fem/solvers/distributed.hpp"
 #include "meshing/core/error.hpp"
 #include "pipeline/report_json.hpp"
 #include "pipeline/stages.hpp"
@@ -185,6 +186,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
     outcome.report["factorization_reuses"] = cache->reuses();
   }
   outcome.report["threads"] = settings.threads;
+  outcome.report["ranks"] = fem::distributed::size();
   if (settings.write) {
     write_outputs(run, r->domain, r->disc, r->loads,
                   {.paraview = settings.paraview, .total = &total}, outcome.report, ctx);

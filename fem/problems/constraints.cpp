@@ -103,6 +103,8 @@ Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& 
     }
   SparseMatrix Kff(m, m);
   Kff.setFromTriplets(entries.begin(), entries.end());
+  // 16 bytes per entry, not to be held through the solve (swap: `= {}` would keep the capacity).
+  std::vector<Eigen::Triplet<double, int>>().swap(entries);
   const Eigen::VectorXd uf = solve_spd(Kff, rhs, reduced_options(options, reduced, m), info);
   Eigen::VectorXd u(n);
   for (int i = 0; i < n; ++i) u[i] = reduced[i] >= 0 ? uf[reduced[i]] : c.values[i];

@@ -2,6 +2,7 @@
 
 #include <Eigen/QR>
 
+#include "fem/solvers/distributed.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 
@@ -19,10 +20,11 @@ Eigen::MatrixXd orthonormal_basis(const Eigen::MatrixXd& V) {
 }
 
 /// Direct solve of the semi-definite A: pins the m unknowns a column-pivoted QR of N^T picks
-/// (N = null space, #rows x m), solves the SPD remainder, pinned unknowns = 0.
+/// (N = null space, #rows x m), solves the SPD remainder (CHOLMOD, or MUMPS over the ranks of a
+/// distributed run), pinned unknowns = 0.
 Eigen::VectorXd solve_pinned(const SparseMatrix& A, const Eigen::VectorXd& b,
-                             const Eigen::MatrixXd& N, LinearSolveInfo& info,
-                             FactorizationCache* cache) {
+                             const Eigen::MatrixXd& N, const LinearSolverOptions& options,
+                             LinearSolveInfo& info, FactorizationCache* cache) {
   const Eigen::Index n = A.rows(), m = N.cols();
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(N.transpose());
   std::vector<int> reduced(static_cast<std::size_t>(n), 0);
@@ -41,7 +43,10 @@ Eigen::VectorXd solve_pinned(const SparseMatrix& A, const Eigen::VectorXd& b,
   Eigen::VectorXd br(r);
   for (Eigen::Index i = 0; i < n; ++i)
     if (reduced[std::size_t(i)] >= 0) br[reduced[std::size_t(i)]] = b[i];
-  const Eigen::VectorXd xr = solve_cholmod(Ar, br, info, cache);
+  const Eigen::VectorXd xr =
+      distributed::active()
+          ? distributed::solve(Ar, br, options, /*direct=*/true, Eigen::MatrixXd(), info)
+          : solve_cholmod(Ar, br, info, cache);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
   for (Eigen::Index i = 0; i < n; ++i)
     if (reduced[std::size_t(i)] >= 0) x[i] = xr[reduced[std::size_t(i)]];
@@ -64,8 +69,11 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
   LinearSolveInfo& out = info ? *info : local;
   out = {};
   if (A.rows() == 0) return Eigen::VectorXd();
+  // Several MPI ranks (fem/solvers/distributed.hpp): "auto" is cg, direct is MUMPS over the ranks.
+  const bool several_ranks = distributed::active();
   std::string type = options.type;
-  if (type == "auto") type = A.rows() <= options.auto_direct_max_dofs ? "direct" : "cg";
+  if (type == "auto")
+    type = !several_ranks && A.rows() <= options.auto_direct_max_dofs ? "direct" : "cg";
   if (type != "direct" && type != "cg")
     throw InputError("unknown solver type '" + options.type + "' (direct, cg or auto)");
   Eigen::MatrixXd Q;
@@ -76,14 +84,18 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
     out.null_space_dim = static_cast<int>(Q.cols());
   }
   Eigen::VectorXd x;
-  if (type == "direct")
-    x = singular ? solve_pinned(A, rhs, options.null_space, out, options.factorization_cache.get())
-                 : solve_cholmod(A, rhs, out, options.factorization_cache.get());
+  if (type == "direct" && singular)
+    x = solve_pinned(A, rhs, options.null_space, options, out, options.factorization_cache.get());
+  else if (several_ranks)
+    x = distributed::solve(A, rhs, options, type == "direct", Q, out);
+  else if (type == "direct")
+    x = solve_cholmod(A, rhs, out, options.factorization_cache.get());
   else
     x = solve_petsc_cg(A, rhs, options, Q, out, options.factorization_cache.get());
   const double bn = rhs.norm();
   out.relative_residual = (rhs - A * x).norm() / (bn > 0 ? bn : 1.0);
-  log::info("linear solve (", out.method, singular ? ", singular" : "", "): ", A.rows(),
+  log::info("linear solve (", out.method, singular ? ", singular" : "",
+            several_ranks ? ", " + std::to_string(out.ranks) + " ranks" : "", "): ", A.rows(),
             " unknowns, ", out.iterations, " iterations, relative residual ", out.relative_residual,
             ", setup ", out.setup_s, " s, solve ", out.solve_s, " s");
   return x;

@@ -71,9 +71,9 @@ struct LinearSolverOptions {
 };
 
 struct LinearSolveInfo {
-  std::string
-      method;  ///< "cholmod-supernodal" | "petsc-cg-gamg" | "petsc-cg-hypre" | "petsc-cg-ml"
-  int iterations = 0;              ///< 0 for direct
+  std::string method;  ///< "cholmod-supernodal" | "petsc-cg-gamg" | "petsc-cg-hypre" |
+                       ///< "petsc-cg-ml" | "petsc-mumps-cholesky" (several ranks, direct)
+  int iterations = 0;  ///< 0 for direct
   double relative_residual = 0.0;  ///< ‖b − A x‖ / ‖b‖, measured after the solve
   double setup_s = 0.0, solve_s = 0.0;
   std::vector<double> residual_history;  ///< cg: preconditioned residual norms per iteration
@@ -81,6 +81,11 @@ struct LinearSolveInfo {
   std::string near_nullspace;
   int null_space_dim = 0;             ///< dimension of the kernel handled (0: A was SPD)
   bool reused_factorization = false;  ///< direct: the factor of an identical earlier matrix
+  // Distributed solves (fem/solvers/distributed.hpp; 1 rank otherwise):
+  int ranks = 1;
+  std::vector<long long> rows_per_rank;          ///< rows owned by each rank (empty on one rank)
+  std::string partitioner;                       ///< "ptscotch" | "contiguous" (several ranks)
+  double partition_s = 0.0, distribute_s = 0.0;  ///< parts of setup_s
 };
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;

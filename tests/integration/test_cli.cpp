@@ -30,8 +30,9 @@ TEST(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(test::run_command(cli(), &out), 1);
 }
 
-// Under an MPI launcher with more than one process every rank refuses (exit 2) before writing:
-// distributed runs are not implemented, and N copies of one run would write the same files.
+// Under an MPI launcher with more than one process only `run` is distributed (its linear solves;
+// tests/integration/test_mpi_run.cpp): every other command is refused on every rank (exit 2)
+// before writing, since N copies of it would write the same files.
 TEST(Cli, SeveralMpiProcessesAreRefusedBeforeAnyOutput) {
   const auto dir = test::scratch_dir("cli_mpi");
   io::write_surface(dir / "sphere.obj", make_icosphere(2), io::SurfaceFormat::obj);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "fem/solvers/distributed.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
@@ -16,6 +17,27 @@ int mpi_launch_size() {
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
     if (const char* v = std::getenv(name)) return std::max(1, std::atoi(v));
   return 1;
+}
+
+/// `run` under a launcher with several processes (fem/solvers/distributed.hpp): rank 0 runs the
+/// command, whose linear solves are spread over every rank; the other ranks only serve those
+/// solves (no output, no progress).
+int run_distributed(CLI::App& app) {
+  int rank = -1;
+  if (const int failed = curvefem::cli::guarded([&] {
+        rank = curvefem::fem::distributed::start();
+        return 0;
+      }))
+    return failed;
+  int code = 0;
+  if (rank == 0) {
+    code = curvefem::cli::run_selected(app);
+    curvefem::fem::distributed::release_workers();
+  } else {
+    curvefem::fem::distributed::serve();
+  }
+  curvefem::fem::distributed::finish();
+  return code;
 }
 
 }  // namespace
@@ -33,15 +55,18 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 1;  // usage error
   }
-  // Distributed runs are not implemented: under `mpirun -n N`, N > 1, every rank would run the
-  // whole command and write the same files. Refuse on every rank, before any output exists.
+  // Under `mpirun -n N`, N > 1, only `run` is distributed (its linear solves); any other command
+  // would run N times and write the same files: refuse it on every rank, before any output.
   if (const int ranks = mpi_launch_size(); ranks > 1) {
-    std::fprintf(stderr,
-                 "curvefem: error: started as %d MPI processes; distributed runs are not "
-                 "implemented yet (meshing, assembly and solve run in one process, with threads: "
-                 "--threads N). Run without mpirun, or with -n 1\n",
-                 ranks);
-    return 2;
+    if (!app.got_subcommand("run")) {
+      std::fprintf(stderr,
+                   "curvefem: error: started as %d MPI processes; only `curvefem run` runs "
+                   "distributed (its linear solves over the ranks). Run this command without "
+                   "mpirun, or with -n 1 (threads: --threads N)\n",
+                   ranks);
+      return 2;
+    }
+    return run_distributed(app);
   }
   return curvefem::cli::run_selected(app);
 }

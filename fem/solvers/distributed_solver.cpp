@@ -1,0 +1,561 @@
+// Distributed solves over MPI ranks (distributed.hpp): rank 0 partitions, renumbers and sends each
+// rank its rows; every rank holds its part of a MATMPIAIJ and of the KSP; rank 0 gets the
+// solution back.
+// <mpi.h> through petscsys.h, which skips the MPI C++ bindings (OMPI_SKIP_MPICXX).
+#include <petscksp.h>
+#include <sys/resource.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include "fem/solvers/distributed.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
+#include "meshing/core/timer.hpp"
+
+namespace curvefem::fem::distributed {
+namespace {
+
+enum Command : int { k_stop = 0, k_solve = 1, k_memory = 2 };
+
+bool g_started = false;
+int g_rank = 0, g_size = 1;
+
+MPI_Comm comm() { return PETSC_COMM_WORLD; }
+
+void check(PetscErrorCode code, const char* what) {
+  if (code != 0)
+    throw SolverError(std::string("PETSc error in ") + what + " (code " +
+                      std::to_string(static_cast<int>(code)) + ", rank " + std::to_string(g_rank) +
+                      ")");
+}
+
+/// Completes a request by polling: a blocking MPI call spins on its core (OpenMPI), which the
+/// threads of rank 0 on the same machine need.
+void wait(MPI_Request& request) {
+  int done = 0;
+  for (;;) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+/// Rank 0's command to every rank (non-blocking on both sides: a non-blocking collective only
+/// matches a non-blocking one).
+int broadcast_command(int command) {
+  MPI_Request request;
+  MPI_Ibcast(&command, 1, MPI_INT, 0, comm(), &request);
+  wait(request);
+  return command;
+}
+
+template <class T>
+void send_vector(const std::vector<T>& v, int to) {
+  const long long count = static_cast<long long>(v.size());
+  if (count * static_cast<long long>(sizeof(T)) > INT_MAX)
+    throw SolverError("distributed solve: a message of " + std::to_string(count * sizeof(T)) +
+                      " bytes to rank " + std::to_string(to) + " (at most 2 GiB)");
+  MPI_Send(&count, 1, MPI_LONG_LONG, to, 0, comm());
+  MPI_Send(v.data(), static_cast<int>(count * sizeof(T)), MPI_BYTE, to, 0, comm());
+}
+
+template <class T>
+std::vector<T> receive_vector() {
+  long long count = 0;
+  MPI_Request request;
+  MPI_Irecv(&count, 1, MPI_LONG_LONG, 0, 0, comm(), &request);
+  wait(request);
+  std::vector<T> v(static_cast<std::size_t>(count));
+  MPI_Irecv(v.data(), static_cast<int>(count * sizeof(T)), MPI_BYTE, 0, 0, comm(), &request);
+  wait(request);
+  return v;
+}
+
+/// Frees v's storage (`v = {}` keeps the capacity).
+template <class T>
+void release(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
+/// What every rank needs to know about a solve (rank 0 broadcasts it).
+struct Header {
+  long long n = 0;  // global rows
+  int block_size = 1;
+  int kernel_columns = 0;  // exact null space (singular A)
+  int vector_columns = 0;  // explicit near-nullspace vectors
+  int coordinates = 0;     // 1: rigid-body modes from the owned nodes' coordinates
+  int direct = 0;          // 1: MUMPS Cholesky
+  int preconditioner = 0;  // 0 gamg, 1 hypre, 2 ml
+  int max_iterations = 0;
+  double rtol = 0;
+};
+
+/// One rank's rows in the new numbering: CSR (global column indices), and its slices of the
+/// right-hand side, the coordinates (3 per node), the kernel and the vectors (column-major,
+/// #local rows per column).
+struct LocalPart {
+  std::vector<PetscInt> row_ptr, cols;
+  std::vector<PetscScalar> values;
+  std::vector<double> b, coordinates, kernel, vectors;
+};
+
+void send_part(const LocalPart& p, int to) {
+  send_vector(p.row_ptr, to);
+  send_vector(p.cols, to);
+  send_vector(p.values, to);
+  send_vector(p.b, to);
+  send_vector(p.coordinates, to);
+  send_vector(p.kernel, to);
+  send_vector(p.vectors, to);
+}
+
+LocalPart receive_part() {
+  LocalPart p;
+  p.row_ptr = receive_vector<PetscInt>();
+  p.cols = receive_vector<PetscInt>();
+  p.values = receive_vector<PetscScalar>();
+  p.b = receive_vector<double>();
+  p.coordinates = receive_vector<double>();
+  p.kernel = receive_vector<double>();
+  p.vectors = receive_vector<double>();
+  return p;
+}
+
+/// Collective: the owner of every node of the graph held by rank 0 (CSR without the diagonal;
+/// empty on the other ranks). Only rank 0's result is filled.
+std::vector<int> partition(const std::vector<int>& ptr, const std::vector<int>& adj,
+                           long long nodes, std::string& partitioner) {
+  const PetscInt local = g_rank == 0 ? static_cast<PetscInt>(nodes) : 0;
+  const std::size_t nnz = g_rank == 0 ? adj.size() : 0;
+  PetscInt *ia = nullptr, *ja = nullptr;  // owned by the MPIAdj matrix
+  check(PetscMalloc1(local + 1, &ia), "PetscMalloc1");
+  check(PetscMalloc1(std::max<std::size_t>(nnz, 1), &ja), "PetscMalloc1");
+  ia[0] = 0;
+  for (PetscInt i = 0; i < local; ++i) ia[i + 1] = ptr[std::size_t(i) + 1];
+  for (std::size_t k = 0; k < nnz; ++k) ja[k] = adj[k];
+  Mat graph;
+  check(MatCreateMPIAdj(comm(), local, static_cast<PetscInt>(nodes), ia, ja, nullptr, &graph),
+        "MatCreateMPIAdj");
+  MatPartitioning part;
+  check(MatPartitioningCreate(comm(), &part), "MatPartitioningCreate");
+  check(MatPartitioningSetAdjacency(part, graph), "MatPartitioningSetAdjacency");
+  check(MatPartitioningSetNParts(part, g_size), "MatPartitioningSetNParts");
+  std::vector<int> owner;
+  IS is = nullptr;
+  PetscErrorCode err = MatPartitioningSetType(part, MATPARTITIONINGPTSCOTCH);
+  if (!err) err = MatPartitioningApply(part, &is);
+  if (!err) {
+    partitioner = "ptscotch";
+    if (g_rank == 0) {
+      const PetscInt* idx;
+      check(ISGetIndices(is, &idx), "ISGetIndices");
+      owner.assign(idx, idx + local);
+      check(ISRestoreIndices(is, &idx), "ISRestoreIndices");
+    }
+    ISDestroy(&is);
+  } else {
+    partitioner = "contiguous";
+    if (g_rank == 0) {
+      log::warn("distributed solve: PT-Scotch partitioning failed (PETSc code ", int(err),
+                "); the nodes are split into contiguous ranges");
+      owner.resize(std::size_t(nodes));
+      for (long long i = 0; i < nodes; ++i) owner[std::size_t(i)] = int(i * g_size / nodes);
+    }
+  }
+  MatPartitioningDestroy(&part);
+  MatDestroy(&graph);
+  return owner;
+}
+
+/// A PETSc null space from the columns of the local slices (orthonormal globally).
+MatNullSpace null_space_from(const std::vector<double>& slices, int columns, PetscInt m) {
+  std::vector<Vec> vecs(static_cast<std::size_t>(columns));
+  for (int k = 0; k < columns; ++k) {
+    check(VecCreateMPI(comm(), m, PETSC_DETERMINE, &vecs[std::size_t(k)]), "VecCreateMPI");
+    PetscScalar* v;
+    check(VecGetArray(vecs[std::size_t(k)], &v), "VecGetArray");
+    for (PetscInt i = 0; i < m; ++i)
+      v[i] = slices[std::size_t(k) * std::size_t(m) + std::size_t(i)];
+    check(VecRestoreArray(vecs[std::size_t(k)], &v), "VecRestoreArray");
+  }
+  MatNullSpace space;
+  check(MatNullSpaceCreate(comm(), PETSC_FALSE, columns, vecs.data(), &space),
+        "MatNullSpaceCreate");
+  for (Vec& v : vecs) VecDestroy(&v);
+  return space;
+}
+
+PetscErrorCode record_residual(KSP, PetscInt, PetscReal norm, void* ctx) {
+  static_cast<std::vector<double>*>(ctx)->push_back(static_cast<double>(norm));
+  return 0;
+}
+
+struct SolveOutcome {
+  std::vector<double> x;  // rank 0: the whole solution in the new numbering
+  int iterations = 0, reason = 0;
+  std::vector<double> history;
+  double setup_s = 0, solve_s = 0;
+  std::string near_nullspace = "default";
+};
+
+/// Collective: every rank solves with its part (its CSR is released once PETSc has copied it).
+SolveOutcome solve_part(const Header& h, LocalPart& part) {
+  SolveOutcome out;
+  if (h.direct) out.near_nullspace = "";
+  Stopwatch watch;
+  const PetscInt m = static_cast<PetscInt>(part.b.size());
+  const PetscInt n = static_cast<PetscInt>(h.n);
+  Mat M;
+  check(MatCreate(comm(), &M), "MatCreate");
+  check(MatSetSizes(M, m, m, n, n), "MatSetSizes");
+  check(MatSetBlockSize(M, h.block_size), "MatSetBlockSize");
+  check(MatSetType(M, MATMPIAIJ), "MatSetType");
+  check(MatMPIAIJSetPreallocationCSR(M, part.row_ptr.data(), part.cols.data(), part.values.data()),
+        "MatMPIAIJSetPreallocationCSR");
+  release(part.row_ptr);
+  release(part.cols);
+  release(part.values);
+  check(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
+  if (h.kernel_columns == 0) check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  if (h.coordinates) {
+    Vec xyz;
+    check(VecCreateMPI(comm(), m, n, &xyz), "VecCreateMPI");
+    check(VecSetBlockSize(xyz, 3), "VecSetBlockSize");
+    PetscScalar* v;
+    check(VecGetArray(xyz, &v), "VecGetArray");
+    std::copy(part.coordinates.begin(), part.coordinates.end(), v);
+    check(VecRestoreArray(xyz, &v), "VecRestoreArray");
+    MatNullSpace near;
+    check(MatNullSpaceCreateRigidBody(xyz, &near), "MatNullSpaceCreateRigidBody");
+    check(MatSetNearNullSpace(M, near), "MatSetNearNullSpace");
+    MatNullSpaceDestroy(&near);
+    VecDestroy(&xyz);
+    out.near_nullspace = "rigid-body modes";
+  } else if (h.vector_columns > 0) {
+    MatNullSpace near = null_space_from(part.vectors, h.vector_columns, m);
+    check(MatSetNearNullSpace(M, near), "MatSetNearNullSpace");
+    MatNullSpaceDestroy(&near);
+    out.near_nullspace = "vectors";
+  }
+  if (h.kernel_columns > 0) {
+    MatNullSpace kernel = null_space_from(part.kernel, h.kernel_columns, m);
+    check(MatSetNullSpace(M, kernel), "MatSetNullSpace");
+    MatNullSpaceDestroy(&kernel);
+  }
+  KSP ksp;
+  PC pc;
+  check(KSPCreate(comm(), &ksp), "KSPCreate");
+  check(KSPSetOperators(ksp, M, M), "KSPSetOperators");
+  check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  if (h.direct) {
+    check(KSPSetType(ksp, KSPPREONLY), "KSPSetType");
+    check(PCSetType(pc, PCCHOLESKY), "PCSetType");
+    check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
+  } else {
+    check(KSPSetType(ksp, KSPCG), "KSPSetType");
+    if (h.preconditioner == 1) {
+      check(PCSetType(pc, PCHYPRE), "PCSetType");
+      check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
+    } else if (h.preconditioner == 2) {
+      check(PCSetType(pc, PCML), "PCSetType");
+    } else {
+      check(PCSetType(pc, PCGAMG), "PCSetType");
+    }
+    check(KSPSetTolerances(ksp, h.rtol, PETSC_DEFAULT, PETSC_DEFAULT, h.max_iterations),
+          "KSPSetTolerances");
+  }
+  check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
+  check(KSPSetUp(ksp), "KSPSetUp");
+  out.setup_s = watch.seconds();
+  watch.reset();
+  Vec x, b;
+  check(MatCreateVecs(M, &x, &b), "MatCreateVecs");
+  PetscScalar* bv;
+  check(VecGetArray(b, &bv), "VecGetArray");
+  std::copy(part.b.begin(), part.b.end(), bv);
+  check(VecRestoreArray(b, &bv), "VecRestoreArray");
+  check(KSPMonitorSet(ksp, record_residual, &out.history, nullptr), "KSPMonitorSet");
+  check(KSPSolve(ksp, b, x), "KSPSolve");
+  out.solve_s = watch.seconds();
+  KSPConvergedReason reason;
+  PetscInt its;
+  check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+  check(KSPGetIterationNumber(ksp, &its), "KSPGetIterationNumber");
+  out.reason = static_cast<int>(reason);
+  out.iterations = static_cast<int>(its);
+  VecScatter to_zero;
+  Vec all;
+  check(VecScatterCreateToZero(x, &to_zero, &all), "VecScatterCreateToZero");
+  check(VecScatterBegin(to_zero, x, all, INSERT_VALUES, SCATTER_FORWARD), "VecScatterBegin");
+  check(VecScatterEnd(to_zero, x, all, INSERT_VALUES, SCATTER_FORWARD), "VecScatterEnd");
+  if (g_rank == 0) {
+    const PetscScalar* xs;
+    check(VecGetArrayRead(all, &xs), "VecGetArrayRead");
+    out.x.assign(xs, xs + n);
+    check(VecRestoreArrayRead(all, &xs), "VecRestoreArrayRead");
+  }
+  VecScatterDestroy(&to_zero);
+  VecDestroy(&all);
+  VecDestroy(&x);
+  VecDestroy(&b);
+  KSPDestroy(&ksp);
+  MatDestroy(&M);
+  return out;
+}
+
+/// Rank != 0's side of solve().
+void serve_solve() {
+  Header h;
+  MPI_Request request;
+  MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
+  wait(request);
+  std::string partitioner;
+  partition({}, {}, h.n / h.block_size, partitioner);
+  LocalPart part = receive_part();
+  solve_part(h, part);
+}
+
+void serve_memory() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  double mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // kB on Linux
+  MPI_Gather(&mb, 1, MPI_DOUBLE, nullptr, 1, MPI_DOUBLE, 0, comm());
+}
+
+}  // namespace
+
+int start() {
+  check(PetscInitializeNoArguments(), "PetscInitialize");
+  MPI_Comm_rank(PETSC_COMM_WORLD, &g_rank);
+  MPI_Comm_size(PETSC_COMM_WORLD, &g_size);
+  g_started = true;
+  return g_rank;
+}
+
+void finish() {
+  if (!g_started) return;
+  g_started = false;
+  PetscFinalize();
+}
+
+bool active() { return g_started && g_size > 1; }
+int rank() { return g_rank; }
+int size() { return g_size; }
+
+void serve() {
+  for (;;) {
+    const int command = broadcast_command(k_stop);
+    if (command == k_stop) return;
+    try {
+      if (command == k_solve) serve_solve();
+      if (command == k_memory) serve_memory();
+    } catch (const std::exception& e) {
+      log::error("rank ", g_rank, ": ", e.what());
+      MPI_Abort(comm(), 3);
+    }
+  }
+}
+
+void release_workers() {
+  if (active() && g_rank == 0) broadcast_command(k_stop);
+}
+
+void abort(int code) {
+  MPI_Abort(comm(), code);
+  std::abort();  // not reached
+}
+
+std::vector<double> peak_rss_mb_per_rank() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  double mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  if (!active()) return {mb};
+  broadcast_command(k_memory);
+  std::vector<double> all(std::size_t(g_size), 0.0);
+  MPI_Gather(&mb, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, comm());
+  return all;
+}
+
+Renumbering renumber_by_owner(const std::vector<int>& owner, int ranks) {
+  Renumbering r;
+  r.offsets.assign(std::size_t(ranks) + 1, 0);
+  for (int o : owner) {
+    if (o < 0 || o >= ranks)
+      throw SolverError("distributed solve: a node owned by rank " + std::to_string(o) + " of " +
+                        std::to_string(ranks));
+    ++r.offsets[std::size_t(o) + 1];
+  }
+  std::partial_sum(r.offsets.begin(), r.offsets.end(), r.offsets.begin());
+  std::vector<int> next(r.offsets.begin(), r.offsets.end() - 1);
+  r.new_of.resize(owner.size());
+  r.old_of.resize(owner.size());
+  for (std::size_t i = 0; i < owner.size(); ++i) {
+    const int k = next[std::size_t(owner[i])]++;
+    r.new_of[i] = k;
+    r.old_of[std::size_t(k)] = static_cast<int>(i);
+  }
+  return r;
+}
+
+Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
+                      const LinearSolverOptions& options, bool direct,
+                      const Eigen::MatrixXd& null_space, LinearSolveInfo& info) {
+  if (!active() || g_rank != 0) throw Error("distributed::solve: only on rank 0 of several");
+  // Everything that may throw on bad input comes before the first message.
+  if (!direct && options.preconditioner != "gamg" && options.preconditioner != "hypre" &&
+      options.preconditioner != "ml")
+    throw InputError("cg: unknown preconditioner '" + options.preconditioner +
+                     "' (gamg, hypre or ml)");
+  const long long n = A.rows();
+  const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
+  const bool use_coordinates = !direct && options.use_near_nullspace && coordinates.size() > 0;
+  if (use_coordinates &&
+      (options.block_size != 3 || coordinates.cols() != 3 || 3 * coordinates.rows() != n))
+    throw InputError("near-nullspace: " + std::to_string(coordinates.rows()) + "x" +
+                     std::to_string(coordinates.cols()) + " coordinates for " + std::to_string(n) +
+                     " unknowns in blocks of " + std::to_string(options.block_size));
+  const bool use_vectors = !direct && options.use_near_nullspace && !use_coordinates &&
+                           options.near_nullspace_vectors.size() > 0;
+  if (use_vectors && options.near_nullspace_vectors.rows() != n)
+    throw InputError("near-nullspace: " + std::to_string(options.near_nullspace_vectors.rows()) +
+                     " rows of vectors for " + std::to_string(n) + " unknowns");
+  const int bs = std::max(1, options.block_size);
+  if (n % bs != 0)
+    throw InputError("distributed solve: " + std::to_string(n) + " unknowns in blocks of " +
+                     std::to_string(bs));
+  Eigen::MatrixXd vectors;
+  if (use_vectors) {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(options.near_nullspace_vectors);
+    vectors =
+        qr.householderQ() * Eigen::MatrixXd::Identity(n, options.near_nullspace_vectors.cols());
+  }
+  Stopwatch watch;
+  SparseMatrix copy;  // only when A is not compressed (the assemblies' matrices are)
+  if (!A.isCompressed()) {
+    copy = A;
+    copy.makeCompressed();
+  }
+  const SparseMatrix& C = A.isCompressed() ? A : copy;
+  // The node graph: node i = rows i*bs .. i*bs+bs-1; neighbours from the (symmetric) pattern.
+  const long long nodes = n / bs;
+  std::vector<int> ptr(std::size_t(nodes) + 1, 0), adj;
+  {
+    std::vector<int> seen(std::size_t(nodes), -1);
+    for (long long i = 0; i < nodes; ++i) {
+      for (int c = 0; c < bs; ++c)
+        for (SparseMatrix::InnerIterator it(C, int(i * bs + c)); it; ++it) {
+          const int j = it.row() / bs;
+          if (j != i && seen[std::size_t(j)] != int(i)) {
+            seen[std::size_t(j)] = int(i);
+            adj.push_back(j);
+          }
+        }
+      ptr[std::size_t(i) + 1] = int(adj.size());
+    }
+  }
+  Header h;
+  h.n = n;
+  h.block_size = bs;
+  h.kernel_columns = int(null_space.cols());
+  h.vector_columns = use_vectors ? int(vectors.cols()) : 0;
+  h.coordinates = use_coordinates;
+  h.direct = direct;
+  h.preconditioner = options.preconditioner == "hypre" ? 1 : options.preconditioner == "ml" ? 2 : 0;
+  h.max_iterations = options.max_iterations;
+  h.rtol = options.rtol;
+  broadcast_command(k_solve);
+  SolveOutcome out;
+  Eigen::VectorXd x(n);
+  try {
+    MPI_Request request;
+    MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
+    wait(request);
+    std::string partitioner;
+    const std::vector<int> owner = partition(ptr, adj, nodes, partitioner);
+    release(ptr);
+    release(adj);
+    const Renumbering r = renumber_by_owner(owner, g_size);
+    auto new_row = [&](int old) { return r.new_of[std::size_t(old / bs)] * bs + old % bs; };
+    const double partition_s = watch.seconds();
+    // Each rank's rows, built and sent one rank at a time (rank 0's last, kept).
+    LocalPart own;
+    for (int p = g_size - 1; p >= 0; --p) {
+      LocalPart part;
+      const int first = r.offsets[std::size_t(p)] * bs, last = r.offsets[std::size_t(p) + 1] * bs;
+      const std::size_t m = std::size_t(last - first);
+      part.row_ptr.reserve(m + 1);
+      part.row_ptr.push_back(0);
+      part.b.resize(m);
+      std::vector<std::pair<PetscInt, double>> row;
+      for (int k = first; k < last; ++k) {
+        const int old = r.old_of[std::size_t(k / bs)] * bs + k % bs;
+        row.clear();
+        for (SparseMatrix::InnerIterator it(C, old); it; ++it)  // column old = row old
+          row.emplace_back(new_row(it.row()), it.value());
+        std::sort(row.begin(), row.end());
+        for (const auto& [c, v] : row) {
+          part.cols.push_back(c);
+          part.values.push_back(v);
+        }
+        part.row_ptr.push_back(static_cast<PetscInt>(part.cols.size()));
+        part.b[std::size_t(k - first)] = b[old];
+      }
+      if (use_coordinates) {
+        part.coordinates.reserve(m);
+        for (int k = first / 3; k < last / 3; ++k)
+          for (int c = 0; c < 3; ++c)
+            part.coordinates.push_back(coordinates(r.old_of[std::size_t(k)], c));
+      }
+      auto slice = [&](const Eigen::MatrixXd& V, std::vector<double>& out) {
+        out.reserve(m * std::size_t(V.cols()));
+        for (Eigen::Index j = 0; j < V.cols(); ++j)
+          for (int k = first; k < last; ++k)
+            out.push_back(V(r.old_of[std::size_t(k / bs)] * bs + k % bs, j));
+      };
+      slice(null_space, part.kernel);
+      if (use_vectors) slice(vectors, part.vectors);
+      info.rows_per_rank.insert(info.rows_per_rank.begin(), static_cast<long long>(m));
+      if (p == 0)
+        own = std::move(part);
+      else
+        send_part(part, p);
+    }
+    copy = SparseMatrix();
+    const double distribute_s = watch.seconds() - partition_s;
+    out = solve_part(h, own);
+    info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + options.preconditioner;
+    info.iterations = out.iterations;
+    info.residual_history = std::move(out.history);
+    info.near_nullspace = out.near_nullspace;
+    info.setup_s = partition_s + distribute_s + out.setup_s;
+    info.solve_s = out.solve_s;
+    info.ranks = g_size;
+    info.partitioner = partitioner;
+    info.partition_s = partition_s;
+    info.distribute_s = distribute_s;
+    for (long long i = 0; i < n; ++i) x[i] = out.x[std::size_t(new_row(int(i)))];
+  } catch (const std::exception& e) {
+    // The other ranks are somewhere in the protocol: nothing brings them back to serve().
+    log::error("distributed solve: ", e.what());
+    abort(3);
+  }
+  if (out.reason < 0) {
+    std::ostringstream s;
+    s << (direct ? "MUMPS Cholesky failed" : "distributed CG did not converge") << " (PETSc reason "
+      << out.reason << ") after " << out.iterations << " iterations on " << g_size
+      << " ranks; residual history:";
+    const auto& hist = info.residual_history;
+    for (std::size_t i = 0; i < hist.size(); i += std::max<std::size_t>(1, hist.size() / 10))
+      s << ' ' << hist[i];
+    throw SolverError(s.str());
+  }
+  return x;
+}
+
+}  // namespace curvefem::fem::distributed

@@ -1,0 +1,225 @@
+// `mpirun -n 2 curvefem run` against `mpirun -n 1` (fem/solvers/distributed.hpp): the same
+// solution up to the solver tolerance, report.json's ranks and rows per rank; other commands are
+// refused under two ranks (test_cli: Cli.SeveralMpiProcessesAreRefusedBeforeAnyOutput).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "meshing/io/vtu_io.hpp"
+#include "tests/support/test_support.hpp"
+
+using namespace curvefem;
+
+namespace {
+
+const std::string k_mpiexec = CURVEFEM_MPIEXEC;
+
+/// `curvefem run` of `case_text` under the launcher with `ranks` processes, into dir/out<ranks>.
+std::filesystem::path run_ranks(const std::filesystem::path& dir, const std::string& case_text,
+                                int ranks, const std::string& extra = "") {
+  const auto file = dir / "case.json";
+  std::ofstream(file) << case_text;
+  const auto out = dir / ("out" + std::to_string(ranks));
+  std::string log;
+  const int code =
+      test::run_command(k_mpiexec + " --allow-run-as-root --oversubscribe -n " +
+                            std::to_string(ranks) + " " + test::curvefem_executable().string() +
+                            " run -q " + file.string() + " -o " + out.string() + extra,
+                        &log);
+  EXPECT_EQ(code, 0) << log;
+  return out;
+}
+
+nlohmann::json report(const std::filesystem::path& dir) {
+  std::ifstream in(dir / "report.json");
+  return nlohmann::json::parse(in);
+}
+
+/// max |a - b| / max |a| over volume.vtu's first point field (u or displacement).
+double relative_difference(const std::filesystem::path& a, const std::filesystem::path& b) {
+  const auto va = io::read_vtu(a / "volume.vtu"), vb = io::read_vtu(b / "volume.vtu");
+  const auto& x = va.fields.point_data.at(0).values;
+  const auto& y = vb.fields.point_data.at(0).values;
+  EXPECT_EQ(x.size(), y.size());
+  double diff = 0, scale = 0;
+  for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
+    diff = std::max(diff, std::abs(x[i] - y[i]));
+    scale = std::max(scale, std::abs(x[i]));
+  }
+  EXPECT_GT(scale, 0.0);
+  return diff / scale;
+}
+
+/// The distributed run's report: two ranks, each owning rows, as many as the one-rank solve.
+void expect_two_rank_report(const nlohmann::json& one, const nlohmann::json& two,
+                            const std::string& method) {
+  EXPECT_EQ(one["ranks"], 1);
+  EXPECT_FALSE(one["solver"].contains("rows_per_rank"));
+  EXPECT_EQ(two["ranks"], 2);
+  EXPECT_EQ(two["solver"]["method"], method);
+  EXPECT_EQ(two["solver"]["ranks"], 2);
+  EXPECT_EQ(two["solver"]["partitioner"], "ptscotch");
+  const auto rows = two["solver"]["rows_per_rank"].get<std::vector<long long>>();
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_GT(rows[0], 0);
+  EXPECT_GT(rows[1], 0);
+  const auto rss = two["mpi"]["peak_rss_mb_per_rank"].get<std::vector<double>>();
+  ASSERT_EQ(rss.size(), 2u);
+  EXPECT_GT(rss[0], 0.0);
+  EXPECT_GT(rss[1], 0.0);
+  EXPECT_EQ(one["dofs"], two["dofs"]);
+  EXPECT_LT(two["solver"]["relative_residual"].get<double>(), 1e-8);
+}
+
+bool have_launcher(std::string& why) {
+  if (k_mpiexec.empty() || test::run_command(k_mpiexec + " --version") != 0) {
+    why = "no MPI launcher (MPIEXEC_EXECUTABLE '" + k_mpiexec + "')";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST(MpiRun, PoissonP2OneAndTwoRanksAgree) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_poisson");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "poisson"},
+    "discretization": {"degree": 2},
+    "rhs": "-2*exp(x)*sin(y)",
+    "exact": "exp(x)*sin(y)*x + z",
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"all": true}, "value": "exp(x)*sin(y)*x + z"}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2, " --threads 2");
+  const double d = relative_difference(one, two);
+  EXPECT_LT(d, 1e-8);  // measured 2026-12-03: see fem/README.md
+  std::printf("Poisson P2: 1 vs 2 ranks, relative max difference %.3e\n", d);
+  const auto r1 = report(one), r2 = report(two);
+  expect_two_rank_report(r1, r2, "petsc-cg-gamg");
+  EXPECT_NEAR(r2["l2_error"].get<double>(), r1["l2_error"].get<double>(),
+              1e-8 * r1["l2_error"].get<double>());
+  EXPECT_GT(r1["l2_error"].get<double>(), 1e-8);  // not in the space: the test can fail
+}
+
+TEST(MpiRun, ElasticityP2OneAndTwoRanksAgreeWithRigidBodyModes) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_elasticity");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "linear_elasticity", "E": 210e3, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+      {"type": "neumann", "select": {"tag": 2}, "value": [0, "10*y", "-100"]}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+  const double d = relative_difference(one, two);
+  EXPECT_LT(d, 1e-8);
+  std::printf("elasticity P2: 1 vs 2 ranks, relative max difference %.3e\n", d);
+  const auto r1 = report(one), r2 = report(two);
+  expect_two_rank_report(r1, r2, "petsc-cg-gamg");
+  EXPECT_EQ(r2["solver"]["near_nullspace"], "rigid-body modes");
+  EXPECT_EQ(r2["solver"]["rows_per_rank"][0].get<long long>() % 3, 0);
+}
+
+TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_direct");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "physics": {"type": "poisson"},
+    "discretization": {"degree": 2},
+    "rhs": "1",
+    "boundary_conditions": [{"type": "dirichlet", "select": {"tag": 1}, "value": "0"}],
+    "solver": {"type": "direct"}
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+  const double d = relative_difference(one, two);
+  EXPECT_LT(d, 1e-10);
+  const auto r1 = report(one), r2 = report(two);
+  EXPECT_EQ(r1["solver"]["method"], "cholmod-supernodal");
+  expect_two_rank_report(r1, r2, "petsc-mumps-cholesky");
+}
+
+// Pure Neumann Poisson (CG on the singular system with its kernel, and MUMPS after pinning) and
+// elasticity with a component fixed alone (block size 1, the six modes as explicit vectors).
+TEST(MpiRun, SingularSystemsAndExplicitNearNullspaceVectors) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const std::string neumann = R"json(
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "physics": {"type": "poisson"}, "discretization": {"degree": 2}, "rhs": "0",
+    "boundary_conditions": [{"type": "neumann", "select": {"tag": 1}, "value": "1"},
+                            {"type": "neumann", "select": {"tag": 2}, "value": "-1"}],)json";
+  for (const std::string solver : {"cg", "direct"}) {
+    const auto dir = test::scratch_dir("mpi_singular_" + solver);
+    const std::string text = "{" + neumann + R"json("solver": {"type": ")json" + solver +
+                             R"json(", "rtol": 1e-12}})json";
+    const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+    EXPECT_LT(relative_difference(one, two), 1e-8) << solver;
+    const auto r2 = report(two);
+    EXPECT_EQ(r2["solver"]["null_space_dim"], 1) << solver;
+    EXPECT_EQ(r2["solver"]["ranks"], 2) << solver;
+  }
+  const auto dir = test::scratch_dir("mpi_vectors");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "linear_elasticity", "E": 1000, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0],
+       "components": [true, false, false]},
+      {"type": "dirichlet", "select": {"box": [[-1, -1, -1], [0.01, 0.01, 2]]}, "value": [0, 0, 0]},
+      {"type": "neumann", "select": {"tag": 2}, "value": [1, 0, "-1"]}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+  EXPECT_LT(relative_difference(one, two), 1e-8);
+  const auto r1 = report(one), r2 = report(two);
+  EXPECT_EQ(r1["solver"]["near_nullspace"], "vectors");
+  expect_two_rank_report(r1, r2, "petsc-cg-gamg");
+  EXPECT_EQ(r2["solver"]["near_nullspace"], "vectors");
+}
+
+// Failures on rank 0 end every rank: a bad case file (exit 2) and a CG that does not converge in
+// its iteration limit (a SolverError after the collective solve, exit 3); no rank hangs, nothing is
+// written.
+TEST(MpiRun, ErrorsOnRankZeroEndEveryRank) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_errors");
+  auto run = [&](const std::string& text, std::string& log) {
+    std::ofstream(dir / "case.json") << text;
+    return test::run_command("timeout 60 " + k_mpiexec +
+                                 " --allow-run-as-root --oversubscribe -n 2 " +
+                                 test::curvefem_executable().string() + " run -q " +
+                                 (dir / "case.json").string() + " -o " + (dir / "out").string(),
+                             &log);
+  };
+  std::string log;
+  EXPECT_EQ(run(R"json({"physics": {"type": "poisson"}})json", log), 2) << log;
+  EXPECT_NE(log.find("/geometry: missing"), std::string::npos) << log;
+  EXPECT_EQ(run(R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "discretization": {"degree": 2}, "rhs": "1",
+    "boundary_conditions": [{"type": "dirichlet", "select": {"tag": 1}, "value": "0"}],
+    "solver": {"type": "cg", "rtol": 1e-14, "max_iterations": 2}
+  })json",
+                log),
+            3)
+      << log;
+  EXPECT_NE(log.find("did not converge"), std::string::npos) << log;
+  EXPECT_NE(log.find("on 2 ranks"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
