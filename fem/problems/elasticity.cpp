@@ -34,9 +34,9 @@ struct Setup {
 
 int stiffness_degree(const LagrangeMesh& mesh, const FunctionSpace& space,
                      const ElasticityProblem& problem) {
-  return problem.quadrature_degree >= 0
-             ? problem.quadrature_degree
-             : default_quadrature_degree(space.degree, mesh.order, QuadratureUse::stiffness);
+  return problem.quadrature_degree >= 0 ? problem.quadrature_degree
+                                        : tetrahedron_degree_at_same_cost(default_quadrature_degree(
+                                              space.degree, mesh.order, QuadratureUse::stiffness));
 }
 
 /// External load: body force (volume) and tractions (faces), scaled by s.

@@ -16,7 +16,8 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   const int p = space.degree;
   const int degree = problem.quadrature_degree >= 0
                          ? problem.quadrature_degree
-                         : default_quadrature_degree(p, mesh.order, QuadratureUse::stiffness);
+                         : tetrahedron_degree_at_same_cost(
+                               default_quadrature_degree(p, mesh.order, QuadratureUse::stiffness));
   const QuadratureRule& rule = tetrahedron_quadrature(degree);
   const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);

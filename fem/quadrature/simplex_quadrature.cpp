@@ -201,6 +201,13 @@ const QuadratureRule& triangle_quadrature(int degree) {
   return cached(cache, degree, &build_triangle);
 }
 
+int tetrahedron_degree_at_same_cost(int degree) {
+  const int points = tetrahedron_quadrature(degree).size();
+  while (degree < k_max_quadrature_degree && tetrahedron_quadrature(degree + 1).size() <= points)
+    ++degree;
+  return degree;
+}
+
 int default_quadrature_degree(int p, int k, QuadratureUse use) {
   if (p < 1 || k < 1)
     throw InputError("default_quadrature_degree: basis degree " + std::to_string(p) +

@@ -76,4 +76,11 @@ enum class QuadratureUse { stiffness, mass, error };
 /// The result is capped at k_max_quadrature_degree. InputError if p < 1 or k < 1.
 int default_quadrature_degree(int p, int k, QuadratureUse use);
 
+/// The highest degree of exactness, at least `degree`, whose tetrahedron rule has no more points
+/// than tetrahedron_quadrature(degree): a free upgrade (degree 4 -> 5, both 14 points). The
+/// volume assemblies use it for their default degree: a non-polynomial load is integrated more
+/// accurately at the same cost (P2 Poisson, cos πx cos πy cos πz: the L2 error's quadrature part
+/// 6.7e-7 -> 7e-8 relative). Capped at k_max_quadrature_degree.
+int tetrahedron_degree_at_same_cost(int degree);
+
 }  // namespace curvefem::fem

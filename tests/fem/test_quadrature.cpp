@@ -285,3 +285,19 @@ TEST(SimplexQuadrature, DefaultDegrees) {
   EXPECT_THROW(default_quadrature_degree(0, 1, QuadratureUse::mass), InputError);
   EXPECT_THROW(default_quadrature_degree(1, 0, QuadratureUse::mass), InputError);
 }
+
+TEST(SimplexQuadrature, TheFreeUpgradeKeepsThePointCountAndRaisesTheDegree) {
+  // Degree 4 and 5 share a 14-point symmetric rule; 14 and 15 a collapsed 8^3 one.
+  EXPECT_EQ(tetrahedron_degree_at_same_cost(4), 5);
+  EXPECT_EQ(tetrahedron_degree_at_same_cost(5), 5);
+  EXPECT_EQ(tetrahedron_degree_at_same_cost(2), 2);
+  EXPECT_EQ(tetrahedron_degree_at_same_cost(10), 10);
+  EXPECT_EQ(tetrahedron_degree_at_same_cost(14), 15);
+  for (int d = 1; d <= 30; ++d) {
+    const int up = tetrahedron_degree_at_same_cost(d);
+    EXPECT_GE(up, d);
+    EXPECT_LE(up, 30);
+    EXPECT_EQ(tetrahedron_quadrature(up).size(), tetrahedron_quadrature(d).size()) << d;
+    if (up < 30) EXPECT_GT(tetrahedron_quadrature(up + 1).size(), tetrahedron_quadrature(d).size());
+  }
+}
