@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "meshing/core/error.hpp"
@@ -298,4 +299,36 @@ TEST(StudySchema, TheStudyTableHasTheKeysTheStudyParserAccepts) {
   const auto j = study_schema_json();
   ASSERT_TRUE(j.is_array());
   EXPECT_EQ(j.size(), 7u);
+}
+
+// Every enum of CaseSpec spells exactly the values its schema key allows (case_enums.hpp), so a
+// value added to one and not the other fails here, not at run time.
+template <class E>
+void expect_enum_spells(std::string_view key, std::set<std::string> extra = {}) {
+  std::set<std::string> names;
+  for (const auto n : EnumNames<E>::names)
+    if (!n.empty()) names.insert(std::string(n));
+  std::set<std::string> allowed(extra);
+  for (const auto a : case_key(key).allowed) allowed.insert(std::string(a));
+  EXPECT_EQ(names, allowed) << key;
+  for (const auto& n : names) EXPECT_EQ(to_string(enum_from<E>(n)), n) << key;
+}
+
+TEST(CaseSchema, TheEnumsSpellTheAllowedValues) {
+  expect_enum_spells<BuiltinVolume>("geometry.builtin.shape");
+  expect_enum_spells<BuiltinSurface>("geometry.builtin_surface.shape");
+  // features: "auto" | "none" as strings, {"angle": ...} | {"file": ...} as objects.
+  expect_enum_spells<FeatureMode>("geometry.features", {"angle", "file"});
+  expect_enum_spells<MeshingMethod>("meshing.method");
+  expect_enum_spells<SolveOn>("meshing.solve_on");
+  expect_enum_spells<Physics>("physics.type");
+  expect_enum_spells<PartialDirichlet>("discretization.partial_dirichlet");
+  expect_enum_spells<SolveGeometry>("discretization.geometry");
+  expect_enum_spells<SolverType>("solver.type");
+  expect_enum_spells<Preconditioner>("solver.preconditioner");
+  expect_enum_spells<BoundaryType>("boundary_conditions[].type");
+  EXPECT_THROW(enum_from<Physics>("poison"), Error);
+  // JSON gets the spelling, not the number.
+  EXPECT_EQ(nlohmann::json(Physics::linear_elasticity), nlohmann::json("linear_elasticity"));
+  EXPECT_EQ(nlohmann::json("cg").get<SolverType>(), SolverType::cg);
 }
