@@ -345,11 +345,19 @@ bool CaseKeyRange::contains(double v) const {
   return true;
 }
 
-const CaseKey& case_key(std::string_view path) {
-  for (const CaseKeyRow& row : k_rows)
+namespace {
+const CaseKey& find_key(const std::vector<CaseKeyRow>& rows, std::string_view path,
+                        const char* table) {
+  for (const CaseKeyRow& row : rows)
     for (const CaseKey& k : row.keys)
       if (k.path == path) return k;
-  throw Error("case schema: no key " + std::string(path) + " (pipeline/case_schema.cpp)");
+  throw Error(std::string(table) + ": no key " + std::string(path) + " (pipeline/case_schema.cpp)");
+}
+}  // namespace
+
+const CaseKey& case_key(std::string_view path) { return find_key(k_rows, path, "case schema"); }
+const CaseKey& study_key(std::string_view path) {
+  return find_key(k_study_rows, path, "study schema");
 }
 
 namespace {

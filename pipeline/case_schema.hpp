@@ -96,6 +96,8 @@ inline constexpr std::string_view k_schema_end = "<!-- schema:end -->";
 /// accepts and the table of cases/README.md's "Studies" between the study markers.
 const std::vector<CaseKeyRow>& study_schema();
 std::set<std::string> study_section_keys(std::string_view section);
+/// The study key at `path`; throws curvefem::Error when the study table has no such key.
+const CaseKey& study_key(std::string_view path);
 std::string study_schema_markdown();
 nlohmann::json study_schema_json();
 

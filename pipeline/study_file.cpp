@@ -207,12 +207,7 @@ StudySpec read_study_json(const ordered_json& j, const std::filesystem::path& fi
     if (s.refine < 0) fail("/refine", "'" + r + "' is not a key of /sweep", file);
   }
   if (j.contains("x")) {
-    const auto& allowed = [] {
-      for (const auto& row : study_schema())
-        for (const auto& k : row.keys)
-          if (k.path == "x") return k.allowed;
-      throw Error("study schema: no key x");
-    }();
+    const auto& allowed = study_key("x").allowed;
     std::string list;
     for (const auto a : allowed) list += (list.empty() ? "" : " or ") + std::string(a);
     if (!j["x"].is_string()) fail("/x", "expected " + list, file);
