@@ -74,6 +74,22 @@ Expression::Expression(std::string text, std::string where, bool normal_allowed)
       for (int d = 0; d < 3 && agree; ++d)
         agree = same(g[d], fd[d], 1e-6) || (std::isnan(fd[d]) && !std::isfinite(v));
     }
+    // The batched evaluation (one call over the six points) against the point-wise one.
+    if (agree) {
+      double xs[3][6], v[6], g[3][6];
+      for (int i = 0; i < 6; ++i)
+        for (int d = 0; d < 3; ++d) xs[d][i] = points[i][d];
+      const double ns[3][6] = {{n[0], n[0], n[0], n[0], n[0], n[0]},
+                               {n[1], n[1], n[1], n[1], n[1], n[1]},
+                               {n[2], n[2], n[2], n[2], n[2], n[2]}};
+      dual->evaluate(6, xs[0], xs[1], xs[2], ns[0], ns[1], ns[2], t, v, g[0], g[1], g[2]);
+      for (int i = 0; i < 6 && agree; ++i) {
+        Eigen::Vector3d gi;
+        const double vi = dual->evaluate(Eigen::Vector3d(xs[0][i], xs[1][i], xs[2][i]), n, t, &gi);
+        agree = same(v[i], vi, 1e-14);
+        for (int d = 0; d < 3 && agree; ++d) agree = same(g[d][i], gi[d], 1e-14);
+      }
+    }
     if (agree) m_dual = std::move(dual);
   }
   if (m_uses_normal && !normal_allowed)
@@ -106,6 +122,21 @@ double Expression::value_and_gradient(const Eigen::Vector3d& x, Eigen::Vector3d*
     return (*this)(x);
   }
   return m_dual->evaluate(x, Eigen::Vector3d::Zero(), 0.0, gradient);
+}
+
+void Expression::values_and_gradients(int count, const double* x, const double* y, const double* z,
+                                      double* value, double* gx, double* gy, double* gz) const {
+  if (m_dual) {
+    m_dual->evaluate(count, x, y, z, nullptr, nullptr, nullptr, 0.0, value, gx, gy, gz);
+    return;
+  }
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector3d p(x[i], y[i], z[i]);
+    value[i] = (*this)(p);
+    if (!gx) continue;
+    const Eigen::Vector3d g = difference_gradient(p);
+    gx[i] = g[0], gy[i] = g[1], gz[i] = g[2];
+  }
 }
 
 Eigen::Vector3d Expression::difference_gradient(const Eigen::Vector3d& x, double h) const {

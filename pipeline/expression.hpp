@@ -31,6 +31,11 @@ class Expression {
   Eigen::Vector3d gradient(const Eigen::Vector3d& x, double h = 1e-3) const;
   /// u(x) and ∇u(x) in one evaluation where differentiated(), else the two separately.
   double value_and_gradient(const Eigen::Vector3d& x, Eigen::Vector3d* gradient) const;
+  /// u and, where gx is not null, ∇u at `count` points (structure of arrays): one pass of the
+  /// batched evaluator of expression_ad.hpp over the points where differentiated(), else point
+  /// by point as value_and_gradient(). t = 0, n = 0.
+  void values_and_gradients(int count, const double* x, const double* y, const double* z,
+                            double* value, double* gx, double* gy, double* gz) const;
   /// The same by the finite difference always (what the differentiation is checked against).
   Eigen::Vector3d difference_gradient(const Eigen::Vector3d& x, double h = 1e-3) const;
   /// The same with the normal bound to nx, ny, nz and time t.

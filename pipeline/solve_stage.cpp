@@ -180,6 +180,10 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
     if (!rhs.empty()) {
       const Expression f = rhs[0];
       problem.rhs = [f](const Eigen::Vector3d& x) { return f(x); };
+      problem.rhs_batch = [f](const Eigen::MatrixXd& x, Eigen::VectorXd& values) {
+        f.values_and_gradients(static_cast<int>(x.rows()), x.col(0).data(), x.col(1).data(),
+                               x.col(2).data(), values.data(), nullptr, nullptr, nullptr);
+      };
     }
     problem.quadrature_degree = spec.quadrature;
     problem.partial_dirichlet = partial_dirichlet;

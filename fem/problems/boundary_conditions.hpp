@@ -20,6 +20,10 @@ using ScalarField = std::function<double(const Eigen::Vector3d&)>;
 /// used only where it returns true (selections by region act point-wise, not face-wise).
 using PointFilter = std::function<bool(const Eigen::Vector3d&)>;
 using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d&)>;
+/// A scalar field at all the quadrature points of one cell at once: x is n_q × 3, values is
+/// already sized n_q. Lets the caller evaluate over a batch (pipeline's expressions walk their
+/// tree once per batch instead of once per point).
+using ScalarBatchField = std::function<void(const Eigen::MatrixXd& x, Eigen::VectorXd& values)>;
 /// Boundary data of a face quadrature point x, given also the mesh's outward unit normal n there.
 using BoundaryScalarField =
     std::function<double(const Eigen::Vector3d& x, const Eigen::Vector3d& n)>;

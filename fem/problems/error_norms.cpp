@@ -26,6 +26,24 @@ ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
 ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
                           const Eigen::VectorXd& u, int c, const ExactValueGradient& exact,
                           int quadrature_degree) {
+  return compute_errors(
+      mesh, space, u, c,
+      [&](const Eigen::MatrixXd& x, Eigen::MatrixXd& values, Eigen::MatrixXd& gradients) {
+        Eigen::VectorXd v(c);
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> g(c, 3);
+        for (Eigen::Index q = 0; q < x.rows(); ++q) {
+          exact(x.row(q).transpose(), v.data(), g.data());
+          values.row(q) = v.transpose();
+          for (int i = 0; i < c; ++i)
+            for (int j = 0; j < 3; ++j) gradients(q, 3 * i + j) = g(i, j);
+        }
+      },
+      quadrature_degree);
+}
+
+ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
+                          const Eigen::VectorXd& u, int c, const ExactBatch& exact,
+                          int quadrature_degree) {
   CF_VERIFY(u.size() == static_cast<Eigen::Index>(space.num_dofs) * c, "field size mismatch");
   const int degree = quadrature_degree >= 0 ? quadrature_degree
                                             : default_quadrature_degree(space.degree, mesh.order,
@@ -34,6 +52,7 @@ ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
   const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, space.degree, rule.points);
   const int n = static_cast<int>(space.cell_dofs.cols());
+  const int nq = geometry.num_points();
   using Sums = std::array<double, 4>;
   // Fixed-size chunks reduced in order: deterministic for any thread count.
   const int chunk = 256;
@@ -41,25 +60,33 @@ ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
   std::vector<Sums> partial(chunks, Sums{0, 0, 0, 0});
   tbb::parallel_for(0, chunks, [&](int k) {
     CellGeometry g;
-    Eigen::MatrixXd U(n, c);
+    Eigen::MatrixXd U(n, c), UH(nq, c), UE(nq, c), GE(nq, 3 * c);
     Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, 3, 3> ref(c, 3), guh(c, 3);
-    Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 3, 1> uh(c), ue(c);
-    Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> ge(c, 3);
     Sums s{0, 0, 0, 0};
     for (int cell = k * chunk; cell < std::min(mesh.num_cells(), (k + 1) * chunk); ++cell) {
       geometry.evaluate(cell, g);
       for (int a = 0; a < n; ++a)
         for (int i = 0; i < c; ++i) U(a, i) = u[space.cell_dofs(cell, a) * c + i];
-      for (int q = 0; q < geometry.num_points(); ++q) {
-        const Eigen::Vector3d x = g.x.row(q).transpose();
-        uh.noalias() = U.transpose() * basis.values.row(q).transpose();
+      exact(g.x, UE, GE);
+      UH.noalias() = basis.values * U;  // n_q × c
+      for (int q = 0; q < nq; ++q) {
         ref.noalias() = U.transpose() * basis.gradients[q];  // c × 3, ∂u_h/∂ξ
         guh.noalias() = ref * g.jacobian_inv[q];             // c × 3, ∂u_h/∂x
-        exact(x, ue.data(), ge.data());
-        s[0] += g.det_w[q] * (uh - ue).squaredNorm();
-        s[1] += g.det_w[q] * (guh - ge).squaredNorm();
-        s[2] += g.det_w[q] * ue.squaredNorm();
-        s[3] += g.det_w[q] * ge.squaredNorm();
+        double e0 = 0, e1 = 0, n0 = 0, n1 = 0;
+        for (int i = 0; i < c; ++i) {
+          const double du = UH(q, i) - UE(q, i);
+          e0 += du * du;
+          n0 += UE(q, i) * UE(q, i);
+          for (int j = 0; j < 3; ++j) {
+            const double dg = guh(i, j) - GE(q, 3 * i + j);
+            e1 += dg * dg;
+            n1 += GE(q, 3 * i + j) * GE(q, 3 * i + j);
+          }
+        }
+        s[0] += g.det_w[q] * e0;
+        s[1] += g.det_w[q] * e1;
+        s[2] += g.det_w[q] * n0;
+        s[3] += g.det_w[q] * n1;
       }
     }
     partial[k] = s;

@@ -24,6 +24,15 @@ using ExactGradient = std::function<void(const Eigen::Vector3d& x, double* gradi
 using ExactValueGradient =
     std::function<void(const Eigen::Vector3d& x, double* value, double* gradient)>;
 
+/// All the quadrature points of one cell at once: x is n_q × 3; fill values (n_q × c) and
+/// gradients (n_q × 3c, column 3i + j = ∂u_i/∂x_j), both already sized. Lets the caller evaluate
+/// the exact solution over a batch (pipeline's expressions: one walk of the tree per batch).
+using ExactBatch = std::function<void(const Eigen::MatrixXd& x, Eigen::MatrixXd& values,
+                                      Eigen::MatrixXd& gradients)>;
+
+ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
+                          const Eigen::VectorXd& u, int components, const ExactBatch& exact,
+                          int quadrature_degree = -1);
 ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
                           const Eigen::VectorXd& u, int components, const ExactValue& exact,
                           const ExactGradient& exact_gradient, int quadrature_degree = -1);

@@ -32,9 +32,15 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
     // Per-thread scratch: no allocation per cell after the first.
     thread_local CellGeometry g;
     thread_local Eigen::MatrixXd G, Gw;  // n × 3·nq physical gradients, and weighted by κ det J w
+    thread_local Eigen::VectorXd f;      // rhs_batch at the points
     G.resize(n, 3 * nq);
     Gw.resize(n, 3 * nq);
     geometry.evaluate(cell, g);
+    if (problem.rhs_batch) {
+      f.resize(nq);
+      problem.rhs_batch(g.x, f);
+      Fe.noalias() += basis.values.transpose() * g.det_w.cwiseProduct(f);
+    }
     for (int q = 0; q < nq; ++q) {
       const Eigen::Vector3d x = g.x.row(q).transpose();
       const double kappa = problem.cell_kappa ? problem.cell_kappa(cell, x)
@@ -42,7 +48,7 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
                                               : 1.0;
       G.middleCols<3>(3 * q).noalias() = basis.gradients[q] * g.jacobian_inv[q];
       Gw.middleCols<3>(3 * q) = (g.det_w[q] * kappa) * G.middleCols<3>(3 * q);
-      if (problem.rhs)
+      if (problem.rhs && !problem.rhs_batch)
         Fe.noalias() += (g.det_w[q] * problem.rhs(x)) * basis.values.row(q).transpose();
     }
     Ke.noalias() = Gw * G.transpose();  // Σ_q κ det J w ∇φ ∇φᵀ as one matrix product

@@ -23,6 +23,8 @@ struct PoissonProblem {
   /// Optional, overrides kappa: κ per cell and point (e.g. a coefficient per region of the mesh).
   std::function<double(int cell, const Eigen::Vector3d& x)> cell_kappa;
   ScalarField rhs;  ///< empty = 0
+  /// Optional, overrides rhs: the same f over a cell's quadrature points at once.
+  ScalarBatchField rhs_batch;
   std::vector<ScalarDirichlet> dirichlet;
   std::vector<ScalarNeumann> neumann;
   std::vector<ScalarRobin> robin;

@@ -150,3 +150,27 @@ TEST(Poisson, InvertedElementIsASolverErrorNamingIt) {
     EXPECT_EQ(e.context().element, 3);
   }
 }
+
+TEST(Poisson, TheBatchedLoadEqualsThePointwiseOne) {
+  // rhs_batch (the load over a cell's points at once) against rhs on the same mesh, P1..P3: the
+  // load vectors agree to rounding, and an rhs_batch that disagrees with rhs wins.
+  const LagrangeMesh mesh = make_cube_tets(3);
+  auto f = [](const Eigen::Vector3d& x) { return std::exp(x[0]) * std::cos(2 * x[1]) + x[2]; };
+  for (int p = 1; p <= 3; ++p) {
+    SCOPED_TRACE(p);
+    const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+    fem::PoissonProblem pointwise;
+    pointwise.rhs = f;
+    fem::PoissonProblem batched;
+    batched.rhs = [](const Eigen::Vector3d&) { return 1e6; };  // ignored where rhs_batch is set
+    batched.rhs_batch = [&](const Eigen::MatrixXd& x, Eigen::VectorXd& v) {
+      ASSERT_EQ(v.size(), x.rows());
+      for (Eigen::Index q = 0; q < x.rows(); ++q) v[q] = f(x.row(q).transpose());
+    };
+    const fem::AssembledSystem a = fem::assemble_poisson(mesh, space, pointwise);
+    const fem::AssembledSystem b = fem::assemble_poisson(mesh, space, batched);
+    ASSERT_EQ(a.F.size(), b.F.size());
+    EXPECT_GT(a.F.norm(), 1e-3);
+    EXPECT_LE((a.F - b.F).lpNorm<Eigen::Infinity>(), 1e-14 * a.F.lpNorm<Eigen::Infinity>());
+  }
+}
