@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "fem/solvers/linear_solver.hpp"
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -54,6 +55,7 @@ ProgressFn progress_of(const py::object& callback) {
 /// oneTBB uses at most `threads` workers while it lives (0: all cores).
 std::unique_ptr<tbb::global_control> limit_threads(int threads) {
   if (threads <= 0) return nullptr;
+  curvefem::fem::set_blas_threads(threads);  // the BLAS under CHOLMOD and PETSc too
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                static_cast<std::size_t>(threads));
 }

@@ -1,5 +1,7 @@
 #include "fem/solvers/linear_solver.hpp"
 
+#include <dlfcn.h>
+
 #include <Eigen/QR>
 
 #include "fem/solvers/distributed.hpp"
@@ -7,6 +9,21 @@
 #include "meshing/core/log.hpp"
 
 namespace curvefem::fem {
+
+bool set_blas_threads(int threads) {
+  using Setter = void (*)(int);
+  const auto set = reinterpret_cast<Setter>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+  if (!set || threads < 1) return false;
+  set(threads);
+  return true;
+}
+
+int blas_threads() {
+  using Getter = int (*)();
+  const auto get = reinterpret_cast<Getter>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return get ? get() : 0;
+}
+
 namespace {
 
 /// Orthonormal basis of the columns of V (#rows x m, full column rank).

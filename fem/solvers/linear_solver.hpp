@@ -90,6 +90,15 @@ struct LinearSolveInfo {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
+/// Limits the threads of the BLAS the solvers call (CHOLMOD's supernodal factorization, PETSc's
+/// dense kernels) to `threads` (>= 1), so that a run's thread count holds for BLAS too: Debian's
+/// OpenBLAS starts one thread per core, and its idle threads spin (sched_yield) beside a
+/// one-thread run. Acts through openblas_set_num_threads when the BLAS loaded is OpenBLAS
+/// (looked up at run time: the BLAS is a Debian alternative); returns whether it did.
+bool set_blas_threads(int threads);
+/// The BLAS's thread count where it can be queried (OpenBLAS), else 0.
+int blas_threads();
+
 /// A must be symmetric (both triangles stored), positive definite, or semi-definite with the
 /// kernel given in options.null_space. Throws InputError for size mismatch.
 Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,

@@ -198,3 +198,14 @@ TEST(NearNullspace, CgReusesItsSetUpForAnIdenticalMatrixThroughTheCache) {
   EXPECT_EQ(o.factorization_cache->factorizations(), 2);
   EXPECT_EQ(o.factorization_cache->reuses(), 1);
 }
+
+TEST(LinearSolver, TheBlasThreadCountFollowsTheRunsThreadCount) {
+  // Debian's OpenBLAS (the BLAS of CHOLMOD and PETSc here) starts a thread per core; a run's
+  // --threads must hold for it. Skipped where the BLAS is not OpenBLAS.
+  if (!fem::set_blas_threads(1)) GTEST_SKIP() << "the BLAS loaded is not OpenBLAS";
+  EXPECT_EQ(fem::blas_threads(), 1);
+  ASSERT_TRUE(fem::set_blas_threads(2));
+  EXPECT_EQ(fem::blas_threads(), 2);
+  EXPECT_FALSE(fem::set_blas_threads(0));  // refused: the count stays
+  EXPECT_EQ(fem::blas_threads(), 2);
+}

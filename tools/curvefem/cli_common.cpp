@@ -6,6 +6,7 @@
 #include <exception>
 #include <new>
 
+#include "fem/solvers/linear_solver.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 
@@ -23,9 +24,12 @@ std::unique_ptr<TerminalProgress> apply_global_options(const GlobalOptions& opti
   log::set_level(options.quiet ? log::Level::warn : log::parse_level(options.log_level));
   // oneTBB (assembly, CGAL's parallel checks) uses at most --threads workers for the whole run.
   static std::unique_ptr<tbb::global_control> limit;
-  if (options.threads > 0)
+  // The BLAS under CHOLMOD and PETSc gets the same count (all cores when --threads is 0).
+  if (options.threads > 0) {
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                   static_cast<std::size_t>(options.threads));
+    fem::set_blas_threads(options.threads);
+  }
   return std::make_unique<TerminalProgress>(TerminalProgress::automatic_mode(options.quiet));
 }
 
