@@ -48,6 +48,7 @@ class CurvedEditMesh : public TetMesh {
   editing::Attribute<double> scaled_jacobian{*this, 3, 0.0};  // min_scaled_jacobian
 
   int k = 1;
+  bool mips_guard = false;  // every operation: the cavity's worst curved MIPS may not grow
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
   std::vector<Eigen::Vector3d> pos;                       // node positions (grows)
@@ -226,7 +227,7 @@ class CurvedEditMesh : public TetMesh {
     // ... and not raise its worst curved MIPS (the quality goal's measure, which the conformal
     // energy above weighs differently: a split that trades a flat cell for a needle passes
     // that one).
-    if (r.new_vertex != editing::k_no_id) {
+    if (r.new_vertex != editing::k_no_id || mips_guard) {
       double mips_before = 0, mips_after = 0;
       for (Id t : r.old_cells)
         mips_before = std::max(mips_before, curved_mips(k, cell_nodes(cell(t))));
@@ -383,6 +384,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   m.lattice = &lattice;
   m.tri_lattice = &lagrange_lattice(CellKind::triangle, k);
   m.stats = &stats;
+  m.mips_guard = options.mips_guard;
   m.initialize(node_of_vertex.size(), cells);
   m.pos.resize(std::size_t(mesh.num_nodes()));
   for (int n = 0; n < mesh.num_nodes(); ++n) m.pos[std::size_t(n)] = mesh.nodes.row(n).transpose();
@@ -482,6 +484,21 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
               work.emplace_back("collapse", *e);
             }
           }
+        // Ring collapses of a flat or needle cell: each of its free corners toward every other
+        // neighbour too, so a slab cell's inner corner can go to a deeper vertex of its ring.
+        if (m.scaled_jacobian[t] < options.ring_collapse_scaled_jacobian) {
+          const auto cv = m.cell(t);
+          for (Id a : cv) {
+            if (m.vertex_fixed[a]) continue;
+            for (Id b : m.one_ring(a)) {
+              if (std::find(cv.begin(), cv.end(), b) != cv.end()) continue;  // done above
+              if (auto e = m.edge_tuple(a, b)) {
+                if (e->vid != a) e = m.switch_vertex(*e);
+                work.emplace_back("collapse", *e);
+              }
+            }
+          }
+        }
       } else {
         for (const auto& f : m.faces_of_tets({t})) work.emplace_back("swap23", f);
         for (const auto& e : m.edges_of_tets({t})) {
@@ -520,10 +537,21 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
       };
     }
     // Worst cells first; a queued entry whose cell is no longer a target is dropped.
-    pass.priority = [&m](const TetMesh&, const std::string&, const TetMesh::Tuple& t) {
-      return m.energy[t.tid];
+    // A collapse is judged by the star of the vertex it removes (its tuple's cell need not be
+    // the target cell that asked for it).
+    auto star_energy = [&m](Id v) {
+      double e = 0;
+      const Id vv[1] = {v};
+      for (Id c : m.cells_containing(std::span<const Id>(vv, 1))) e = std::max(e, m.energy[c]);
+      return e;
     };
-    pass.should_process = [&wanted, mode](const TetMesh&, const Pass::Work& w, double) {
+    pass.priority = [&m, mode, &star_energy](const TetMesh&, const std::string&,
+                                             const TetMesh::Tuple& t) {
+      return mode == Mode::collapse ? star_energy(t.vid) : m.energy[t.tid];
+    };
+    pass.should_process = [&wanted, &star_energy, &options, mode](const TetMesh&,
+                                                                  const Pass::Work& w, double) {
+      if (mode == Mode::collapse) return star_energy(w.second.vid) > options.energy;
       return wanted(w.second.tid, mode);
     };
     pass.renew_neighbor_tuples = [&](const TetMesh&, const std::string&, const TetMesh::Tuple&) {

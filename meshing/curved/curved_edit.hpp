@@ -32,6 +32,15 @@ struct CurvedEditOptions {
   int passes = 2;       // rounds of (collapses, flips); 0: off
   double energy = 4.0;  // cells above this mean energy (optimize.hpp cell_energy) are targets
   bool collapses = true;
+  // Target cells whose sampled scaled Jacobian is below this also try to collapse each free
+  // corner toward every vertex of its one-ring, not only along the cell's own edges (a flat slab
+  // cell's inner corner toward a deeper neighbour); 0: off. Off by default: measured at 0.05 on
+  // 10 dev meshes (benchmarks/results/robustness_quality.md) it removed 15-40% of the tets and was
+  // mixed (elephant K = 4 better, hinge K = 4 max MIPS 1.9e4 -> 5.0e4, shape_occt K = 4 worse).
+  double ring_collapse_scaled_jacobian = 0.0;
+  // Every operation, not only splits, must not raise the cavity's worst curved MIPS (the quality
+  // goal's measure; the conformal energy weighs a curved dip less).
+  bool mips_guard = true;
   bool flips = true;
   // Edge splits of flat cells (after the flips of each pass): an edge of a target cell whose
   // sampled scaled Jacobian is below split_scaled_jacobian, not on the mesh boundary nor on the

@@ -204,6 +204,13 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       cell_sj[std::size_t(c)] = min_scaled_jacobian(k, cell_nodes(mesh, c));
     return cell_sj[std::size_t(c)];
   };
+  // The same for the curved MIPS (the quality goal's measure), when options.mips_ceiling > 0.
+  std::vector<double> cell_mips(std::size_t(nc), std::numeric_limits<double>::quiet_NaN());
+  auto mips_of = [&](int c) {
+    if (std::isnan(cell_mips[std::size_t(c)]))
+      cell_mips[std::size_t(c)] = curved_mips(k, cell_nodes(mesh, c));
+    return cell_mips[std::size_t(c)];
+  };
   auto summarize = [&](double& mean, double& max) {
     mean = max = 0;
     for (double e : energy) {
@@ -318,10 +325,14 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     auto restore = [&] {
       for (std::size_t i = 0; i < moved.size(); ++i) mesh.nodes.row(moved[i].first) = saved[i];
     };
-    double sj_before = k_inf;
-    for (const auto& [c, local] : star[v]) sj_before = std::min(sj_before, sj_of(c));
+    double sj_before = k_inf, mips_before = 0;
+    for (const auto& [c, local] : star[v]) {
+      sj_before = std::min(sj_before, sj_of(c));
+      if (options.mips_ceiling > 0) mips_before = std::max(mips_before, mips_of(c));
+    }
     const double sj_floor = std::min(sj_before, options.scaled_jacobian_floor);
-    std::vector<double> sj_after(star[v].size());
+    const double mips_cap = std::max(mips_before, options.mips_ceiling);
+    std::vector<double> sj_after(star[v].size()), mips_after(star[v].size(), 0.0);
     bool accepted = false;
     for (int attempt = 0; attempt < 4; ++attempt) {
       for (std::size_t i = 0; i < moved.size(); ++i)
@@ -330,9 +341,16 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       for (std::size_t i = 0; i < star[v].size() && accepted; ++i) {
         const Eigen::MatrixXd X = cell_nodes(mesh, star[v][i].first);
         sj_after[i] = min_scaled_jacobian(k, X);
+        if (options.mips_ceiling > 0) mips_after[i] = curved_mips(k, X);
         accepted = sj_after[i] >= sj_floor &&
                    certify_tet_jacobian(k, X).verdict == JacobianVerdict::positive;
       }
+      // The MIPS cap binds only moves that do not raise the star's worst scaled Jacobian (those
+      // are what the goal needs most; capped, abc_00000008's worst cell fell 3.3e-4 -> 5.8e-5).
+      if (accepted && options.mips_ceiling > 0 &&
+          *std::max_element(mips_after.begin(), mips_after.end()) > mips_cap &&
+          !(*std::min_element(sj_after.begin(), sj_after.end()) > sj_before))
+        accepted = false;
       if (accepted) break;
       ++rejected;
       restore();
@@ -349,6 +367,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       const int c = star[v][i].first;
       energy[c] = energy_of(ref, cell_nodes(mesh, c), &point_energy[c]);
       cell_sj[std::size_t(c)] = sj_after[i];
+      cell_mips[std::size_t(c)] =
+          options.mips_ceiling > 0 ? mips_after[i] : std::numeric_limits<double>::quiet_NaN();
     }
     return true;
   };

@@ -50,6 +50,13 @@ struct OptimizeOptions {
   // A move may not take the star's worst sampled scaled Jacobian (min_scaled_jacobian) below
   // min(its value before, this floor): the energy alone let moves create the mesh's worst cells.
   double scaled_jacobian_floor = 0.05;
+  // Nor take the star's worst curved MIPS (curved_mips, the quality goal's measure) above
+  // max(its value before, this ceiling); 0: off. The conformal energy above is a mean over the
+  // lattice and weighs a dip of the curved map less, so without this moves raised the mesh's
+  // worst curved MIPS (cylinder_sharp K = 3 with the edits' MIPS guard: 1.0e3 -> 4.7e3). A move
+  // that raises the star's worst scaled Jacobian is exempt (capped too, abc_00000008's worst
+  // cell fell 3.3e-4 -> 5.8e-5). benchmarks/results/robustness_quality.md.
+  double mips_ceiling = 1000;
   // Collapses and flips of the stitched curved mesh before the smoothing (curved_edit.hpp; run by
   // the curved mesher, not by optimize_vertices).
   CurvedEditOptions edits;

@@ -80,7 +80,8 @@ TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) 
   // Jacobian 2.0e-3, 116 tets below 0.01, max MIPS 1.0e5; with the default (8 × the local
   // thickness) 228 faces, 2.2e-2, none below 0.01, max MIPS 3.0e3. With the curved edits and the
   // smoothing's scaled-Jacobian floor (2026-12-02): without the guard min scaled Jacobian 5.3e-3,
-  // 27 tets below 0.01, max MIPS 2.8e4; with it 2.9e-2, none, 1.5e3.
+  // 27 tets below 0.01, max MIPS 2.8e4; with it 2.9e-2, none, 1.5e3. Since the edits' collapses
+  // are no longer dropped by the queue (2026-12-03): without the guard 6.7e-3, 9 below, 1.4e4.
   const SurfaceMesh input = make_adversarial("cylinder_flat");
   cv::CurvedMeshOptions o = default_options(input, 3);
   ASSERT_GT(o.max_edge_per_thickness, 0);  // on by default
@@ -95,7 +96,7 @@ TEST(CurvedAdversarial, TheThicknessGuardKeepsSlabTetsOfThinPartsFromGoingFlat) 
   EXPECT_LT(a.max_mips, 1e4);
   // What the guard prevents (the optimization alone does not repair it).
   EXPECT_LT(b.min_scaled_jacobian, 1e-2);
-  EXPECT_GT(b.tets_sj_below_1e2, 10);
+  EXPECT_GT(b.tets_sj_below_1e2, 5);
   EXPECT_GT(b.max_mips, 1e4);
   long refused = -1;
   for (const auto& [why, n] : with.stats.coarsen_rejections)
@@ -107,7 +108,10 @@ TEST(CurvedAdversarial, EditSplitsRaiseTheWorstCellOfTheFlatCylinder) {
   // CurvedEditOptions::splits (off by default): measured (K = 3, 2026-12-03) 290 -> 294 tets, min
   // scaled Jacobian 0.0295 -> 0.0387, max MIPS 1.53e3 both. (This test used the sharp cylinder,
   // 0.0108 -> 0.0156, until the coarsening's flips between feature vertices raised its worst cell
-  // without splits to 0.0119, a cell the splits do not improve.)
+  // without splits to 0.0119, a cell the splits do not improve.) Since the edits' collapses are
+  // no longer dropped by the queue (CollapsesAskedForByAFlatCell... below) the cylinder's worst
+  // cell is 0.0477 without splits and the splits leave it there: 276 -> 279 tets, max MIPS
+  // 557 -> 500; what is left to check is that they run and make nothing worse.
   const SurfaceMesh input = make_adversarial("cylinder_flat");
   cv::CurvedMeshOptions o = default_options(input, 3);
   ASSERT_FALSE(o.optimize.edits.splits);
@@ -117,7 +121,8 @@ TEST(CurvedAdversarial, EditSplitsRaiseTheWorstCellOfTheFlatCylinder) {
   EXPECT_EQ(without.stats.optimize.edits.splits, 0);
   EXPECT_GE(with.stats.optimize.edits.splits, 1);
   EXPECT_TRUE(with.v.valid(0.01));
-  EXPECT_GT(with.v.min_scaled_jacobian, 1.2 * without.v.min_scaled_jacobian);
+  EXPECT_GE(with.v.min_scaled_jacobian, without.v.min_scaled_jacobian);
+  EXPECT_GT(without.v.min_scaled_jacobian, 0.04);
   EXPECT_LE(with.v.max_mips, without.v.max_mips);
   // The boundary is the same, node for node.
   EXPECT_EQ(with.mesh.map.boundary.nodes, without.mesh.map.boundary.nodes);
@@ -234,8 +239,9 @@ TEST(CurvedAdversarial, EdgesBetweenFeatureVerticesThatAreNotFeatureEdgesMayFlip
   // feature edge; with feature chains the coarse feature edges are marked, so only those are
   // kept. On the sharp box the diagonals between the corners (all frozen) could not flip before.
   // Measured (K = 3, 2026-12-03): 48 -> 34 tets, min scaled Jacobian 0.105 -> 0.152, max MIPS
-  // 146 -> 80. On the dev meshes (benchmarks/results/robustness_flips.md) anchor's tets below
-  // 0.01 went 17 -> 4 and abc_00000008's worst coarse cap (0.07°) went.
+  // 146 -> 80 (106 since the curved edits' collapses are no longer dropped, 34 -> 29 tets, min
+  // scaled Jacobian 0.157). On the dev meshes (benchmarks/results/robustness_flips.md) anchor's
+  // tets below 0.01 went 17 -> 4 and abc_00000008's worst coarse cap (0.07°) went.
   const SurfaceMesh input = make_adversarial("box_sharp");
   const Meshed m = mesh_of(input, 3);
   EXPECT_TRUE(m.v.valid(0.01));
@@ -243,6 +249,21 @@ TEST(CurvedAdversarial, EdgesBetweenFeatureVerticesThatAreNotFeatureEdgesMayFlip
   EXPECT_GT(m.v.feature_edges, 0);
   EXPECT_EQ(m.mesh.map.boundary.num_cells(), 12);
   EXPECT_GE(m.v.min_scaled_jacobian, 0.14);
-  EXPECT_LE(m.v.max_mips, 100.0);
+  EXPECT_LE(m.v.max_mips, 110.0);
   EXPECT_LE(m.v.tets, 40);
+}
+
+TEST(CurvedAdversarial, CollapsesAskedForByAFlatCellAreNotDroppedByTheQueue) {
+  // The curved edits queue a collapse of every edge of a target cell, but the queue's stale
+  // filter judged each entry by the cell its edge tuple happened to name, usually not the target,
+  // so most of them were dropped unseen; now a collapse is judged by the star of the vertex it
+  // removes. With the curved-MIPS guards of the edits and the smoothing, measured (K = 3,
+  // 2026-12-03) on the thin long box: 82 -> 84 tets, below 0.01 17 -> 13, min scaled Jacobian
+  // 0.00428 -> 0.00507, max MIPS 4173 -> 1533.
+  const SurfaceMesh input = make_adversarial("box_thin_long");
+  const Meshed m = mesh_of(input, 3);
+  EXPECT_TRUE(m.v.valid(0.01));
+  EXPECT_GT(m.v.min_scaled_jacobian, 0.0048);
+  EXPECT_LE(m.v.tets_sj_below_1e2, 14);
+  EXPECT_LE(m.v.max_mips, 2000.0);
 }
