@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
   problem.rhs = [&](const Eigen::Vector3d& x) { return 3 * pi * pi * u(x); };
   problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), u, {}});
   fem::LinearSolverOptions options;
-  options.type = solver;
+  options.type = curvefem::fem::solver_type_from(solver);
   options.rtol = 1e-10;
   const auto sol = fem::solve_poisson(mesh, space, problem, options);
   w.reset();

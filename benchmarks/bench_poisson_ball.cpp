@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
                                [](const Eigen::Vector3d&) { return 0.0; },
                                {}});
   fem::LinearSolverOptions options;
-  options.type = solver;
+  options.type = curvefem::fem::solver_type_from(solver);
   const auto sol = fem::solve_poisson(mesh, space, problem, options);
   w.reset();
   const auto e = fem::compute_errors(

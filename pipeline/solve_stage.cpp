@@ -146,11 +146,11 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   const fem::FunctionSpace& space = disc.space;
   ctx.update("solve " + to_string(spec.physics), 0.0);
   fem::LinearSolverOptions solver;
-  solver.type = to_string(spec.solver);
+  solver.type = fem::solver_type_from(to_string(spec.solver));
   solver.rtol = spec.solver_rtol;
   solver.max_iterations = spec.solver_max_iterations;
   solver.use_near_nullspace = spec.solver_near_nullspace;
-  solver.preconditioner = to_string(spec.solver_preconditioner);
+  solver.preconditioner = fem::preconditioner_from(to_string(spec.solver_preconditioner));
   solver.auto_direct_max_dofs = auto_direct_max_unknowns(spec.physics, disc.space.degree);
   if (spec.physics != Physics::neo_hookean) solver.factorization_cache = std::move(cache);
   const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == PartialDirichlet::nodal

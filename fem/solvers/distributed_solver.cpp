@@ -91,7 +91,7 @@ struct Header {
   int vector_columns = 0;  // explicit near-nullspace vectors
   int coordinates = 0;     // 1: rigid-body modes from the owned nodes' coordinates
   int direct = 0;          // 1: MUMPS Cholesky
-  int preconditioner = 0;  // 0 gamg, 1 hypre, 2 ml
+  int preconditioner = 0;  // Preconditioner as an int: 0 gamg, 1 hypre, 2 ml
   int max_iterations = 0;
   double rtol = 0;
 };
@@ -259,10 +259,10 @@ SolveOutcome solve_part(const Header& h, LocalPart& part) {
     check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
   } else {
     check(KSPSetType(ksp, KSPCG), "KSPSetType");
-    if (h.preconditioner == 1) {
+    if (h.preconditioner == static_cast<int>(Preconditioner::hypre)) {
       check(PCSetType(pc, PCHYPRE), "PCSetType");
       check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
-    } else if (h.preconditioner == 2) {
+    } else if (h.preconditioner == static_cast<int>(Preconditioner::ml)) {
       check(PCSetType(pc, PCML), "PCSetType");
     } else {
       check(PCSetType(pc, PCGAMG), "PCSetType");
@@ -407,11 +407,6 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
                       const LinearSolverOptions& options, bool direct,
                       const Eigen::MatrixXd& null_space, LinearSolveInfo& info) {
   if (!active() || g_rank != 0) throw Error("distributed::solve: only on rank 0 of several");
-  // Everything that may throw on bad input comes before the first message.
-  if (!direct && options.preconditioner != "gamg" && options.preconditioner != "hypre" &&
-      options.preconditioner != "ml")
-    throw InputError("cg: unknown preconditioner '" + options.preconditioner +
-                     "' (gamg, hypre or ml)");
   const long long n = A.rows();
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
   const bool use_coordinates = !direct && options.use_near_nullspace && coordinates.size() > 0;
@@ -466,7 +461,7 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
   h.vector_columns = use_vectors ? int(vectors.cols()) : 0;
   h.coordinates = use_coordinates;
   h.direct = direct;
-  h.preconditioner = options.preconditioner == "hypre" ? 1 : options.preconditioner == "ml" ? 2 : 0;
+  h.preconditioner = static_cast<int>(options.preconditioner);
   h.max_iterations = options.max_iterations;
   h.rtol = options.rtol;
   broadcast_command(k_solve);
@@ -529,7 +524,7 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     copy = SparseMatrix();
     const double distribute_s = watch.seconds() - partition_s;
     out = solve_part(h, own);
-    info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + options.preconditioner;
+    info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + to_string(options.preconditioner);
     info.iterations = out.iterations;
     info.residual_history = std::move(out.history);
     info.near_nullspace = out.near_nullspace;

@@ -10,6 +10,40 @@
 
 namespace curvefem::fem {
 
+std::string to_string(SolverType type) {
+  switch (type) {
+    case SolverType::direct:
+      return "direct";
+    case SolverType::cg:
+      return "cg";
+    default:
+      return "auto";
+  }
+}
+
+std::string to_string(Preconditioner preconditioner) {
+  switch (preconditioner) {
+    case Preconditioner::hypre:
+      return "hypre";
+    case Preconditioner::ml:
+      return "ml";
+    default:
+      return "gamg";
+  }
+}
+
+SolverType solver_type_from(const std::string& text) {
+  for (const SolverType t : {SolverType::automatic, SolverType::direct, SolverType::cg})
+    if (to_string(t) == text) return t;
+  throw InputError("unknown solver type '" + text + "' (direct, cg or auto)");
+}
+
+Preconditioner preconditioner_from(const std::string& text) {
+  for (const Preconditioner p : {Preconditioner::gamg, Preconditioner::hypre, Preconditioner::ml})
+    if (to_string(p) == text) return p;
+  throw InputError("unknown preconditioner '" + text + "' (gamg, hypre or ml)");
+}
+
 bool set_blas_threads(int threads) {
   using Setter = void (*)(int);
   const auto set = reinterpret_cast<Setter>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
@@ -88,11 +122,9 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
   if (A.rows() == 0) return Eigen::VectorXd();
   // Several MPI ranks (fem/solvers/distributed.hpp): "auto" is cg, direct is MUMPS over the ranks.
   const bool several_ranks = distributed::active();
-  std::string type = options.type;
-  if (type == "auto")
-    type = !several_ranks && A.rows() <= options.auto_direct_max_dofs ? "direct" : "cg";
-  if (type != "direct" && type != "cg")
-    throw InputError("unknown solver type '" + options.type + "' (direct, cg or auto)");
+  const bool direct = options.type == SolverType::automatic
+                          ? !several_ranks && A.rows() <= options.auto_direct_max_dofs
+                          : options.type == SolverType::direct;
   Eigen::MatrixXd Q;
   Eigen::VectorXd rhs = b;
   if (singular) {
@@ -101,11 +133,11 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
     out.null_space_dim = static_cast<int>(Q.cols());
   }
   Eigen::VectorXd x;
-  if (type == "direct" && singular)
+  if (direct && singular)
     x = solve_pinned(A, rhs, options.null_space, options, out, options.factorization_cache.get());
   else if (several_ranks)
-    x = distributed::solve(A, rhs, options, type == "direct", Q, out);
-  else if (type == "direct")
+    x = distributed::solve(A, rhs, options, direct, Q, out);
+  else if (direct)
     x = solve_cholmod(A, rhs, out, options.factorization_cache.get());
   else
     x = solve_petsc_cg(A, rhs, options, Q, out, options.factorization_cache.get());

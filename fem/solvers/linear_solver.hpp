@@ -49,13 +49,25 @@ class FactorizationCache {
   std::unique_ptr<Impl> m_impl;
 };
 
+/// direct: CHOLMOD (MUMPS over several ranks); cg: PETSc CG with an AMG; automatic: direct up
+/// to auto_direct_max_dofs unknowns on one process, else cg.
+enum class SolverType { automatic, direct, cg };
+/// The AMG of cg.
+enum class Preconditioner { gamg, hypre, ml };
+/// Spellings as in case files and reports: "auto" | "direct" | "cg", "gamg" | "hypre" | "ml".
+std::string to_string(SolverType type);
+std::string to_string(Preconditioner preconditioner);
+/// From those spellings; InputError naming the allowed ones otherwise.
+SolverType solver_type_from(const std::string& text);
+Preconditioner preconditioner_from(const std::string& text);
+
 struct LinearSolverOptions {
-  std::string type = "auto";  ///< direct | cg | auto
+  SolverType type = SolverType::automatic;
   double rtol = 1e-10;
   int max_iterations = 5000;
   int auto_direct_max_dofs = 200000;
-  std::string preconditioner = "gamg";  ///< cg: gamg | hypre | ml
-  int block_size = 1;                   ///< unknowns per node (3 for elasticity): helps AMG
+  Preconditioner preconditioner = Preconditioner::gamg;  ///< cg
+  int block_size = 1;  ///< unknowns per node (3 for elasticity): helps AMG
   /// cg, block_size 3: coordinates of the node of each block of 3 consecutive rows (#rows/3 x 3,
   /// row r = the node of unknowns 3r, 3r+1, 3r+2): GAMG's near-nullspace = the rigid-body modes.
   Eigen::MatrixXd near_nullspace_coordinates;

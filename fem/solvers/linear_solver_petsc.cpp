@@ -97,7 +97,8 @@ struct KspState {
   Eigen::MatrixXd null_space, coordinates, vectors;
   double rtol = 0;
   int max_iterations = 0, block_size = 1;
-  std::string near_nullspace, preconditioner;
+  std::string near_nullspace;
+  Preconditioner preconditioner = Preconditioner::gamg;
   // MatCreateSeqAIJWithArrays keeps pointers to these.
   std::vector<PetscInt> row_ptr, col;
   std::vector<PetscScalar> val;
@@ -170,10 +171,10 @@ std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSol
   check(KSPSetOperators(st->ksp, M, M), "KSPSetOperators");
   check(KSPSetType(st->ksp, KSPCG), "KSPSetType");
   check(KSPGetPC(st->ksp, &pc), "KSPGetPC");
-  if (options.preconditioner == "hypre") {
+  if (options.preconditioner == Preconditioner::hypre) {
     check(PCSetType(pc, PCHYPRE), "PCSetType");
     check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
-  } else if (options.preconditioner == "ml") {
+  } else if (options.preconditioner == Preconditioner::ml) {
     check(PCSetType(pc, PCML), "PCSetType");
   } else {
     check(PCSetType(pc, PCGAMG), "PCSetType");
@@ -194,11 +195,7 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                                const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
                                FactorizationCache* cache) {
   ensure_petsc();
-  if (options.preconditioner != "gamg" && options.preconditioner != "hypre" &&
-      options.preconditioner != "ml")
-    throw InputError("cg: unknown preconditioner '" + options.preconditioner +
-                     "' (gamg, hypre or ml)");
-  info.method = "petsc-cg-" + options.preconditioner;
+  info.method = "petsc-cg-" + to_string(options.preconditioner);
   Stopwatch watch;
   const PetscInt n = static_cast<PetscInt>(A.rows());
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;

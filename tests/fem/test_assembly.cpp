@@ -60,7 +60,7 @@ TEST(Solvers, NonPositiveDefiniteSystemIsASolverError) {
                                [](const Eigen::Vector3d&) { return 1.0; },
                                {}});
   fem::LinearSolverOptions direct;
-  direct.type = "direct";
+  direct.type = fem::SolverType::direct;
   EXPECT_THROW(fem::solve_poisson(mesh, space, problem, direct), SolverError);
 }
 
@@ -73,7 +73,7 @@ TEST(Solvers, CgNonConvergenceReportsResidualHistory) {
                                [](const Eigen::Vector3d&) { return 0.0; },
                                {}});
   fem::LinearSolverOptions cg;
-  cg.type = "cg";
+  cg.type = fem::SolverType::cg;
   cg.max_iterations = 2;
   cg.rtol = 1e-14;
   try {
@@ -101,7 +101,7 @@ TEST(Solvers, FactorizationCacheReusesTheFactorOfAnIdenticalMatrix) {
     return p;
   };
   fem::LinearSolverOptions fresh;
-  fresh.type = "direct";
+  fresh.type = fem::SolverType::direct;
   fem::LinearSolverOptions cached = fresh;
   cached.factorization_cache = std::make_shared<fem::FactorizationCache>();
   const auto a = fem::solve_poisson(mesh, space, problem(1.0, true), cached);

@@ -51,7 +51,7 @@ struct Cantilever {
 
 fem::LinearSolverOptions cg(bool near_nullspace) {
   fem::LinearSolverOptions o;
-  o.type = "cg";
+  o.type = fem::SolverType::cg;
   o.rtol = 1e-10;
   o.use_near_nullspace = near_nullspace;
   return o;
@@ -83,7 +83,7 @@ TEST(NearNullspace, EveryPreconditionerSolvesTheCantileverToTheDirectSolution) {
   const auto direct = fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, {});
   for (const char* pc : {"gamg", "hypre", "ml"}) {
     fem::LinearSolverOptions o = cg(true);
-    o.preconditioner = pc;
+    o.preconditioner = fem::preconditioner_from(pc);
     const auto s = fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, o);
     std::printf("%s: %d unknowns, %d iterations\n", pc, s.free_unknowns, s.solve.iterations);
     EXPECT_EQ(s.solve.method, std::string("petsc-cg-") + pc);
@@ -91,9 +91,12 @@ TEST(NearNullspace, EveryPreconditionerSolvesTheCantileverToTheDirectSolution) {
     EXPECT_LT(s.solve.iterations, 200) << pc;
     EXPECT_LT((s.u - direct.u).norm(), 1e-7 * direct.u.norm()) << pc;
   }
-  fem::LinearSolverOptions bad = cg(true);
-  bad.preconditioner = "jacobi";
-  EXPECT_THROW(fem::solve_linear_elasticity(beam.mesh, beam.space, beam.problem, bad), InputError);
+  // A spelling outside the set is refused where text becomes the enum.
+  EXPECT_THROW(fem::preconditioner_from("jacobi"), InputError);
+  EXPECT_THROW(fem::solver_type_from("gmres"), InputError);
+  for (const fem::SolverType t :
+       {fem::SolverType::automatic, fem::SolverType::direct, fem::SolverType::cg})
+    EXPECT_EQ(fem::solver_type_from(fem::to_string(t)), t);
 }
 
 TEST(NearNullspace, ComponentsFixedSeparatelyGiveTheModesAsVectors) {
@@ -142,10 +145,10 @@ TEST(NearNullspace, SingularSystemDirectAndCgAgreeUpToTheKernel) {
   for (int i = 0; i < n; ++i) b[i] = std::sin(0.3 * i);
   b.array() -= b.mean();
   fem::LinearSolverOptions direct;
-  direct.type = "direct";
+  direct.type = fem::SolverType::direct;
   direct.null_space = Eigen::VectorXd::Ones(n);
   fem::LinearSolverOptions iterative = direct;
-  iterative.type = "cg";
+  iterative.type = fem::SolverType::cg;
   iterative.rtol = 1e-12;
   fem::LinearSolveInfo di, ci;
   Eigen::VectorXd x = fem::solve_spd(A, b, direct, &di);
@@ -172,7 +175,7 @@ TEST(NearNullspace, CgReusesItsSetUpForAnIdenticalMatrixThroughTheCache) {
   fem::SparseMatrix A(n, n);
   A.setFromTriplets(t.begin(), t.end());
   fem::LinearSolverOptions o;
-  o.type = "cg";
+  o.type = fem::SolverType::cg;
   o.rtol = 1e-12;
   o.factorization_cache = std::make_shared<fem::FactorizationCache>();
   const Eigen::VectorXd b1 = Eigen::VectorXd::Ones(n), b2 = Eigen::VectorXd::LinSpaced(n, 0, 1);

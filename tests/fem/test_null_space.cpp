@@ -77,8 +77,8 @@ double integral(const LagrangeMesh& mesh, const fem::FunctionSpace& space, int c
 
 TEST(PureNeumannPoisson, OptimalRatesMeanZeroAndTheSameSolutionByCg) {
   fem::LinearSolverOptions direct, cg;
-  direct.type = "direct";
-  cg.type = "cg";
+  direct.type = fem::SolverType::direct;
+  cg.type = fem::SolverType::cg;
   cg.rtol = 1e-12;
   const int base[3] = {0, 4, 2};
   for (int p = 1; p <= 2; ++p) {

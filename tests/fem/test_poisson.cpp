@@ -21,7 +21,7 @@ fem::ErrorNorms solve_and_measure(
   problem.rhs = f;
   problem.dirichlet.push_back({std::vector<char>(space.boundary_faces.size(), 1), exact, {}});
   fem::LinearSolverOptions options;
-  options.type = solver;
+  options.type = fem::solver_type_from(solver);
   const auto sol = fem::solve_poisson(mesh, space, problem, options);
   if (dofs) *dofs = space.num_dofs;
   return fem::compute_errors(
