@@ -14,25 +14,16 @@ namespace curvefem::fem {
 ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
                           const Eigen::VectorXd& u, int c, const ExactValue& exact,
                           const ExactGradient& exact_gradient, int quadrature_degree) {
-  return compute_errors(
-      mesh, space, u, c,
-      [&](const Eigen::Vector3d& x, double* value, double* gradient) {
-        exact(x, value);
-        exact_gradient(x, gradient);
-      },
-      quadrature_degree);
-}
-
-ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
-                          const Eigen::VectorXd& u, int c, const ExactValueGradient& exact,
-                          int quadrature_degree) {
+  // Point by point into the batch's layout.
   return compute_errors(
       mesh, space, u, c,
       [&](const Eigen::MatrixXd& x, Eigen::MatrixXd& values, Eigen::MatrixXd& gradients) {
         Eigen::VectorXd v(c);
         Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> g(c, 3);
         for (Eigen::Index q = 0; q < x.rows(); ++q) {
-          exact(x.row(q).transpose(), v.data(), g.data());
+          const Eigen::Vector3d p = x.row(q).transpose();
+          exact(p, v.data());
+          exact_gradient(p, g.data());
           values.row(q) = v.transpose();
           for (int i = 0; i < c; ++i)
             for (int j = 0; j < 3; ++j) gradients(q, 3 * i + j) = g(i, j);

@@ -20,9 +20,6 @@ struct ErrorNorms {
 /// exact(x) fills c values, exact_gradient(x) fills a c × 3 row-major Jacobian (∂u_i/∂x_j).
 using ExactValue = std::function<void(const Eigen::Vector3d& x, double* value)>;
 using ExactGradient = std::function<void(const Eigen::Vector3d& x, double* gradient)>;
-/// Both at once (one evaluation where the exact solution is differentiated in forward mode).
-using ExactValueGradient =
-    std::function<void(const Eigen::Vector3d& x, double* value, double* gradient)>;
 
 /// All the quadrature points of one cell at once: x is n_q × 3; fill values (n_q × c) and
 /// gradients (n_q × 3c, column 3i + j = ∂u_i/∂x_j), both already sized. Lets the caller evaluate
@@ -36,8 +33,5 @@ ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
 ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
                           const Eigen::VectorXd& u, int components, const ExactValue& exact,
                           const ExactGradient& exact_gradient, int quadrature_degree = -1);
-ErrorNorms compute_errors(const LagrangeMesh& mesh, const FunctionSpace& space,
-                          const Eigen::VectorXd& u, int components, const ExactValueGradient& exact,
-                          int quadrature_degree = -1);
 
 }  // namespace curvefem::fem
