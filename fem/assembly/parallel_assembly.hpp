@@ -17,6 +17,6 @@ using ElementKernel = std::function<void(int cell, Eigen::MatrixXd& Ke, Eigen::V
 
 void assemble_cells(int num_cells, int local_size, const ElementKernel& compute,
                     const SparsePattern& pattern, const Eigen::MatrixXi& cell_dofs, int block_size,
-                    std::vector<double>* values, Eigen::VectorXd* load);
+                    double* values, Eigen::VectorXd* load);
 
 }  // namespace curvefem::fem

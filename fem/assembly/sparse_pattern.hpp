@@ -18,11 +18,11 @@ class SparsePattern {
   /// Index into the value array of (row, col); -1 if not in the pattern.
   long long find(int row, int col) const;
   /// Adds the (b·n) × (b·n) element matrix of `cell` (local unknown order: node-major,
-  /// component-minor) into `values`.
-  void scatter(int cell, const Eigen::MatrixXd& local, std::vector<double>& values) const;
-  /// Builds a compressed column-major Eigen matrix (the pattern is symmetric, so CSR of A is CSC
-  /// of Aᵀ = A).
-  Eigen::SparseMatrix<double, Eigen::ColMajor, int> matrix(const std::vector<double>& values) const;
+  /// component-minor) into `values` (nonzeros() entries, in the pattern's order).
+  void scatter(int cell, const Eigen::MatrixXd& local, double* values) const;
+  /// A compressed column-major Eigen matrix with this pattern and zero values (the pattern is
+  /// symmetric, so CSR of A is CSC of Aᵀ = A); assemblies scatter into its valuePtr() in place.
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> zero_matrix() const;
 
  private:
   const Eigen::MatrixXi& m_cell_dofs;

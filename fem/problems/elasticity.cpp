@@ -172,7 +172,7 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   Stopwatch watch;
   const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
   const int n = setup.n;
-  std::vector<double> values(static_cast<std::size_t>(setup.pattern.nonzeros()), 0.0);
+  SparseMatrix K = setup.pattern.zero_matrix();
   const int nq = setup.geometry.num_points();
   // Ke(3a+i, 3b+j) = Σ_q w (λ G_ai G_bj + μ G_aj G_bi + δ_ij μ Σ_k G_ak G_bk), G = ∇φ at q.
   // With M = Σ_q w g_q g_qᵀ for the stacked gradients g_q (row i·n + a = G_ai), one matrix
@@ -205,10 +205,9 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
                                        mu * M(j * n + a, i * n + b) + (i == j ? mu * trace : 0.0);
         }
   };
-  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, &values,
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, K.valuePtr(),
                  nullptr);
   Eigen::VectorXd F = external_load(mesh, space, problem, setup);
-  SparseMatrix K = setup.pattern.matrix(values);
   std::vector<DirichletFaceSplit> splits;
   for (const auto& bc : problem.dirichlet) {
     splits.push_back(
@@ -261,7 +260,7 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
   const int n = setup.n;
   NeoHookeanState s;
   s.internal = Eigen::VectorXd::Zero(u.size());
-  std::vector<double> values(with_matrix ? setup.pattern.nonzeros() : 0, 0.0);
+  if (with_matrix) s.K = setup.pattern.zero_matrix();
   std::vector<double> energy(mesh.num_cells(), 0.0);
   std::atomic<bool> valid{true};
   // Tangent: Ke(3a+i, 3b+j) = Σ_q w [μ δij (G Gᵀ)(a,b) + c1 H(a,j) H(b,i) + λ H(a,i) H(b,j)]
@@ -332,14 +331,14 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
     energy[cell] = e;
   };
   assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3,
-                 with_matrix ? &values : nullptr, &s.internal);
+                 with_matrix ? s.K.valuePtr() : nullptr, &s.internal);
   s.valid = valid;
   if (!s.valid) {
+    s.K = SparseMatrix();  // a partial tangent is not handed out
     s.strain_energy = std::numeric_limits<double>::infinity();
     return s;
   }
   for (double e : energy) s.strain_energy += e;
-  if (with_matrix) s.K = setup.pattern.matrix(values);
   return s;
 }
 

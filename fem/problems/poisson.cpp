@@ -23,8 +23,8 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);
   const int n = static_cast<int>(space.cell_dofs.cols());
   const SparsePattern pattern(space.cell_dofs, space.num_dofs, 1);
-  std::vector<double> values(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
   AssembledSystem system;
+  system.K = pattern.zero_matrix();
   system.F = Eigen::VectorXd::Zero(space.num_dofs);
 
   const int nq = geometry.num_points();
@@ -53,7 +53,8 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
     }
     Ke.noalias() = Gw * G.transpose();  // Σ_q κ det J w ∇φ ∇φᵀ as one matrix product
   };
-  assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, &values, &system.F);
+  assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, system.K.valuePtr(),
+                 &system.F);
 
   system.rhs_integral = system.F.sum();
   // Neumann data: evaluated at every face point in parallel (the flux may be expensive, e.g. a
@@ -74,7 +75,6 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
     }
   }
   system.flux_integral = system.F.sum() - system.rhs_integral;
-  system.K = pattern.matrix(values);
   // Robin: ∫ h φ_a φ_b into K and ∫ h u∞ φ_a into F at the same face points (a face's DOFs all
   // belong to its cell, so every entry is in the pattern).
   for (const auto& bc : problem.robin) {

@@ -7,6 +7,9 @@
 // p ≥ 3 edge and face DOFs consistent). Geometry and space are independent (iso-, sub-,
 // super-parametric): DOF points are the images of the reference lattice under the order-k map.
 // The mesh's corner nodes must be its cells' first four canonical nodes (they are, by definition).
+// DOFs are numbered in the order they are first met over the cells taken along a Morton curve of
+// their centroids, so that neighbouring DOFs get neighbouring numbers whatever the mesh file's cell
+// order (a Gmsh volume mesh's is spatially random); assembly and solvers touch memory locally.
 #pragma once
 
 #include <Eigen/Core>
