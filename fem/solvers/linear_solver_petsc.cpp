@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <mutex>
 #include <sstream>
+#include <type_traits>
 
 #include "fem/solvers/linear_solver.hpp"
 #include "meshing/core/error.hpp"
@@ -99,7 +100,7 @@ struct KspState {
   int max_iterations = 0, block_size = 1;
   std::string near_nullspace;
   Preconditioner preconditioner = Preconditioner::gamg;
-  // MatCreateSeqAIJWithArrays keeps pointers to these.
+  // MatCreateSeqAIJWithArrays keeps pointers to these (or to matrix's arrays).
   std::vector<PetscInt> row_ptr, col;
   std::vector<PetscScalar> val;
   Mat M = nullptr;
@@ -136,13 +137,22 @@ std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSol
   st->preconditioner = options.preconditioner;
   const SparseMatrix& A = st->matrix;
   const PetscInt n = static_cast<PetscInt>(A.rows());
-  // CSR from the column-major symmetric matrix: rows of A = columns of A (symmetric).
-  st->row_ptr.assign(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
-  st->col.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-  st->val.assign(A.valuePtr(), A.valuePtr() + A.nonZeros());
-  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, st->row_ptr.data(), st->col.data(),
-                                  st->val.data(), &st->M),
-        "MatCreateSeqAIJWithArrays");
+  // CSR from the column-major symmetric matrix: rows of A = columns of A (symmetric). Where
+  // PETSc's index and scalar types are Eigen's, PETSc uses the kept copy's arrays (it does not
+  // write to them: the preconditioners build their own matrices); otherwise converted copies.
+  if constexpr (std::is_same_v<PetscInt, int> && std::is_same_v<PetscScalar, double>) {
+    SparseMatrix& kept = st->matrix;
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, kept.outerIndexPtr(),
+                                    kept.innerIndexPtr(), kept.valuePtr(), &st->M),
+          "MatCreateSeqAIJWithArrays");
+  } else {
+    st->row_ptr.assign(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
+    st->col.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+    st->val.assign(A.valuePtr(), A.valuePtr() + A.nonZeros());
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, st->row_ptr.data(), st->col.data(),
+                                    st->val.data(), &st->M),
+          "MatCreateSeqAIJWithArrays");
+  }
   Mat M = st->M;
   if (options.block_size > 1) check(MatSetBlockSize(M, options.block_size), "MatSetBlockSize");
   check(MatSetOption(M, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
@@ -213,8 +223,13 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
                      " rows of vectors for " + std::to_string(A.rows()) + " unknowns");
   const Eigen::MatrixXd xyz = use_coordinates ? coordinates : Eigen::MatrixXd();
   const Eigen::MatrixXd vec = use_vectors ? options.near_nullspace_vectors : Eigen::MatrixXd();
-  SparseMatrix compressed = A;
-  compressed.makeCompressed();
+  // The key and the solver's copy need compressed storage; copied here only if A is not.
+  SparseMatrix copy;
+  if (!A.isCompressed()) {
+    copy = A;
+    copy.makeCompressed();
+  }
+  const SparseMatrix& compressed = A.isCompressed() ? A : copy;
   std::shared_ptr<KspState> st;
   if (cache) {
     auto& slot = petsc_cache_slot(*cache);
