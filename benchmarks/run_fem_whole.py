@@ -11,7 +11,7 @@ DOLFINx's form compilation is warmed by one run first (its cache then holds the 
 Writes benchmarks/results/fem_whole_run.md. Run by hand on a quiet machine:
   /usr/bin/python3 benchmarks/run_fem_whole.py [--h 0.04] [--p 2] [--repeat 3]
 Subsets (e.g. a before/after of one binary): --exe B --solvers auto --threads 1,2 --no-peer
---out F.
+--out F, --peer-solvers cg-gamg.
 """
 import argparse
 import json
@@ -36,6 +36,8 @@ ap.add_argument("--solvers", default="auto,direct,cg",
                 help="curvefem solver types, comma-separated")
 ap.add_argument("--threads", default="1,2", help="curvefem thread counts, comma-separated")
 ap.add_argument("--no-peer", action="store_true", help="skip DOLFINx (curvefem rows only)")
+ap.add_argument("--peer-solvers", default="cg-boomeramg,cg-gamg,direct",
+                help="DOLFINx solvers, comma-separated")
 args = ap.parse_args()
 
 work = args.work or tempfile.mkdtemp(prefix="fem_whole_")
@@ -101,7 +103,7 @@ for solver in args.solvers.split(","):
     for threads in (int(t) for t in args.threads.split(",")):
         curvefem(solver, threads)
 if not args.no_peer:
-    for solver in ("cg-boomeramg", "cg-gamg", "direct"):
+    for solver in args.peer_solvers.split(","):
         dolfinx(solver)
 
 best_peer = min((r["wall"] for r in rows if r["code"] == "dolfinx"), default=float("nan"))

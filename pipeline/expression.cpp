@@ -49,6 +49,7 @@ Expression::Expression(std::string text, std::string where, bool normal_allowed)
     e.parser.Eval();  // compiles; reports unknown tokens and syntax errors
     for (const auto& [name, ptr] : e.parser.GetUsedVar())
       m_uses_normal |= name == "nx" || name == "ny" || name == "nz";
+    if (e.parser.GetUsedVar().empty()) m_constant = e.parser.Eval();
   } catch (const mu::Parser::exception_type& err) {
     throw InputError(where + ": bad expression \"" + m_text + "\": " + err.GetMsg());
   }

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace curvefem::pipeline {
@@ -46,12 +47,15 @@ class Expression {
   /// (relative 1e-6) at 6 fixed points (t = 0.37, a fixed unit normal).
   bool differentiated() const { return m_dual != nullptr; }
   const std::string& text() const { return m_text; }
+  /// The value, when the text uses none of x, y, z, t, nx, ny, nz (e.g. "1", "2*pi").
+  std::optional<double> constant() const { return m_constant; }
   bool empty() const { return m_text.empty(); }
 
  private:
   std::string m_text;
   long long m_id = -1;
   bool m_uses_normal = false;
+  std::optional<double> m_constant;
   std::shared_ptr<const DualExpression> m_dual;
 };
 

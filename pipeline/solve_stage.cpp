@@ -168,7 +168,10 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   if (spec.physics == Physics::poisson) {
     fem::PoissonProblem problem;
     const Expression kappa = spec.kappa;
-    problem.kappa = [kappa](const Eigen::Vector3d& x) { return kappa(x); };
+    if (const auto value = kappa.constant())
+      problem.kappa_value = *value;  // lets straight cells use the reference tensors
+    else
+      problem.kappa = [kappa](const Eigen::Vector3d& x) { return kappa(x); };
     if (spec.solve_on == SolveOn::both && !spec.kappa_inside.empty()) {
       // Tags 1-2: inside the surface (slab layer, interior); 3-4: outside.
       const Expression inside = spec.kappa_inside;

@@ -177,25 +177,56 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   // Ke(3a+i, 3b+j) = Σ_q w (λ G_ai G_bj + μ G_aj G_bi + δ_ij μ Σ_k G_ak G_bk), G = ∇φ at q.
   // With M = Σ_q w g_q g_qᵀ for the stacked gradients g_q (row i·n + a = G_ai), one matrix
   // product: Ke(3a+i, 3b+j) = λ M(in+a, jn+b) + μ M(jn+a, in+b) + δ_ij μ Σ_k M(kn+a, kn+b).
+  // Straight cells: with G = B J⁻¹ (B the reference gradients), block (i, j) of M is
+  // det J Σ_kl J⁻¹(k, i) J⁻¹(l, j) R_kl for the reference matrices R_kl = Σ_q w_q B_k B_lᵀ, so
+  // all nine blocks are one product of the n² × 9 table R with a 9 × 9 matrix per cell instead of
+  // a product over the quadrature points.
+  const bool tensor = mesh.order == 1;
+  Eigen::MatrixXd R;
+  if (tensor) {
+    R.setZero(n * n, 9);
+    for (int q = 0; q < nq; ++q) {
+      const auto& B = setup.basis.gradients[q];
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l)
+          R.col(3 * k + l).reshaped(n, n).noalias() +=
+              setup.rule->weights[q] * B.col(k) * B.col(l).transpose();
+    }
+  }
   const ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd&) {
     const ElasticMaterial material =
         problem.cell_material ? problem.cell_material(cell) : problem.material;
     const double lambda = material.lambda(), mu = material.mu();
     thread_local CellGeometry g;  // per-thread scratch: no allocation per cell after the first
-    thread_local Eigen::MatrixXd S, Sw, M, G;
-    S.resize(3 * n, nq);
-    Sw.resize(3 * n, nq);
+    thread_local Eigen::MatrixXd S, Sw, M, G, blocks;
     M.resize(3 * n, 3 * n);
-    G.resize(n, 3);
     setup.geometry.evaluate(cell, g);
-    for (int q = 0; q < nq; ++q) {
-      G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
-      for (int i = 0; i < 3; ++i) {
-        S.col(q).segment(i * n, n) = G.col(i);
-        Sw.col(q).segment(i * n, n) = g.det_w[q] * G.col(i);
+    if (tensor) {
+      const Eigen::Matrix3d& Ji = g.jacobian_inv[0];
+      const double det = g.det_w[0] / setup.rule->weights[0];
+      Eigen::Matrix<double, 9, 9> A;  // A((i, j), (k, l)) = det J⁻¹(k, i) J⁻¹(l, j)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          for (int k = 0; k < 3; ++k)
+            for (int l = 0; l < 3; ++l) A(3 * i + j, 3 * k + l) = det * Ji(k, i) * Ji(l, j);
+      blocks.resize(n * n, 9);
+      blocks.noalias() = R * A.transpose();
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          M.block(i * n, j * n, n, n) = blocks.col(3 * i + j).reshaped(n, n);
+    } else {
+      S.resize(3 * n, nq);
+      Sw.resize(3 * n, nq);
+      G.resize(n, 3);
+      for (int q = 0; q < nq; ++q) {
+        G.noalias() = setup.basis.gradients[q] * g.jacobian_inv[q];
+        for (int i = 0; i < 3; ++i) {
+          S.col(q).segment(i * n, n) = G.col(i);
+          Sw.col(q).segment(i * n, n) = g.det_w[q] * G.col(i);
+        }
       }
+      M.noalias() = Sw * S.transpose();
     }
-    M.noalias() = Sw * S.transpose();
     for (int b = 0; b < n; ++b)
       for (int j = 0; j < 3; ++j)
         for (int a = 0; a < n; ++a) {

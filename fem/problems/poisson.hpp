@@ -19,7 +19,8 @@
 namespace curvefem::fem {
 
 struct PoissonProblem {
-  ScalarField kappa;  ///< empty = 1
+  ScalarField kappa;         ///< empty: kappa_value everywhere
+  double kappa_value = 1.0;  ///< κ where kappa and cell_kappa are empty (a constant coefficient)
   /// Optional, overrides kappa: κ per cell and point (e.g. a coefficient per region of the mesh).
   std::function<double(int cell, const Eigen::Vector3d& x)> cell_kappa;
   ScalarField rhs;  ///< empty = 0

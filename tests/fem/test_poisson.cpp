@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "fem/problems/error_norms.hpp"
 #include "fem/problems/poisson.hpp"
@@ -172,5 +173,45 @@ TEST(Poisson, TheBatchedLoadEqualsThePointwiseOne) {
     ASSERT_EQ(a.F.size(), b.F.size());
     EXPECT_GT(a.F.norm(), 1e-3);
     EXPECT_LE((a.F - b.F).lpNorm<Eigen::Infinity>(), 1e-14 * a.F.lpNorm<Eigen::Infinity>());
+  }
+}
+
+TEST(Poisson, StraightCellsWithAConstantKappaUseTheReferenceTensorsExactly) {
+  // A constant κ (kappa_value) on straight cells takes the reference-tensor kernel; a κ given as a
+  // field takes the point loop. Both must give the same stiffness matrix to rounding, on generic
+  // (perturbed) tets, P1..P4, with a κ other than 1; and on a curved mesh (order 2) the constant
+  // κ keeps the point loop, so the two agree there too.
+  LagrangeMesh mesh = make_cube_tets(3);
+  std::uint32_t state = 12345;
+  auto jitter = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return (double(state >> 8) / double(1u << 24) - 0.5) * 0.08;  // ± 0.04 of a 1/3 cell
+  };
+  for (Eigen::Index v = 0; v < mesh.nodes.rows(); ++v)
+    for (int d = 0; d < 3; ++d) mesh.nodes(v, d) += jitter();
+  const double kappa = 2.75;
+  for (int k : {1, 2}) {
+    const LagrangeMesh m =
+        k == 1 ? mesh : elevate_order(mesh, 2, [](const Eigen::Vector3d& x) { return x; });
+    for (int p = 1; p <= 4; ++p) {
+      SCOPED_TRACE("order " + std::to_string(k) + ", P" + std::to_string(p));
+      const fem::FunctionSpace space = fem::build_function_space(m, p);
+      fem::PoissonProblem field;
+      field.kappa = [kappa](const Eigen::Vector3d&) { return kappa; };
+      fem::PoissonProblem constant;
+      constant.kappa_value = kappa;
+      const fem::AssembledSystem a = fem::assemble_poisson(m, space, field);
+      const fem::AssembledSystem b = fem::assemble_poisson(m, space, constant);
+      ASSERT_EQ(a.K.nonZeros(), b.K.nonZeros());
+      const double scale = Eigen::Map<const Eigen::VectorXd>(a.K.valuePtr(), a.K.nonZeros())
+                               .lpNorm<Eigen::Infinity>();
+      EXPECT_GT(scale, 1.0);
+      const Eigen::VectorXd diff =
+          Eigen::Map<const Eigen::VectorXd>(a.K.valuePtr(), a.K.nonZeros()) -
+          Eigen::Map<const Eigen::VectorXd>(b.K.valuePtr(), b.K.nonZeros());
+      EXPECT_LE(diff.lpNorm<Eigen::Infinity>(), 1e-13 * scale);
+      // The row sums of a stiffness matrix vanish (constants are in its kernel).
+      EXPECT_LE((b.K * Eigen::VectorXd::Ones(b.K.cols())).lpNorm<Eigen::Infinity>(), 1e-12 * scale);
+    }
   }
 }
