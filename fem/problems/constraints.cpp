@@ -1,6 +1,7 @@
 #include "fem/problems/constraints.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include "meshing/core/error.hpp"
 
@@ -75,11 +76,11 @@ LinearSolverOptions reduced_options(const LinearSolverOptions& options,
   return out;
 }
 
-}  // namespace
-
-Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,
-                                  const Constraints& c, const LinearSolverOptions& options,
-                                  LinearSolveInfo* info) {
+// The reduced solve; `owned`, if set, is K itself, released once K_ff and the right-hand side
+// are built (before the solver's own copies and preconditioner).
+Eigen::VectorXd reduce_and_solve(const SparseMatrix& K, const Eigen::VectorXd& F,
+                                 const Constraints& c, const LinearSolverOptions& options,
+                                 LinearSolveInfo* info, SparseMatrix* owned) {
   const int n = static_cast<int>(K.rows());
   CF_VERIFY(static_cast<int>(c.fixed.size()) == n && c.values.size() == n,
             "constraints do not match the system size");
@@ -120,10 +121,25 @@ Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& 
     if (rc >= 0) outer[rc + 1] = static_cast<int>(k);
   }
   CF_VERIFY(k == nnz, "reduced system: entry count mismatch");
+  if (owned) *owned = SparseMatrix();
   const Eigen::VectorXd uf = solve_spd(Kff, rhs, reduced_options(options, reduced, m), info);
   Eigen::VectorXd u(n);
   for (int i = 0; i < n; ++i) u[i] = reduced[i] >= 0 ? uf[reduced[i]] : c.values[i];
   return u;
+}
+
+}  // namespace
+
+Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,
+                                  const Constraints& c, const LinearSolverOptions& options,
+                                  LinearSolveInfo* info) {
+  return reduce_and_solve(K, F, c, options, info, nullptr);
+}
+
+Eigen::VectorXd solve_constrained(SparseMatrix&& K, const Eigen::VectorXd& F, const Constraints& c,
+                                  const LinearSolverOptions& options, LinearSolveInfo* info) {
+  SparseMatrix owned = std::move(K);
+  return reduce_and_solve(owned, F, c, options, info, &owned);
 }
 
 }  // namespace curvefem::fem

@@ -29,5 +29,10 @@ void for_each_boundary_dof(const FunctionSpace& space, const std::vector<char>& 
 Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& F,
                                   const Constraints& constraints,
                                   const LinearSolverOptions& options, LinearSolveInfo* info);
+/// The same, taking K over: it is freed as soon as the reduced system is built, so the solve
+/// (factorization or AMG set-up, the peak of a run) does not hold K beside K_ff.
+Eigen::VectorXd solve_constrained(SparseMatrix&& K, const Eigen::VectorXd& F,
+                                  const Constraints& constraints,
+                                  const LinearSolverOptions& options, LinearSolveInfo* info);
 
 }  // namespace curvefem::fem

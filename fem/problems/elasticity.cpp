@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "fem/assembly/element_geometry.hpp"
 #include "fem/assembly/face_integration.hpp"
@@ -271,7 +272,7 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   }
   {
     ScopedTimer t(result.timings, "solve");
-    result.u = solve_constrained(K, F, constraints, options, &result.solve);
+    result.u = solve_constrained(std::move(K), F, constraints, options, &result.solve);
   }
   return result;
 }

@@ -1,5 +1,7 @@
 #include "fem/problems/poisson.hpp"
 
+#include <utility>
+
 #include "fem/assembly/element_geometry.hpp"
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
@@ -223,7 +225,7 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
   }
   {
     ScopedTimer t(result.timings, "solve");
-    result.u = solve_constrained(system.K, system.F, constraints, solver, &result.solve);
+    result.u = solve_constrained(std::move(system.K), system.F, constraints, solver, &result.solve);
   }
   return result;
 }
