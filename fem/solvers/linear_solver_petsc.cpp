@@ -100,7 +100,7 @@ struct KspState {
   int max_iterations = 0, block_size = 1;
   std::string near_nullspace;
   Preconditioner preconditioner = Preconditioner::gamg;
-  // MatCreateSeqAIJWithArrays keeps pointers to these (or to matrix's arrays).
+  // MatCreateSeqAIJWithArrays keeps pointers to these (or to matrix's, or the caller's, arrays).
   std::vector<PetscInt> row_ptr, col;
   std::vector<PetscScalar> val;
   Mat M = nullptr;
@@ -123,11 +123,14 @@ struct KspState {
   }
 };
 
+// `keep`: the state goes into a cache and outlives `compressed`, so it holds a copy (the cache
+// key, whose arrays PETSc then uses); otherwise PETSc uses `compressed`'s own arrays, which outlive
+// the state (no copy of the matrix at all).
 std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSolverOptions& options,
                                  const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& vectors,
-                                 const Eigen::MatrixXd& null_space) {
+                                 const Eigen::MatrixXd& null_space, bool keep) {
   auto st = std::make_shared<KspState>();
-  st->matrix = compressed;
+  if (keep) st->matrix = compressed;
   st->null_space = null_space;
   st->coordinates = coordinates;
   st->vectors = vectors;
@@ -135,15 +138,15 @@ std::shared_ptr<KspState> set_up(const SparseMatrix& compressed, const LinearSol
   st->max_iterations = options.max_iterations;
   st->block_size = options.block_size;
   st->preconditioner = options.preconditioner;
-  const SparseMatrix& A = st->matrix;
+  const SparseMatrix& A = keep ? st->matrix : compressed;
   const PetscInt n = static_cast<PetscInt>(A.rows());
   // CSR from the column-major symmetric matrix: rows of A = columns of A (symmetric). Where
   // PETSc's index and scalar types are Eigen's, PETSc uses the kept copy's arrays (it does not
   // write to them: the preconditioners build their own matrices); otherwise converted copies.
   if constexpr (std::is_same_v<PetscInt, int> && std::is_same_v<PetscScalar, double>) {
-    SparseMatrix& kept = st->matrix;
-    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, kept.outerIndexPtr(),
-                                    kept.innerIndexPtr(), kept.valuePtr(), &st->M),
+    SparseMatrix& arrays = const_cast<SparseMatrix&>(A);  // PETSc does not write to them
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, arrays.outerIndexPtr(),
+                                    arrays.innerIndexPtr(), arrays.valuePtr(), &st->M),
           "MatCreateSeqAIJWithArrays");
   } else {
     st->row_ptr.assign(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
@@ -239,12 +242,12 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
       info.reused_factorization = true;
     } else {
       slot.reset();
-      st = set_up(compressed, options, xyz, vec, null_space);
+      st = set_up(compressed, options, xyz, vec, null_space, true);
       slot = st;
     }
     count_cache_use(*cache, info.reused_factorization);
   } else {
-    st = set_up(compressed, options, xyz, vec, null_space);
+    st = set_up(compressed, options, xyz, vec, null_space, false);
   }
   info.near_nullspace = st->near_nullspace;
   info.setup_s = watch.seconds();
