@@ -129,8 +129,14 @@ def main():
                   f"| max rank / 1 rank | 1 | "
                   f"{max(r2['mpi']['peak_rss_mb_per_rank']) / r1['peak_rss_mb']:.2f} |", ""]
         print("\n".join(lines[-20:]), flush=True)
+    # A hand-written "## Reading" section of an existing file is kept after the new tables.
+    kept = ""
+    if os.path.exists(a.results):
+        old = open(a.results).read()
+        if "\n## Reading" in old:
+            kept = old[old.index("\n## Reading"):]
     with open(a.results, "w") as f:
-        f.write("\n".join(lines) + "\n")
+        f.write("\n".join(lines) + "\n" + kept)
 
 
 if __name__ == "__main__":

@@ -487,6 +487,14 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
       part.row_ptr.reserve(m + 1);
       part.row_ptr.push_back(0);
       part.b.resize(m);
+      // Exact sizes: grown by push_back, the part's arrays kept up to twice their entries.
+      std::size_t entries = 0;
+      for (int k = first; k < last; ++k) {
+        const int old = r.old_of[std::size_t(k / bs)] * bs + k % bs;
+        entries += std::size_t(C.outerIndexPtr()[old + 1] - C.outerIndexPtr()[old]);
+      }
+      part.cols.reserve(entries);
+      part.values.reserve(entries);
       std::vector<std::pair<PetscInt, double>> row;
       for (int k = first; k < last; ++k) {
         const int old = r.old_of[std::size_t(k / bs)] * bs + k % bs;
