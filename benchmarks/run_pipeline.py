@@ -255,7 +255,7 @@ def times(rep):
     t = rep["time_s"]
     mesh = sum(t.get(k, 0.0) for k in ("load_surface", "meshing", "load_mesh"))
     solve = sum(t.get(k, 0.0) for k in ("build_space", "assembly", "solve", "newton"))
-    return mesh, solve, t["total"], t["total"] - t.get("errors", 0.0)
+    return mesh, solve, t["total"], t["total"] - t.get("errors", 0.0) - t.get("error_estimate", 0.0)
 
 
 def fmt(x, spec="%.3g"):
