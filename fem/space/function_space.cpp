@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/morton.hpp"
 
 namespace curvefem::fem {
 namespace {
@@ -42,26 +43,12 @@ std::vector<int> spatial_cell_order(const LagrangeMesh& mesh) {
     for (int i = 0; i < 4; ++i) sum += mesh.nodes.row(mesh.cells(c, i));
     centroid.row(c) = sum / 4;
   }
-  const Eigen::RowVector3d lo = centroid.colwise().minCoeff();
-  const double extent = (centroid.colwise().maxCoeff() - lo).maxCoeff();
-  const double scale = extent > 0 ? double((1 << 21) - 1) / extent : 0;
-  // Spreads the low 21 bits of v to every third bit.
-  auto spread = [](std::uint64_t v) {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-  };
+  const Eigen::Vector3d lo = centroid.colwise().minCoeff().transpose();
+  const double extent =
+      std::max((centroid.colwise().maxCoeff().transpose() - lo).maxCoeff(), 1e-300);
   std::vector<std::uint64_t> key(static_cast<std::size_t>(nc));
-  for (int c = 0; c < nc; ++c) {
-    std::uint64_t k = 0;
-    for (int a = 0; a < 3; ++a)
-      k |= spread(static_cast<std::uint64_t>((centroid(c, a) - lo[a]) * scale)) << a;
-    key[static_cast<std::size_t>(c)] = k;
-  }
+  for (int c = 0; c < nc; ++c)
+    key[static_cast<std::size_t>(c)] = morton_key(centroid.row(c).transpose(), lo, extent);
   std::sort(order.begin(), order.end(), [&](int a, int b) {
     return key[std::size_t(a)] != key[std::size_t(b)] ? key[std::size_t(a)] < key[std::size_t(b)]
                                                       : a < b;

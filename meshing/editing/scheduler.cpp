@@ -14,6 +14,7 @@
 #include <unordered_map>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/morton.hpp"
 
 // oneTBB's library is not built with ThreadSanitizer, so TSan cannot see that the tasks of a
 // parallel_for start after the code before it and finish before arena.execute returns. These
@@ -44,16 +45,6 @@ std::string PassStats::summary() const {
 
 namespace {
 
-std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
 void add(PassStats& into, const PassStats& s) {
   into.attempted += s.attempted;
   into.succeeded += s.succeeded;
@@ -83,9 +74,7 @@ std::vector<int> morton_partition(std::size_t n, const std::function<Eigen::Vect
   const double extent = std::max((hi - lo).maxCoeff(), 1e-300);
   std::vector<std::uint64_t> code(n);
   for (std::size_t v = 0; v < n; ++v) {
-    const Eigen::Vector3d q = (p[v] - lo) / extent * double((1 << 21) - 1);
-    code[v] = spread_bits(std::uint64_t(q.x())) | spread_bits(std::uint64_t(q.y())) << 1 |
-              spread_bits(std::uint64_t(q.z())) << 2;
+    code[v] = morton_key(p[v], lo, extent);
   }
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
