@@ -13,6 +13,17 @@
 
 namespace curvefem::fem {
 
+namespace {
+
+/// κ at point x of a cell: the per-cell field, else the field, else the constant.
+double kappa_at(const PoissonProblem& problem, int cell, const Eigen::Vector3d& x) {
+  return problem.cell_kappa ? problem.cell_kappa(cell, x)
+         : problem.kappa    ? problem.kappa(x)
+                            : problem.kappa_value;
+}
+
+}  // namespace
+
 AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
                                  const PoissonProblem& problem) {
   const int p = space.degree;
@@ -77,9 +88,7 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
     Gw.resize(n, 3 * nq);
     for (int q = 0; q < nq; ++q) {
       const Eigen::Vector3d x = g.x.row(q).transpose();
-      const double kappa = problem.cell_kappa ? problem.cell_kappa(cell, x)
-                           : problem.kappa    ? problem.kappa(x)
-                                              : problem.kappa_value;
+      const double kappa = kappa_at(problem, cell, x);
       G.middleCols<3>(3 * q).noalias() = basis.gradients[q] * g.jacobian_inv[q];
       Gw.middleCols<3>(3 * q) = (g.det_w[q] * kappa) * G.middleCols<3>(3 * q);
     }
@@ -154,9 +163,7 @@ void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
     const int cell = P.cell[k];
     const Eigen::Vector3d x = P.x.row(k).transpose();
     const Eigen::Vector3d normal = P.normal.row(k).transpose();
-    const double kappa = problem.cell_kappa ? problem.cell_kappa(cell, x)
-                         : problem.kappa    ? problem.kappa(x)
-                                            : problem.kappa_value;
+    const double kappa = kappa_at(problem, cell, x);
     const double h =
         nitsche_length(mesh, cell, space.boundary_faces[std::size_t(P.face[k])].opposite);
     const double beta = kappa * nitsche_penalty(space.degree, h);

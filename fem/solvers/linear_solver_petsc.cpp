@@ -94,7 +94,7 @@ namespace {
 /// A KSP (CG + GAMG) set up for one matrix, with what it was set up for: load cases with the same
 /// matrix and options reuse it (FactorizationCache), GAMG's hierarchy included.
 struct KspState {
-  SparseMatrix matrix;  // compressed copy (the key, with the options below)
+  SparseMatrix matrix;  // cached states only: a compressed copy (the key, with the options below)
   Eigen::MatrixXd null_space, coordinates, vectors;
   double rtol = 0;
   int max_iterations = 0, block_size = 1;

@@ -212,3 +212,46 @@ TEST(LinearSolver, TheBlasThreadCountFollowsTheRunsThreadCount) {
   EXPECT_FALSE(fem::set_blas_threads(0));  // refused: the count stays
   EXPECT_EQ(fem::blas_threads(), 2);
 }
+
+TEST(LinearSolver, CgWithoutACacheLeavesTheCallersMatrixUntouched) {
+  // Without a cache, PETSc works on the caller's own arrays (linear_solver_petsc.cpp, no copy):
+  // every preconditioner, and GAMG with rigid-body modes in blocks of 3, must leave them bitwise
+  // as they were.
+  const int n = 300;
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (int i = 0; i < n; ++i) {
+    t.emplace_back(i, i, i == 0 ? 3.0 : 2.0 + 0.01 * (i % 7));
+    if (i + 1 < n) {
+      t.emplace_back(i, i + 1, -1.0);
+      t.emplace_back(i + 1, i, -1.0);
+    }
+  }
+  fem::SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  const fem::SparseMatrix before = A;
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1, 2);
+  Eigen::MatrixXd xyz(n / 3, 3);
+  for (int i = 0; i < n / 3; ++i) xyz.row(i) << 0.1 * i, std::sin(0.3 * i), 0.05 * i * i;
+  for (int variant = 0; variant < 4; ++variant) {
+    SCOPED_TRACE(variant);
+    fem::LinearSolverOptions o = cg(variant == 3);
+    o.preconditioner = variant == 1   ? fem::Preconditioner::hypre
+                       : variant == 2 ? fem::Preconditioner::ml
+                                      : fem::Preconditioner::gamg;
+    if (variant == 3) {
+      o.block_size = 3;
+      o.near_nullspace_coordinates = xyz;
+    }
+    fem::LinearSolveInfo info;
+    const Eigen::VectorXd x = fem::solve_spd(A, b, o, &info);
+    EXPECT_LT(info.relative_residual, 1e-8);
+    ASSERT_EQ(A.nonZeros(), before.nonZeros());
+    for (Eigen::Index k = 0; k < A.nonZeros(); ++k) {
+      ASSERT_EQ(A.valuePtr()[k], before.valuePtr()[k]) << k;
+      ASSERT_EQ(A.innerIndexPtr()[k], before.innerIndexPtr()[k]) << k;
+    }
+    for (Eigen::Index c = 0; c <= n; ++c)
+      ASSERT_EQ(A.outerIndexPtr()[c], before.outerIndexPtr()[c]);
+  }
+}

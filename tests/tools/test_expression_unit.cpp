@@ -151,3 +151,15 @@ TEST(Expression, TheBatchedSinAndCosAreWithinTwoUlpOfGlibc) {
   curvefem::pipeline::sincos_batch(n, x.data(), nullptr, only.data());
   for (int i = 0; i < n; ++i) ASSERT_TRUE(only[i] == c[i] || std::isnan(c[i]));
 }
+
+TEST(Expression, AConstantIsRecognizedOnlyWithoutVariables) {
+  // Expression::constant() lets the pipeline pass a constant κ as a number (fem's reference-
+  // tensor kernel on straight cells); any use of x, y, z, t or the normal is not constant.
+  ASSERT_TRUE(Expression("1", "/k").constant().has_value());
+  EXPECT_EQ(*Expression("1", "/k").constant(), 1.0);
+  ASSERT_TRUE(Expression("2*pi + sin(0.5)^2", "/k").constant().has_value());
+  EXPECT_DOUBLE_EQ(*Expression("2*pi + sin(0.5)^2", "/k").constant(),
+                   2 * M_PI + std::sin(0.5) * std::sin(0.5));
+  for (const char* text : {"x", "1 + 0*y", "z^0", "t", "2*nx"})
+    EXPECT_FALSE(Expression(text, "/k", true).constant().has_value()) << text;
+}
