@@ -118,6 +118,43 @@ Eigen::MatrixXd evaluate_on_surface(const fem::FunctionSpace& space, const Eigen
   return out;
 }
 
+Eigen::MatrixXd evaluate_on_surface_extended(const LagrangeMesh& mesh,
+                                             const fem::FunctionSpace& space,
+                                             const Eigen::VectorXd& u, int components,
+                                             const SurfaceSamples& samples,
+                                             const Eigen::MatrixXd& targets) {
+  CF_VERIFY(u.size() == Eigen::Index(space.num_dofs) * components,
+            "surface transfer: field size does not match the space");
+  CF_VERIFY(targets.rows() == samples.cell.size() && targets.cols() == 3,
+            "surface transfer: one target point per sample expected");
+  CF_VERIFY(mesh.kind == CellKind::tetrahedron && mesh.num_cells() == space.cell_dofs.rows(),
+            "surface transfer: the mesh is not the space's");
+  Eigen::MatrixXd out = Eigen::MatrixXd::Constant(samples.cell.size(), components, k_nan);
+  for (Eigen::Index v = 0; v < samples.cell.size(); ++v) {
+    const int c = samples.cell[v];
+    if (c < 0) continue;
+    const Eigen::Vector3d xi = samples.xi.row(v).transpose();
+    const Eigen::VectorXd phi = lagrange_shape_values(CellKind::tetrahedron, space.degree, xi);
+    const Eigen::MatrixXd dphi = lagrange_shape_gradients(CellKind::tetrahedron, space.degree, xi);
+    const Eigen::Matrix3d J = mesh.jacobian(c, xi);
+    const double det = J.determinant();
+    if (!(std::abs(det) > 0)) continue;
+    // x_v − φ(v) in reference coordinates: J⁻¹ d, so ∇u_h · d = (∂u/∂ξ) · J⁻¹ d.
+    const Eigen::Vector3d d = targets.row(v).transpose() - mesh.map(c, xi);
+    const Eigen::Vector3d dxi = J.inverse() * d;
+    for (int i = 0; i < components; ++i) {
+      double value = 0, slope = 0;
+      for (Eigen::Index a = 0; a < phi.size(); ++a) {
+        const double ua = u[Eigen::Index(space.cell_dofs(c, a)) * components + i];
+        value += phi[a] * ua;
+        slope += dphi.row(a).dot(dxi) * ua;
+      }
+      out(v, i) = value + slope;
+    }
+  }
+  return out;
+}
+
 SurfaceErrors surface_errors(const SurfaceMesh& input, const Eigen::MatrixXd& values,
                              const ExactFn& exact) {
   const int nv = input.num_vertices(), c = int(values.cols());

@@ -35,6 +35,18 @@ Eigen::MatrixXd sample_positions(const LagrangeMesh& mesh, const SurfaceSamples&
 Eigen::MatrixXd evaluate_on_surface(const fem::FunctionSpace& space, const Eigen::VectorXd& u,
                                     int components, const SurfaceSamples& samples);
 
+/// The field's first-order extension from φ(v) to `targets` row v (usually the input vertex v):
+///   u_h(φ(v)) + ∇u_h(φ(v)) · (x_v − φ(v)),
+/// ∇u_h taken in the tet of φ(v) (basis gradients through the inverse of the tet's Jacobian at
+/// ξ). φ(v) lies on the mesh's boundary, up to the distance bound away from v; evaluating u_h
+/// there alone carries an error of ∇u·(φ(v) − v), first order in that distance, which the term
+/// removes (second order left). #V × c, NaN rows without an image (or a singular Jacobian).
+Eigen::MatrixXd evaluate_on_surface_extended(const LagrangeMesh& mesh,
+                                             const fem::FunctionSpace& space,
+                                             const Eigen::VectorXd& u, int components,
+                                             const SurfaceSamples& samples,
+                                             const Eigen::MatrixXd& targets);
+
 /// Errors of values at the input vertices against exact(x_v) evaluated at the *input* vertex
 /// positions (the data was pulled from the input, so u_h(φ(v)) approximates u(v); this includes
 /// the geometric error of the boundary).

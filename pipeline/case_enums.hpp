@@ -25,6 +25,8 @@ enum class SolveGeometry { iso, mesh };                 ///< discretization.geom
 enum class SolverType { automatic, direct, cg };        ///< solver.type
 enum class Preconditioner { gamg, hypre, ml };          ///< solver.preconditioner
 enum class BoundaryType { dirichlet, neumann, robin };  ///< boundary_conditions[].type
+enum class SurfaceValues { extended, image };           ///< output.surface_values
+enum class BoundaryValuesAt { input, mesh, shifted };   ///< discretization.boundary_values_at
 
 /// The spelling of every value, in the enum's order ("" for a value no file spells: none).
 template <class E>
@@ -69,6 +71,8 @@ CURVEFEM_ENUM_NAMES(SolveGeometry, "iso", "mesh")
 CURVEFEM_ENUM_NAMES(SolverType, "auto", "direct", "cg")
 CURVEFEM_ENUM_NAMES(Preconditioner, "gamg", "hypre", "ml")
 CURVEFEM_ENUM_NAMES(BoundaryType, "dirichlet", "neumann", "robin")
+CURVEFEM_ENUM_NAMES(SurfaceValues, "extended", "image")
+CURVEFEM_ENUM_NAMES(BoundaryValuesAt, "input", "mesh", "shifted")
 #undef CURVEFEM_ENUM_NAMES
 
 }  // namespace curvefem::pipeline

@@ -646,6 +646,13 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*d, "target_error")) {
       c.target_error = r.number(*v, "/discretization/target_error", "discretization.target_error");
     }
+    if (const json* v = r.get(*d, "boundary_values_at")) {
+      c.boundary_values_at = r.choice_of<BoundaryValuesAt>(*v, "/discretization/boundary_values_at",
+                                                           "discretization.boundary_values_at");
+      if (c.boundary_values_at == BoundaryValuesAt::shifted && c.physics == Physics::neo_hookean)
+        fail("/discretization/boundary_values_at",
+             "\"shifted\" is for the linear problems (poisson, linear_elasticity)", r.file);
+    }
     if (const json* v = r.get(*d, "geometry")) {
       c.geometry =
           r.choice_of<SolveGeometry>(*v, "/discretization/geometry", "discretization.geometry");
@@ -666,6 +673,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
         c.quadrature = r.integer(*v, "/discretization/quadrature", "discretization.quadrature");
     }
   }
+  // Neo-Hookean without the key reads on the input ("shifted" given is refused above).
+  if (c.physics == Physics::neo_hookean && c.boundary_values_at == BoundaryValuesAt::shifted)
+    c.boundary_values_at = BoundaryValuesAt::input;
   if (!partial_dirichlet_given)  // measured trade-off: cases/README.md
     c.partial_dirichlet =
         c.physics == Physics::poisson ? PartialDirichlet::nitsche : PartialDirichlet::nodal;
@@ -727,6 +737,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   if (const json* o = r.get(j, "output")) {
     r.only_keys(*o, "/output", "output");
     if (const json* v = r.get(*o, "dir")) out = r.string(*v, "/output/dir");
+    if (const json* v = r.get(*o, "surface_values"))
+      c.surface_values =
+          r.choice_of<SurfaceValues>(*v, "/output/surface_values", "output.surface_values");
   }
   c.output_dir = output_override.empty() ? resolve(out) : std::filesystem::path(output_override);
 
@@ -818,7 +831,8 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   res["discretization"] = {{"degree", c.degree},
                            {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
                            {"partial_dirichlet", c.partial_dirichlet},
-                           {"geometry", c.geometry}};
+                           {"geometry", c.geometry},
+                           {"boundary_values_at", c.boundary_values_at}};
   if (c.target_error > 0) res["discretization"]["target_error"] = c.target_error;
   const int comps = c.components();
   auto write_load = [&](json& out, const std::vector<Expression>& rhs,
@@ -866,7 +880,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
                    {"max_iterations", c.solver_max_iterations},
                    {"near_nullspace", c.solver_near_nullspace},
                    {"preconditioner", c.solver_preconditioner}};
-  res["output"] = {{"dir", c.output_dir.string()}};
+  res["output"] = {{"dir", c.output_dir.string()}, {"surface_values", c.surface_values}};
   c.resolved = res;
   return c;
 }

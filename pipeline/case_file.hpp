@@ -116,6 +116,8 @@ struct CaseSpec {
   /// (meshing/core/geometry_degree.hpp), certified first; "mesh": on the mesh's own maps
   /// (super-parametric).
   SolveGeometry geometry = SolveGeometry::iso;
+  /// curved | dense; "shifted" by default, "input" for neo_hookean (linear problems only).
+  BoundaryValuesAt boundary_values_at = BoundaryValuesAt::shifted;
   std::vector<Expression> rhs;  ///< empty, 1 or 3
   std::vector<BoundaryConditionSpec> boundary_conditions;
   std::vector<Expression> exact;  ///< empty, 1 or 3
@@ -136,6 +138,7 @@ struct CaseSpec {
   bool solver_near_nullspace = true;  ///< cg: rigid-body modes for GAMG (elasticity)
   Preconditioner solver_preconditioner = Preconditioner::gamg;  ///< cg
   std::filesystem::path output_dir;                             ///< resolved
+  SurfaceValues surface_values = SurfaceValues::extended;       ///< output.surface_values
   nlohmann::json resolved;                                      ///< the case with defaults, as run
   int components() const { return physics == Physics::poisson ? 1 : 3; }
 };

@@ -160,6 +160,10 @@ const std::vector<CaseKeyRow> k_rows = {
      .type = R"md(`"nitsche"` \| `"nodal"`)md",
      .default_text = R"md(Poisson `"nitsche"`; elasticity `"nodal"` (Neo-Hookean's only mode))md",
      .doc = R"md(a boundary face of the mesh that a Dirichlet selection covers only in part (see "Boundary data on the dense input"): imposed weakly by Nitsche's method on the face quadrature points the selection covers, or by fixing the DOFs it covers (the others stay free, and the flux is missing from the weak form on the face's Dirichlet part))md"},
+    {.keys = {{.path = "discretization.boundary_values_at", .type = T::string, .allowed = {"input", "mesh", "shifted"}}},
+     .type = R"md(`"input"` \| `"mesh"` \| `"shifted"`)md",
+     .default_text = R"md(`"shifted"`; Neo-Hookean `"input"`)md",
+     .doc = R"md(methods `curved` and `dense`: where a boundary condition's `value` (and Robin's `h`) is evaluated. `input`: at φ⁻¹(x) on the dense input, the data painted there (see "Boundary data on the dense input"); on a curved mesh the boundary lies up to ε from the input, so the data carry an error up to ε·|∇u| that no degree removes. `mesh`: at the mesh's own point x, for values that are fields in space (an analytic temperature, displacement or pressure), consistent with the domain solved on. `shifted` (curved; Poisson and linear elasticity): painted data read on the input as with `input`, the Dirichlet values then continued from φ⁻¹(x) to x with the recovered gradient of the solution, g(φ⁻¹(x)) + G(x)·(x − φ⁻¹(x)) (the shifted boundary method's Taylor condition), by two re-solves with the same stiffness; report.json `physics_details.boundary_shift`. Selections are judged on the input either way. Measured on six dev meshes (5.9k–52k faces), k = 3, ε = 1%, Poisson (benchmarks/results/accuracy.md), relative L2 error against `input`: `shifted` 2.6–5.0 times smaller at P3 (1.0–4.7 at P2, 2.7–4.7 at P4), `mesh` 2.6–46 at P3, 17–406 at P4. Dense meshes: the same (φ = identity))md"},
     {.keys = {{.path = "discretization.geometry", .type = T::string, .default_json = R"("iso")", .allowed = {"iso", "mesh"}}},
      .type = R"md(`"iso"` \| `"mesh"`)md",
      .doc = R"md(a mesh of order k above the degree p: `iso` solves on the degree-p interpolant of every tet's map (meshing/core/geometry_degree.hpp; the corners and the DOF points stay where they are, tets whose interpolant is not certified positive keep their map: `solve_geometry` in report.json, volume.vtu shows the solved geometry); `mesh` solves on the order-k maps (super-parametric). On a degree-k > p map the degree-p space misses the linear fields, rigid rotations included: P2 elasticity on the curved elephant at k = 3 came out at 0.39 of the reference displacement (16% RMS error) with `mesh`, 2.3% with `iso` (k = 2: 1.3%; issue 20, meshing/curved/README.md))md"},
@@ -258,6 +262,9 @@ const std::vector<CaseKeyRow> k_rows = {
     {.keys = {{.path = "output.dir", .type = T::path, .default_json = R"("out")"}},
      .type = R"md(path)md",
      .doc = R"md(results: `volume.vtu`, `surface.vtu`, `result.pvd`, `resolved_case.json`, `report.json` (last))md"},
+    {.keys = {{.path = "output.surface_values", .type = T::string, .default_json = R"("extended")", .allowed = {"extended", "image"}}},
+     .type = R"md(`"extended"` \| `"image"`)md",
+     .doc = R"md(curved: the solution on an input vertex v (surface.vtu, the `surface_*` errors, the ε levels' changes on the input) is u_h at its image φ(v) on the mesh's boundary, up to ε away from v. `extended`: u_h(φ(v)) + ∇u_h(φ(v))·(v − φ(v)), the discrete solution continued to first order along the offset (mapping/surface_transfer.hpp), except where a Dirichlet condition holds v (per component): there the value is the data g(v), as on a node of a dense mesh; `image`: u_h(φ(v)) everywhere. report.json `surface_values`. Dense meshes: the same (φ(v) = v). Measured in benchmarks/results/accuracy.md)md"},
 };
 // The study file of `curvefem study` (cases/README.md, Studies; parsed by study_file.cpp).
 const std::vector<CaseKeyRow> k_study_rows = {

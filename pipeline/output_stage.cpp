@@ -144,7 +144,8 @@ ErrorResult compute_errors(const LoadCase& spec, const Discretization& disc,
 
 InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
                                 const Discretization& disc, const Solution& solution,
-                                const ErrorResult& errors, const StageContext& ctx) {
+                                const ErrorResult& errors, const StageContext& ctx,
+                                SurfaceValues values) {
   CF_VERIFY(domain.on_input(), "transfer_to_input: the domain has no dense input");
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "surface_transfer");
@@ -153,8 +154,52 @@ InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
   const SurfaceMesh& input = domain.input;
   const int c = solution.components;
   const mapping::SurfaceSamples samples = mapping::locate_input_vertices(disc.mesh, domain.map());
-  out.values = mapping::evaluate_on_surface(disc.space, solution.u, c, samples);
   out.images = mapping::sample_positions(disc.mesh, samples);
+  out.values = mapping::evaluate_on_surface(disc.space, solution.u, c, samples);
+  long long extended = 0, from_data = 0;
+  if (values == SurfaceValues::extended) {
+    // Where a Dirichlet condition holds v (component by component), the value is its data g(v),
+    // as on a node of a dense mesh (u_h(φ(v)) interpolates g∘φ⁻¹ between the mesh's boundary
+    // nodes; continued to v it would add ∂u_h/∂n times the offset, which the data do not have).
+    // Elsewhere: u_h continued from φ(v) to v. The first condition holding a component wins.
+    const Eigen::MatrixXd ext = mapping::evaluate_on_surface_extended(
+        disc.mesh, disc.space, solution.u, c, samples, input.V);
+    std::vector<const BoundaryConditionSpec*> held(
+        std::size_t(input.num_vertices()) * std::size_t(c), nullptr);
+    for (const auto& bc : spec.boundary_conditions) {
+      if (bc.type != BoundaryType::dirichlet) continue;
+      for (int f = 0; f < input.num_faces(); ++f) {
+        mapping::SelectionSite site;
+        site.tag = input.has_tags() ? input.tags[f] : -1;
+        site.normal = mapping::face_normal(input, f);
+        for (int k = 0; k < 3; ++k) {
+          const int v = input.F(f, k);
+          site.x = input.V.row(v).transpose();
+          if (!mapping::selects(bc.select, site)) continue;
+          for (int i = 0; i < c; ++i)
+            if ((c == 1 || bc.components[std::size_t(i)]) &&
+                !held[std::size_t(v) * std::size_t(c) + std::size_t(i)])
+              held[std::size_t(v) * std::size_t(c) + std::size_t(i)] = &bc;
+        }
+      }
+    }
+    for (int v = 0; v < input.num_vertices() && v < out.values.rows(); ++v) {
+      if (samples.cell[v] < 0) continue;  // no image: stays NaN
+      bool moved = false, data = false;
+      for (int i = 0; i < c; ++i) {
+        const BoundaryConditionSpec* bc = held[std::size_t(v) * std::size_t(c) + std::size_t(i)];
+        if (bc) {
+          out.values(v, i) = bc->value[std::size_t(i)](input.V.row(v).transpose());
+          data = true;
+        } else if (std::isfinite(ext(v, i))) {
+          out.values(v, i) = ext(v, i);
+          moved = true;
+        }
+      }
+      extended += moved;
+      from_data += data;
+    }
+  }
   out.fields.point_data.push_back(field_of(c == 1 ? "u" : "displacement", out.values));
   out.fields.point_data.push_back(field_of("phi_offset", out.images - input.V));
   out.report = json::object();
@@ -211,6 +256,14 @@ InputSolution transfer_to_input(const LoadCase& spec, const Domain& domain,
     out.report["surface_max_error"] = e.max;
   }
   out.report["surface_vertices"] = input.num_vertices();
+  out.report["surface_values"] = {
+      {"method", values == SurfaceValues::extended
+                     ? "u_h(phi(v)) + grad u_h(phi(v)) . (v - phi(v)) where no Dirichlet "
+                       "condition holds v; the Dirichlet data g(v) where one does "
+                       "(component-wise)"
+                     : "u_h(phi(v))"},
+      {"extended_vertices", extended},
+      {"dirichlet_data_vertices", from_data}};
   long long unmapped = 0;
   for (Eigen::Index v = 0; v < samples.cell.size(); ++v) unmapped += samples.cell[v] < 0;
   out.report["surface_unmapped_vertices"] = unmapped;

@@ -134,8 +134,9 @@ struct BoundCondition {
   fem::PointFilter where;   ///< empty: the whole flagged faces
 };
 
-/// The boundary conditions, bound to the mesh. On a dense input their selections and values are
-/// evaluated at data_point(x) (φ⁻¹(x), or x on an exterior run's outer box). InputError when a
+/// The boundary conditions, bound to the mesh. On a dense input their selections are evaluated at
+/// φ⁻¹(x), their values at data_point(x) (φ⁻¹(x); x on an exterior run's outer box or with
+/// discretization.boundary_values_at "mesh"). InputError when a
 /// selection selects no boundary node / point of the mesh.
 struct BoundaryData {
   std::vector<BoundCondition> conditions;
@@ -183,17 +184,19 @@ ErrorResult compute_errors(const LoadCase& load, const Discretization& disc,
 // ---- transfer_to_input ----------------------------------------------------------------------
 
 struct InputSolution {
-  Eigen::MatrixXd values;  ///< #input V × components: u_h(φ(v))
+  Eigen::MatrixXd values;  ///< #input V × components: u_h at v (output.surface_values)
   Eigen::MatrixXd images;  ///< #input V × 3: φ(v)
   MeshFields fields;       ///< surface.vtu: u, phi_offset, exact, error, bcN coverage
   nlohmann::json report;   ///< surface_* keys of report.json
 };
 
-/// u_h at φ(v) for every input vertex (curved | dense domains only); surface.vtu's fields, with
-/// the coverage of the load case's selections.
+/// u_h on every input vertex v (curved | dense domains only): at φ(v), continued to v to first
+/// order with `extended` (output.surface_values); surface.vtu's fields, with the coverage of the
+/// load case's selections.
 InputSolution transfer_to_input(const LoadCase& load, const Domain& domain,
                                 const Discretization& disc, const Solution& solution,
-                                const ErrorResult& errors, const StageContext& ctx = {});
+                                const ErrorResult& errors, const StageContext& ctx = {},
+                                SurfaceValues values = SurfaceValues::extended);
 
 /// Everything one load case gave.
 struct LoadResult {

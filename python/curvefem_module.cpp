@@ -348,8 +348,9 @@ PYBIND11_MODULE(_curvefem, m) {
          const Solution& solution, std::shared_ptr<ErrorResult> errors, const std::string& load) {
         py::gil_scoped_release release;
         // Without errors: u_h(φ(v)) and φ(v) only (no exact / error fields).
-        return std::make_shared<InputSolution>(transfer_to_input(
-            load_of(spec, load), domain, disc, solution, errors ? *errors : ErrorResult{}));
+        return std::make_shared<InputSolution>(
+            transfer_to_input(load_of(spec, load), domain, disc, solution,
+                              errors ? *errors : ErrorResult{}, {}, spec.surface_values));
       },
       py::arg("case"), py::arg("domain"), py::arg("discretization"), py::arg("solution"),
       py::arg("errors") = nullptr, py::arg("load") = "");

@@ -13,20 +13,12 @@
 
 namespace curvefem::fem {
 
-RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const FunctionSpace& space,
-                                            const Eigen::VectorXd& u, int c,
-                                            int quadrature_degree) {
+Eigen::MatrixXd recover_gradient(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                 const Eigen::VectorXd& u, int c) {
   CF_VERIFY(c >= 1 && u.size() == static_cast<Eigen::Index>(space.num_dofs) * c,
-            "estimate_gradient_recovery: field size mismatch");
+            "recover_gradient: field size mismatch");
   const int p = space.degree, nc = mesh.num_cells();
   const int n = static_cast<int>(space.cell_dofs.cols());
-  const int degree = quadrature_degree >= 0
-                         ? quadrature_degree
-                         : default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
-  const QuadratureRule& rule = tetrahedron_quadrature(degree);
-  const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
-  const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);
-
   // The DOF points of the reference cell (the degree-p lattice, the basis's order).
   const auto& lattice = lagrange_lattice(CellKind::tetrahedron, p);
   Eigen::MatrixXd nodes(n, 3);
@@ -68,6 +60,23 @@ RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const Func
     }
   for (int dof = 0; dof < space.num_dofs; ++dof)
     if (weight[dof] > 0) recovered.row(dof) /= weight[dof];
+  return recovered;
+}
+
+RecoveryEstimate estimate_gradient_recovery(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                            const Eigen::VectorXd& u, int c,
+                                            int quadrature_degree) {
+  CF_VERIFY(c >= 1 && u.size() == static_cast<Eigen::Index>(space.num_dofs) * c,
+            "estimate_gradient_recovery: field size mismatch");
+  const int p = space.degree, nc = mesh.num_cells();
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  const int degree = quadrature_degree >= 0
+                         ? quadrature_degree
+                         : default_quadrature_degree(p, mesh.order, QuadratureUse::mass);
+  const QuadratureRule& rule = tetrahedron_quadrature(degree);
+  const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
+  const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);
+  const Eigen::MatrixXd recovered = recover_gradient(mesh, space, u, c);
 
   RecoveryEstimate out;
   out.cell_eta.resize(nc);

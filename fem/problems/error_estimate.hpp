@@ -24,6 +24,11 @@ struct RecoveryEstimate {
   double gradient_norm = 0;  ///< ‖∇u_h‖_L2, for the relative estimate η / ‖∇u_h‖
 };
 
+/// The recovered gradient G(u_h) at every DOF: #DOFs × 3c (component i's gradient in columns
+/// 3i..3i+2). u: c values per DOF (DOF-major).
+Eigen::MatrixXd recover_gradient(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                 const Eigen::VectorXd& u, int components);
+
 /// u: components values per DOF (DOF-major), as compute_errors takes it. quadrature_degree < 0:
 /// default_quadrature_degree(p, k, mass) — exact on straight cells, where G(u_h) and ∇u_h are
 /// polynomials of degrees p and p − 1 (the over-integration of compute_errors is for the exact

@@ -3,6 +3,7 @@
 // straight and on curved (order-3, non-affine) meshes, for every degree.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "fem/problems/error_estimate.hpp"
@@ -63,6 +64,38 @@ TEST(ErrorEstimate, VanishesWhereTheGradientIsAlreadyContinuous) {
     }
     const fem::RecoveryEstimate est = fem::estimate_gradient_recovery(mesh, space, u, 2);
     EXPECT_LT(est.eta, 1e-12) << "p=" << p;
+  }
+}
+
+TEST(ErrorEstimate, TheRecoveredGradientIsExactWhereTheGradientIsContinuous) {
+  // The same fields: G(u_h) at every DOF is the exact gradient there (component i in columns
+  // 3i..3i+2), on the boundary too (what the shifted Dirichlet values of pipeline/solve_stage.cpp
+  // read), on the straight cube, and for the linear field on the warped order-3 one from p = 3
+  // (below, a physically linear field is not in the space of an order-3 map).
+  for (const bool warped : {false, true}) {
+    const LagrangeMesh mesh = warped ? warped_cube(3) : make_cube_tets(3);
+    for (int p = warped ? 3 : 1; p <= 4; ++p) {
+      const bool quadratic = p >= 2 && !warped;  // a warped map bends quadratics out of P_p
+      const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+      Eigen::VectorXd u(2 * space.num_dofs);
+      for (int d = 0; d < space.num_dofs; ++d) {
+        const Eigen::Vector3d x = space.dof_points.row(d).transpose();
+        u[2 * d] = 1 + 2 * x[0] - x[1] + 0.5 * x[2] + (quadratic ? x[0] * x[1] - x[2] * x[2] : 0.0);
+        u[2 * d + 1] = -x[2] + (quadratic ? 3 * x[1] * x[1] : 0.0);
+      }
+      const Eigen::MatrixXd G = fem::recover_gradient(mesh, space, u, 2);
+      ASSERT_EQ(G.rows(), space.num_dofs);
+      ASSERT_EQ(G.cols(), 6);
+      double worst = 0;
+      for (int d = 0; d < space.num_dofs; ++d) {
+        const Eigen::Vector3d x = space.dof_points.row(d).transpose();
+        Eigen::Matrix<double, 1, 6> exact;
+        exact << 2 + (quadratic ? x[1] : 0.0), -1 + (quadratic ? x[0] : 0.0),
+            0.5 - (quadratic ? 2 * x[2] : 0.0), 0, (quadratic ? 6 * x[1] : 0.0), -1;
+        worst = std::max(worst, (G.row(d) - exact).cwiseAbs().maxCoeff());
+      }
+      EXPECT_LT(worst, 1e-11) << "p=" << p << (warped ? " warped" : "");
+    }
   }
 }
 

@@ -77,6 +77,15 @@ TEST(MappingCurved, LinearFieldPushedThroughInverseAndPulledBackMatchesOnIcosphe
       EXPECT_LT((X.row(v).transpose() - phi_v).norm(), 1e-12) << v;
       EXPECT_NEAR(values(v, 0), linear_g(phi_v), 1e-10) << v;
     }
+    // Continued from φ(v) to v to first order, it is exact at the input vertex itself.
+    const Eigen::MatrixXd extended = evaluate_on_surface_extended(cm.mesh, space, u, 1, s, input.V);
+    double moved = 0;
+    for (int v = 0; v < input.num_vertices(); ++v) {
+      const Eigen::Vector3d x = input.V.row(v).transpose();
+      moved = std::max(moved, (cm.map.image(v) - x).norm());
+      EXPECT_NEAR(extended(v, 0), linear_g(x), 1e-10) << v;
+    }
+    EXPECT_GT(moved, 1e-3) << "k = " << k;  // the images are off the input: not a trivial check
   }
 }
 

@@ -223,6 +223,56 @@ TEST(SurfaceTransfer, LinearFieldIsExactAtEveryInputVertexOfTheDenseBaseline) {
   }
 }
 
+TEST(SurfaceTransfer, TheExtensionToTheTargetIsExactToFirstOrder) {
+  // P2 on straight tets holds q(x) = |x|² exactly; continued from x by d, the extension is
+  // q(x) + ∇q(x)·d = q(x + d) − |d|²: its error is exactly the second-order term, which tests
+  // the gradient and its pull-back through the tet's Jacobian. Three components at once.
+  const LagrangeMesh mesh = make_cube_tets(2);
+  const fem::FunctionSpace space1 = fem::build_function_space(mesh, 1);
+  SurfaceMesh input;
+  input.V = mesh.nodes;
+  input.F.resize(Eigen::Index(space1.boundary_faces.size()), 3);
+  for (std::size_t f = 0; f < space1.boundary_faces.size(); ++f) {
+    const auto [c, j] = space1.boundary_faces[f];
+    int n = 0;
+    for (int i = 0; i < 4; ++i)
+      if (i != j) input.F(Eigen::Index(f), n++) = mesh.cells(c, i);
+  }
+  const BoundaryMap map = make_identity_boundary_map(input);
+  const SurfaceSamples s = locate_input_vertices(mesh, map);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  const auto q = [](const Eigen::Vector3d& x) { return x.squaredNorm(); };
+  const auto ell = [](const Eigen::Vector3d& x) { return 1.5 - 2 * x.x() + 3 * x.z(); };
+  Eigen::VectorXd u(3 * space.num_dofs);
+  for (int d = 0; d < space.num_dofs; ++d) {
+    const Eigen::Vector3d x = space.dof_points.row(d).transpose();
+    u.segment<3>(3 * d) << q(x), ell(x), -2 * q(x);
+  }
+  Eigen::MatrixXd targets = input.V;
+  for (int v = 0; v < input.num_vertices(); ++v)
+    targets.row(v) += 0.01 * Eigen::RowVector3d(std::sin(v), std::cos(3.0 * v), 0.5);
+  const Eigen::MatrixXd got = evaluate_on_surface_extended(mesh, space, u, 3, s, targets);
+  int mapped = 0;
+  for (int v = 0; v < input.num_vertices(); ++v) {
+    if (map.vertex_face[v] < 0) {
+      EXPECT_TRUE(std::isnan(got(v, 0)));
+      continue;
+    }
+    ++mapped;
+    const Eigen::Vector3d y = targets.row(v).transpose();
+    const double d2 = (targets.row(v) - input.V.row(v)).squaredNorm();
+    EXPECT_NEAR(got(v, 0), q(y) - d2, 1e-12) << v;
+    EXPECT_NEAR(got(v, 1), ell(y), 1e-12) << v;
+    EXPECT_NEAR(got(v, 2), -2 * (q(y) - d2), 1e-12) << v;
+  }
+  EXPECT_EQ(mapped, 26);
+  // With the targets at the images it is the plain evaluation.
+  const Eigen::MatrixXd at = evaluate_on_surface_extended(mesh, space, u, 3, s, input.V);
+  const Eigen::MatrixXd plain = evaluate_on_surface(space, u, 3, s);
+  for (int v = 0; v < input.num_vertices(); ++v)
+    if (map.vertex_face[v] >= 0) EXPECT_LT((at.row(v) - plain.row(v)).norm(), 1e-13) << v;
+}
+
 TEST(TriangleLocator, FindsPointsOnAStronglyCurledTriangle) {
   // One order-3 triangle bent around a cylinder through about 340 degrees, a curl the boundary
   // of a coarse curved mesh can have on a thin part. From the centroid alone, Gauss-Newton can
