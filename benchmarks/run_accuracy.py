@@ -5,7 +5,9 @@ mesh, for every way a user could solve the same Poisson problem on a dense input
 Problem per mesh (bounding-box centre c, longest edge L, X = (x - c) / L): -Δu = f with the
 manufactured u = sin 3X₁ cos 2X₂ exp X₃ (f = 12u / L²), the flux ∇u·n above the plane
 z = c_z + 0.1 L and Dirichlet u below it, the data painted on the dense input (n = the input's
-normal; the peer's data at the input's closest point, its normal its own mesh's). The reference is the exact u, so every error below is the true
+normal; the peer's data at the input's closest point, its normal its own mesh's). With
+--physics elasticity: linear elasticity (E = 1, ν = 0.3) with u = (sin 3X₂, sin 3X₃, sin 3X₁)
+(divergence-free: f = −μΔu), the traction σn above the plane and u below. The reference is the exact u, so every error below is the true
 one (the geometric error of each mesh included).
 Methods, all through `curvefem run`, one process each, one after the other:
   dense P1, dense P2   the input tetrahedralized by Gmsh with its boundary unchanged;
@@ -33,7 +35,8 @@ integration (errors, error_estimate).
 
 Usage (from the repository root; needs ../shared/data/dev, gmsh, python3-pygalmesh, meshio):
   /usr/bin/python3 benchmarks/run_accuracy.py [--meshes spot fertility ...] [--eps 0.01]
-      [--levels 0.04 0.02 0.01 0.005] [--peer-eps 0.02 0.01 0.005] [--work /tmp/accuracy]
+      [--levels 0.04 0.02 0.01 0.005] [--peer-eps 0.02 0.01 0.005] [--physics elasticity]
+      [--work /tmp/accuracy]
       [--out benchmarks/results/accuracy.md] [--note TEXT] [--render-from WORK/runs.jsonl]
 """
 import argparse
@@ -52,6 +55,7 @@ ap.add_argument("--data", default=os.path.join(os.path.dirname(root), "shared", 
 ap.add_argument("--meshes", nargs="+",
                 default=["spot", "fertility", "homer", "fandisk", "rocker_arm", "armadillo"])
 ap.add_argument("--eps", type=float, default=0.01)
+ap.add_argument("--physics", choices=["poisson", "elasticity"], default="poisson")
 ap.add_argument("--levels", nargs="+", type=float, default=[0.04, 0.02, 0.01, 0.005])
 ap.add_argument("--peer-eps", nargs="+", type=float, default=[0.02, 0.01, 0.005])
 ap.add_argument("--threads", type=int, default=2)
@@ -91,6 +95,7 @@ def problem(path):
 
 def case(path, geometry, meshing, degree, extra=None):
     u, f, L, grad, c = problem(path)
+    c_ = c
     # Neumann above z0 = c_z + 0.1 L, so that the solution on the surface is computed there (with
     # Dirichlet everywhere the dense runs would carry the data exactly). Planes, not normal
     # cones: the peer's given mesh can only be selected by position.
@@ -103,6 +108,20 @@ def case(path, geometry, meshing, degree, extra=None):
               "value": u},
              {"type": "neumann", "select": {"plane": {"point": z0, "normal": [0, 0, 1]}},
               "value": flux}]}
+    if args.physics == "elasticity":
+        # u = (sin 3X₂, sin 3X₃, sin 3X₁): div u = 0, so σ = 2μ ε(u) and f = −μ Δu = 9μ/L² u;
+        # E = 1, ν = 0.3. The traction above z0 is σ n with the normal of the data's surface.
+        X = ["((%s - (%.17g)) / %.17g)" % (v, c_[i], L) for i, v in enumerate("xyz")]
+        mu = 1 / (2 * 1.3)
+        disp = ["sin(3*%s)" % X[1], "sin(3*%s)" % X[2], "sin(3*%s)" % X[0]]
+        a, b, cc = ("%.17g*cos(3*%s)" % (3 * mu / L, X[i]) for i in (1, 2, 0))  # σ12, σ23, σ13
+        traction = ["(%s)*ny + (%s)*nz" % (a, cc), "(%s)*nx + (%s)*nz" % (a, b),
+                    "(%s)*nx + (%s)*ny" % (cc, b)]
+        c.update({"physics": {"type": "linear_elasticity", "E": 1, "nu": 0.3},
+                  "rhs": ["%.17g*%s" % (9 * mu / (L * L), d) for d in disp], "exact": disp})
+        c.pop("exact_gradient")
+        c["boundary_conditions"][0]["value"] = disp
+        c["boundary_conditions"][1]["value"] = traction
     for k, v in (extra or {}).items():
         c.setdefault(k, {}).update(v)
     return c
@@ -144,7 +163,7 @@ def record(mesh, method, code, wall, rep, err, extra_s=0.0, **kw):
          "l2": rel("l2_error", "l2_norm_exact"), "h1": rel("h1_semi_error", "h1_semi_norm_exact"),
          "mesh_s": t.get("meshing", 0.0) + t.get("load_surface", 0.0) + extra_s,
          "run_s": run_s + extra_s, "wall": wall + extra_s,
-         "valid": rep.get("mesh_valid"), **kw}
+         "valid": rep.get("mesh_valid"), "physics": args.physics, **kw}
     print(json.dumps({k: r[k] for k in ("mesh", "method", "exit", "dofs", "surf_rms", "run_s")}),
           file=sys.stderr, flush=True)
     return r
@@ -264,12 +283,20 @@ def render(rows):
     when = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     head = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
                           text=True).stdout.strip()
-    L = ["# Accuracy against DOFs and time: curved, dense and coarse-linear (issue 22)", "",
+    elastic = rows and rows[0].get("physics") == "elasticity"
+    problem_text = (
+        "Linear elasticity (E = 1, ν = 0.3), u = (sin 3X₂, sin 3X₃, sin 3X₁) (X = (x − c)/L), "
+        "body force −μΔu, the traction σn above z = c_z + 0.1 L, u given below"
+        if elastic else
+        "Poisson, u = sin 3X₁ cos 2X₂ exp X₃ (X = (x − c)/L), flux ∇u·n above z = c_z + 0.1 L, "
+        "Dirichlet u below")
+    L = ["# Accuracy against DOFs and time: curved, dense and coarse-linear (issue 22)" +
+         (", linear elasticity" if elastic else ""), "",
          f"Generated {when} by `{command}`; HEAD {head}; 2 cores, {args.threads} threads, one "
          "run at a time." + (" " + args.note if args.note else ""), "",
-         "Poisson, u = sin 3X₁ cos 2X₂ exp X₃ (X = (x − c)/L), flux ∇u·n above z = c_z + 0.1 L, "
-         "Dirichlet u below, the data painted on the input; errors against the exact u (geometric error included). surf RMS = "
-         "RMS of u_h − u over the input's vertices relative to the RMS of u; surf max absolute "
+         problem_text + ", the data painted on the input; errors against the exact u "
+         "(geometric error included). surf RMS = "
+         "RMS of |u_h − u| over the input's vertices relative to the RMS of |u|; surf max absolute "
          "(u is O(1)); L2, H1 = relative volume errors on each run's own domain. run s = whole "
          "run without the benchmark's error integration (report time_s), mesh s its meshing "
          "part (Mesh_3's call for the peer; the P2 mesh's for curved P3/P4).", ""]
