@@ -41,6 +41,7 @@ Usage (from the repository root; needs ../shared/data/dev, gmsh, python3-pygalme
 """
 import argparse
 import datetime
+import functools
 import json
 import math
 import os
@@ -48,6 +49,8 @@ import shlex
 import subprocess
 import sys
 import time
+
+from manufactured import obj_bbox, scaled_solution
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
@@ -70,32 +73,14 @@ command = "/usr/bin/python3 " + " ".join(
     shlex.quote(a) for a in ["benchmarks/run_accuracy.py"] + sys.argv[1:])
 
 
-def bbox(path):
-    lo, hi = [math.inf] * 3, [-math.inf] * 3
-    with open(path) as f:
-        for line in f:
-            if line.startswith("v "):
-                p = [float(t) for t in line.split()[1:4]]
-                lo = [min(a, b) for a, b in zip(lo, p)]
-                hi = [max(a, b) for a, b in zip(hi, p)]
-    return lo, hi
-
-
+@functools.lru_cache(maxsize=None)
 def problem(path):
-    lo, hi = bbox(path)
-    c = [(a + b) / 2 for a, b in zip(lo, hi)]
-    L = max(b - a for a, b in zip(lo, hi))
-    X = ["((%s - (%.17g)) / %.17g)" % (v, c[i], L) for i, v in enumerate("xyz")]
-    u = "sin(3*%s)*cos(2*%s)*exp(%s)" % tuple(X)
-    grad = ["3/%.17g*cos(3*%s)*cos(2*%s)*exp(%s)" % (L, X[0], X[1], X[2]),
-            "-2/%.17g*sin(3*%s)*sin(2*%s)*exp(%s)" % (L, X[0], X[1], X[2]),
-            "1/%.17g*sin(3*%s)*cos(2*%s)*exp(%s)" % (L, X[0], X[1], X[2])]
-    return u, "12/%.17g*%s" % (L * L, u), L, grad, c
+    u, grad, f, c, L, X = scaled_solution(*obj_bbox(path))
+    return u, f, L, grad, c, X
 
 
 def case(path, geometry, meshing, degree, extra=None):
-    u, f, L, grad, c = problem(path)
-    c_ = c
+    u, f, L, grad, c, X = problem(path)
     # Neumann above z0 = c_z + 0.1 L, so that the solution on the surface is computed there (with
     # Dirichlet everywhere the dense runs would carry the data exactly). Planes, not normal
     # cones: the peer's given mesh can only be selected by position.
@@ -111,7 +96,6 @@ def case(path, geometry, meshing, degree, extra=None):
     if args.physics == "elasticity":
         # u = (sin 3X₂, sin 3X₃, sin 3X₁): div u = 0, so σ = 2μ ε(u) and f = −μ Δu = 9μ/L² u;
         # E = 1, ν = 0.3. The traction above z0 is σ n with the normal of the data's surface.
-        X = ["((%s - (%.17g)) / %.17g)" % (v, c_[i], L) for i, v in enumerate("xyz")]
         mu = 1 / (2 * 1.3)
         disp = ["sin(3*%s)" % X[1], "sin(3*%s)" % X[2], "sin(3*%s)" % X[0]]
         a, b, cc = ("%.17g*cos(3*%s)" % (3 * mu / L, X[i]) for i in (1, 2, 0))  # σ12, σ23, σ13

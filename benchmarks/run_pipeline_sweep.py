@@ -31,6 +31,8 @@ import subprocess
 import sys
 import time
 
+from manufactured import obj_bbox, scaled_solution
+
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 NOTES_HEADER = "## Notes (hand-written, kept by run_pipeline_sweep.py)"
 data = os.path.join(os.path.dirname(root), "shared", "data", "dev")
@@ -64,25 +66,11 @@ def manifest():
 
 @functools.lru_cache(maxsize=None)
 def bbox(path):  # read once per mesh (the curved and the dense case both need it)
-    lo, hi = [float("inf")] * 3, [float("-inf")] * 3
-    with open(path) as f:
-        for line in f:
-            if line.startswith("v "):
-                p = [float(t) for t in line.split()[1:4]]
-                lo = [min(a, b) for a, b in zip(lo, p)]
-                hi = [max(a, b) for a, b in zip(hi, p)]
-    return lo, hi
+    return obj_bbox(path)
 
 
 def case(path, method):
-    lo, hi = bbox(path)
-    c = [(a + b) / 2 for a, b in zip(lo, hi)]
-    L = max(b - a for a, b in zip(lo, hi))
-    X = ["((%s - (%.17g)) / %.17g)" % (v, c[i], L) for i, v in enumerate("xyz")]
-    u = "sin(3*%s)*cos(2*%s)*exp(%s)" % tuple(X)
-    grad = ["3/%.17g*cos(3*%s)*cos(2*%s)*exp(%s)" % (L, X[0], X[1], X[2]),
-            "-2/%.17g*sin(3*%s)*sin(2*%s)*exp(%s)" % (L, X[0], X[1], X[2]),
-            "1/%.17g*sin(3*%s)*cos(2*%s)*exp(%s)" % (L, X[0], X[1], X[2])]
+    u, grad, f, _, L, _ = scaled_solution(*bbox(path))
     flux = "(%s)*nx + (%s)*ny + (%s)*nz" % tuple(grad)
     cone = {"normal": {"direction": [0, 0, 1], "angle": 60}}
     meshing = {"method": "dense"} if method == "dense" else \
@@ -92,7 +80,7 @@ def case(path, method):
         "meshing": meshing,
         "physics": {"type": "poisson"},
         "discretization": {"degree": 1 if method == "dense" else args.degree},
-        "rhs": "12/%.17g*%s" % (L * L, u),
+        "rhs": f,
         "boundary_conditions": [
             {"type": "dirichlet", "select": {"not": cone}, "value": u},
             {"type": "neumann", "select": cone, "value": flux}],

@@ -36,6 +36,22 @@ LagrangeMesh curved_sphere_triangles(int level, int k) {
   for (std::size_t i = 0; i < nodes.size(); ++i) t.nodes.row(Eigen::Index(i)) = nodes[i];
   return t;
 }
+
+/// The dense pipeline's input for a tet mesh: its nodes (so the mesh's nodes are the input's
+/// vertices; interior ones unreferenced, without an image) and its boundary faces.
+SurfaceMesh boundary_as_input(const LagrangeMesh& mesh) {
+  const fem::FunctionSpace space1 = fem::build_function_space(mesh, 1);
+  SurfaceMesh input;
+  input.V = mesh.nodes;
+  input.F.resize(Eigen::Index(space1.boundary_faces.size()), 3);
+  for (std::size_t f = 0; f < space1.boundary_faces.size(); ++f) {
+    const auto [c, j] = space1.boundary_faces[f];
+    int n = 0;
+    for (int i = 0; i < 4; ++i)
+      if (i != j) input.F(Eigen::Index(f), n++) = mesh.cells(c, i);
+  }
+  return input;
+}
 }  // namespace
 
 TEST(TriangleLocator, InvertsCurvedTrianglesAndRejectsPointsOffTheSurface) {
@@ -182,16 +198,7 @@ TEST(Selection, OuterBoxPointsAreSelectedOnlyThroughOuterBox) {
 TEST(SurfaceTransfer, LinearFieldIsExactAtEveryInputVertexOfTheDenseBaseline) {
   // Dense pipeline on the unit cube: volume nodes first = input vertices, φ = identity.
   const LagrangeMesh mesh = make_cube_tets(2);
-  const fem::FunctionSpace space1 = fem::build_function_space(mesh, 1);
-  SurfaceMesh input;
-  input.V = mesh.nodes;  // includes the interior node: unreferenced, no image
-  input.F.resize(Eigen::Index(space1.boundary_faces.size()), 3);
-  for (std::size_t f = 0; f < space1.boundary_faces.size(); ++f) {
-    const auto [c, j] = space1.boundary_faces[f];
-    int n = 0;
-    for (int i = 0; i < 4; ++i)
-      if (i != j) input.F(Eigen::Index(f), n++) = mesh.cells(c, i);
-  }
+  const SurfaceMesh input = boundary_as_input(mesh);  // the interior node: no image
   const BoundaryMap map = make_identity_boundary_map(input);
   const SurfaceSamples s = locate_input_vertices(mesh, map);
   const auto ell = [](const Eigen::Vector3d& x) {
@@ -228,16 +235,7 @@ TEST(SurfaceTransfer, TheExtensionToTheTargetIsExactToFirstOrder) {
   // q(x) + ∇q(x)·d = q(x + d) − |d|²: its error is exactly the second-order term, which tests
   // the gradient and its pull-back through the tet's Jacobian. Three components at once.
   const LagrangeMesh mesh = make_cube_tets(2);
-  const fem::FunctionSpace space1 = fem::build_function_space(mesh, 1);
-  SurfaceMesh input;
-  input.V = mesh.nodes;
-  input.F.resize(Eigen::Index(space1.boundary_faces.size()), 3);
-  for (std::size_t f = 0; f < space1.boundary_faces.size(); ++f) {
-    const auto [c, j] = space1.boundary_faces[f];
-    int n = 0;
-    for (int i = 0; i < 4; ++i)
-      if (i != j) input.F(Eigen::Index(f), n++) = mesh.cells(c, i);
-  }
+  const SurfaceMesh input = boundary_as_input(mesh);
   const BoundaryMap map = make_identity_boundary_map(input);
   const SurfaceSamples s = locate_input_vertices(mesh, map);
   const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
