@@ -206,6 +206,34 @@ class Builder {
       if (referenced[x])
         where[x] = projection.locate(projection.reference_vertices().row(x).transpose());
     });
+    // A vertex a feature chain snapped is a + s (b − a) on the coarse edge between the middle
+    // vertices on a and b: its (u, v) are exact there (barycentrics 1 − s, s, 0). Located, its
+    // rounding lands up to ~1e-9 off the edge in a thin coarse triangle, and the validator would
+    // then see a feature edge off the boundary's edges (cheese, K = 3: 9 features).
+    if (!s.reference.empty()) {
+      std::vector<int> middle_of(std::size_t(in.num_vertices()), -1);
+      for (int v = 0; v < nv; ++v)
+        if (s.input_vertex[v] >= 0 && s.input_vertex[v] < in.num_vertices())
+          middle_of[std::size_t(s.input_vertex[v])] = v;
+      for (const sh::SnappedVertex& q : s.reference) {
+        if (q.vertex < 0 || q.vertex >= in.num_vertices() || !where[q.vertex] || q.a < 0 ||
+            q.b < 0 || q.a >= in.num_vertices() || q.b >= in.num_vertices())
+          continue;
+        const int va = middle_of[std::size_t(q.a)], vb = middle_of[std::size_t(q.b)];
+        const auto it = edge_faces.find({std::min(va, vb), std::max(va, vb)});
+        if (va < 0 || vb < 0 || it == edge_faces.end()) continue;
+        const std::vector<int>& faces = it->second;
+        const int f = std::find(faces.begin(), faces.end(), where[q.vertex]->face) != faces.end()
+                          ? where[q.vertex]->face
+                          : faces.front();
+        double l[3] = {0, 0, 0};
+        for (int c = 0; c < 3; ++c) {
+          if (rotated(f, c) == va) l[c] = 1 - q.s;
+          if (rotated(f, c) == vb) l[c] = q.s;
+        }
+        where[q.vertex] = sh::PrismPoint{f, l[1], l[2], 0.0};
+      }
+    }
     for (int x = 0; x < in.num_vertices(); ++x) {
       if (!referenced[x]) continue;
       if (!where[x])

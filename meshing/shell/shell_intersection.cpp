@@ -163,10 +163,112 @@ NT det_of_differences(const ExactPoint& u1, const ExactPoint& u0, const ExactPoi
   return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
          u[2] * (v[0] * w[1] - v[1] * w[0]);
 }
+// det(u1 − u0, v1 − v0, w1 − w0) is affine in each of its six arguments, so a snapped argument
+// a + s (b − a) with 0 < s < 1 splits it into (1 − s) det(…a…) + s det(…b…), both weights
+// positive. Expanding every snapped argument (at most 64 terms) gives a sum of double
+// determinants with positive weights: where no two terms have opposite signs, the sum has the
+// sign of its nonzero terms, and is exactly 0 when all are. The terms are exact double
+// predicates, so this decides exactly, and cheaply, the degenerate configurations chains make
+// (a snapped point on the coarse edge its chain lies on) without rational arithmetic.
+// Returns 2 when the terms disagree (or s is outside [0, 1], or too many arguments are snapped).
+int expanded_sign(const std::array<const ExactPoint*, 6>& q) {
+  std::array<std::array<const V3*, 2>, 6> options{};
+  std::array<int, 6> count{};
+  int terms = 1;
+  for (int i = 0; i < 6; ++i) {
+    const ExactPoint& x = *q[std::size_t(i)];
+    auto& o = options[std::size_t(i)];
+    int& c = count[std::size_t(i)];
+    if (!x.snapped) {
+      o[0] = &x.p;
+      c = 1;
+    } else if (x.s == 0) {
+      o[0] = &x.a;  // a + 0 (b − a) = a exactly
+      c = 1;
+    } else if (x.s == 1) {
+      o[0] = &x.b;  // a + (b − a) = b exactly
+      c = 1;
+    } else if (x.s > 0 && x.s < 1) {
+      o[0] = &x.a;
+      o[1] = &x.b;
+      c = 2;
+    } else {
+      return 2;
+    }
+    terms *= c;
+  }
+  if (terms > 8) return 2;
+  bool pos = false, neg = false;
+  for (int t = 0; t < terms; ++t) {
+    std::array<const V3*, 6> p{};
+    int rest = t;
+    for (int i = 0; i < 6; ++i) {
+      p[std::size_t(i)] = options[std::size_t(i)][std::size_t(rest % count[std::size_t(i)])];
+      rest /= count[std::size_t(i)];
+    }
+    const int s = sign_det(*p[0], *p[1], *p[2], *p[3], *p[4], *p[5]);
+    pos = pos || s > 0;
+    neg = neg || s < 0;
+    if (pos && neg) return 2;
+  }
+  return pos ? 1 : (neg ? -1 : 0);
+}
+// A column q1 − q0 whose points lie on one snapped segment a–b is a known multiple of b − a:
+// both snapped on it, (s1 − s0)(b − a); q1 snapped and q0 = a, s1 (b − a); q1 snapped and q0 = b,
+// (1 − s1)(a − b); and the same with the roles swapped (negated). The sign of the factor is
+// exact (a comparison of doubles), so the column becomes the plain pair (b, a) and the factor's
+// sign multiplies the determinant. Returns that sign (0: the column is exactly zero), the pair
+// in `out`; 2 where no such rule applies (the column is kept).
+int simplified_column(const ExactPoint& q1, const ExactPoint& q0,
+                      std::array<const ExactPoint*, 2>& out, ExactPoint& b_store,
+                      ExactPoint& a_store) {
+  auto on_segment_of = [](const ExactPoint& snapped, const ExactPoint& plain) {
+    return !plain.snapped && (plain.p == snapped.a || plain.p == snapped.b);
+  };
+  int sign = 2;
+  const ExactPoint* seg = nullptr;
+  if (q1.snapped && q0.snapped) {
+    if (q1.a != q0.a || q1.b != q0.b) return 2;
+    sign = q1.s > q0.s ? 1 : (q1.s < q0.s ? -1 : 0);
+    seg = &q1;
+  } else if (q1.snapped && on_segment_of(q1, q0)) {
+    // q1 − a = s1 (b − a); q1 − b = (1 − s1)(a − b) = −(1 − s1)(b − a).
+    if (!(q1.s >= 0 && q1.s <= 1)) return 2;
+    sign = q0.p == q1.a ? (q1.s > 0 ? 1 : 0) : (q1.s < 1 ? -1 : 0);
+    seg = &q1;
+  } else if (q0.snapped && on_segment_of(q0, q1)) {
+    if (!(q0.s >= 0 && q0.s <= 1)) return 2;
+    sign = q1.p == q0.a ? (q0.s > 0 ? -1 : 0) : (q0.s < 1 ? 1 : 0);
+    seg = &q0;
+  } else {
+    return 2;
+  }
+  if (seg->a == seg->b) return 0;
+  b_store = ExactPoint(seg->b);
+  a_store = ExactPoint(seg->a);
+  out = {&b_store, &a_store};
+  return sign;
+}
 int sign_det(const ExactPoint& u1, const ExactPoint& u0, const ExactPoint& v1, const ExactPoint& v0,
              const ExactPoint& w1, const ExactPoint& w0) {
   if (!u1.snapped && !u0.snapped && !v1.snapped && !v0.snapped && !w1.snapped && !w0.snapped)
     return sign_det(u1.p, u0.p, v1.p, v0.p, w1.p, w0.p);
+  {
+    std::array<const ExactPoint*, 6> q{&u1, &u0, &v1, &v0, &w1, &w0};
+    std::array<ExactPoint, 6> store;
+    int factor = 1;
+    for (std::size_t c = 0; c < 3; ++c) {
+      std::array<const ExactPoint*, 2> pair{};
+      const int s =
+          simplified_column(*q[2 * c], *q[2 * c + 1], pair, store[2 * c], store[2 * c + 1]);
+      if (s == 0) return 0;
+      if (s == 2) continue;
+      factor *= s;
+      q[2 * c] = pair[0];
+      q[2 * c + 1] = pair[1];
+    }
+    if (const int s = expanded_sign(q); s != 2) return factor * s;
+  }
   {
     CGAL::Protect_FPU_rounding<true> guard;
     const CGAL::Interval_nt<false> d =
@@ -386,6 +488,12 @@ bool triangle_section_contact(const std::array<V3, 3>& t, const std::array<V3, 4
   return section_contact(t, T);
 }
 bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& tet) {
+  // A corner that is a tet corner touches the closed tet (the coarse corners of a chain are
+  // input vertices, so the faces around them share corners with their prisms' tets).
+  for (const ExactPoint& q : tri)
+    if (!q.snapped)
+      for (const V3& c : tet)
+        if (q.p == c) return true;
   return meets_tet<true>(tri, tet);
 }
 bool exact_triangles_meet(const std::array<ExactPoint, 3>& a, const std::array<V3, 3>& b) {

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -344,6 +345,106 @@ TEST(SnappedPredicates, SnappedPointsMatchExactRationalReference) {
   EXPECT_GT(tri_meet, 700);
   EXPECT_GT(tri_miss, 700);
   EXPECT_GT(tri_coplanar, 6);
+}
+
+// ------------------------------------------------- several snapped points on one segment (a chain)
+
+// A coarse feature edge snaps its chain's input vertices onto one segment a–b, so the faces next
+// to it hold two snapped points of one segment, or a snapped point and an end of its segment:
+// columns q1 − q0 that are exact multiples of b − a, and every plane through a and b contains
+// them. The predicates decide these by the sign of the multiple and by expanding the snapped
+// points into their segment's ends; the exact rational reference must agree on every one.
+TEST(SnappedPredicates, SnappedPointsOfOneSegmentMatchExactRationalReference) {
+  std::mt19937 rng(4242);
+  std::uniform_int_distribution<int> coord(0, 4), pick4(0, 3), pick8(0, 7);
+  auto grid = [&] { return Vector3d(coord(rng), coord(rng), coord(rng)); };
+  const std::array<double, 8> s_list = {1.0 / 3, 2.0 / 3, 0.1, 0.7, 1.0 / 7, 0.5, 0.25, 0.999};
+  int closed = 0, open = 0, degen = 0, same_segment_faces = 0, zero_dots = 0, tri_meet = 0,
+      tri_miss = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Tet T;
+    do T = {grid(), grid(), grid(), grid()};
+    while (CGAL::orientation(exact(T[0]), exact(T[1]), exact(T[2]), exact(T[3])) == 0);
+    // The segment: a tet edge, a tet corner to a grid point, or two grid points.
+    Vector3d a, b;
+    do {
+      const int kind = pick4(rng);
+      a = kind < 3 ? T[pick4(rng)] : grid();
+      b = kind == 0 ? T[pick4(rng)] : grid();
+    } while (a == b);
+    std::array<sh::ExactPoint, 4> chain;
+    for (auto& q : chain) q = sh::ExactPoint::on_segment(a, b, s_list[rng() % s_list.size()]);
+    if (pick4(rng) == 0) chain[3] = sh::ExactPoint::on_segment(b, a, 0.5);  // the reversed segment
+    auto corner = [&]() -> sh::ExactPoint {
+      switch (pick8(rng)) {
+        case 0:
+        case 1:
+        case 2:
+          return chain[std::size_t(pick4(rng))];
+        case 3:
+          return a;
+        case 4:
+          return b;
+        case 5:
+          return Vector3d(T[pick4(rng)]);
+        default:
+          return grid();
+      }
+    };
+    ExactTri t;
+    int snapped = 0;
+    do {
+      t = {chain[std::size_t(pick4(rng))], corner(), corner()};
+      std::swap(t[0], t[std::size_t(rng() % 3)]);
+      snapped = t[0].snapped + t[1].snapped + t[2].snapped;
+    } while (exact(t[0]) == exact(t[1]) || exact(t[1]) == exact(t[2]) ||
+             exact(t[0]) == exact(t[2]));
+    same_segment_faces += snapped >= 2;
+    const std::array<EP, 3> et = exact(t);
+    const std::array<EP, 4> eT = exact(T);
+    const bool is_degenerate = degenerate(et);
+    ASSERT_EQ(sh::exact_collinear(t), is_degenerate) << "trial " << trial;
+    const Reference ref = reference(et, eT);
+    ASSERT_EQ(sh::exact_triangle_meets_tet(t, T), ref.closed)
+        << "trial " << trial << (is_degenerate ? " (degenerate)" : "");
+    ASSERT_EQ(sh::exact_section_contact(t, T), ref.section)
+        << "trial " << trial << (is_degenerate ? " (degenerate)" : "");
+    {
+      const Vector3d from = pick4(rng) < 2 ? a : grid(), to = pick4(rng) < 2 ? b : grid();
+      const int expected = normal_dot_sign_exact(et, exact(from), exact(to));
+      ASSERT_EQ(sh::exact_normal_dot_sign(t, from, to), expected) << "trial " << trial;
+      zero_dots += expected == 0 && !is_degenerate;
+    }
+    closed += ref.closed;
+    open += !ref.closed;
+    degen += is_degenerate;
+    if (is_degenerate) continue;
+    Tri u;
+    do u = {pick4(rng) < 2 ? a : grid(), pick4(rng) < 2 ? b : grid(), T[pick4(rng)]};
+    while (degenerate(exact(plain(u))));
+    const std::array<EP, 3> eu = exact(plain(u));
+    const bool ours = sh::exact_triangles_meet(t, u);
+    if (coplanar(et, eu)) {
+      ASSERT_TRUE(ours) << "coplanar pair, trial " << trial;
+      continue;
+    }
+    const bool cgal = CGAL::do_intersect(Exact::Triangle_3(et[0], et[1], et[2]),
+                                         Exact::Triangle_3(eu[0], eu[1], eu[2]));
+    ASSERT_EQ(ours, cgal) << "trial " << trial;
+    tri_meet += cgal;
+    tri_miss += !cgal;
+  }
+  EXPECT_GT(same_segment_faces, 600);
+  EXPECT_GT(degen, 300);
+  EXPECT_GT(closed, 1000);
+  EXPECT_GT(open, 300);
+  EXPECT_GT(zero_dots, 100);
+  EXPECT_GT(tri_meet, 300);
+  EXPECT_GT(tri_miss, 300);
+  std::printf(
+      "faces with two snapped corners %d, collinear %d, meeting the tet %d, missing %d, "
+      "zero normal dots %d, triangle pairs meeting %d, missing %d\n",
+      same_segment_faces, degen, closed, open, zero_dots, tri_meet, tri_miss);
 }
 
 // ---------------------------------------------------------------- a snapped point on a tet edge
