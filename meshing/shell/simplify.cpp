@@ -72,6 +72,35 @@ class ShellMesh : public TriMesh {
   std::vector<char> chain_vertex;  // input vertex with exactly two input feature edges
   std::vector<char> on_chain;      // input vertex inside a coarse feature edge (snapped)
   bool chain_mode = false;         // collapses are chain collapses (one thread)
+  // The boxes of the prisms during a chain pass, by cell id with the corners they were computed
+  // for: a chain collapse moves no vertex, so a cell's box is fixed by its corners until the pass
+  // ends (cleared then; ids a refused or later operation reuses are recomputed).
+  struct CachedBox {
+    Cell corners{editing::k_no_id, editing::k_no_id, editing::k_no_id};
+    Eigen::AlignedBox3d box;
+  };
+  std::vector<CachedBox> chain_boxes;
+  // The live cells during a chain pass, ascending (built at the pass's first scan; an accepted
+  // chain collapse replaces its old cells by its new ones, chain_invariants being the last
+  // check): the cell capacity grows with every operation tried, so scanning it visits mostly
+  // dead ids.
+  std::vector<Id> chain_live;
+  bool chain_live_ready = false;
+  const Eigen::AlignedBox3d& prism_box(Id f) {
+    if (chain_boxes.size() <= std::size_t(f)) chain_boxes.resize(std::size_t(f) + 1);
+    CachedBox& c = chain_boxes[std::size_t(f)];
+    const Cell& cv = cell(f);
+    if (c.corners != cv) {
+      c.corners = cv;
+      c.box.setEmpty();
+      for (Id v : cv) {
+        c.box.extend(base[v]);
+        c.box.extend(mid[v]);
+        c.box.extend(top[v]);
+      }
+    }
+    return c.box;
+  }
   struct PendingChain {
     Id w = editing::k_no_id, u = editing::k_no_id;
     int x = -1;
@@ -587,6 +616,16 @@ class ShellMesh : public TriMesh {
     }
     on_chain[std::size_t(pending.x)] = 1;
     const bool ok = chain_geometry_ok(r);
+    if (ok && chain_live_ready) {  // the last check: the collapse is accepted
+      for (Id f : r.old_cells) {
+        const auto at = std::lower_bound(chain_live.begin(), chain_live.end(), f);
+        if (at != chain_live.end() && *at == f) chain_live.erase(at);
+      }
+      for (Id f : r.new_cells) {
+        const auto at = std::lower_bound(chain_live.begin(), chain_live.end(), f);
+        if (at == chain_live.end() || *at != f) chain_live.insert(at, f);
+      }
+    }
     if (!ok) {
       for (auto it = saved.rbegin(); it != saved.rend(); ++it)
         if (it->second)
@@ -630,15 +669,18 @@ class ShellMesh : public TriMesh {
       boxes.push_back(b);
       all.extend(b);
     }
-    for (Id f = 0; f < Id(cell_capacity()); ++f) {
-      if (is_cell_removed(f) || std::find(cells.begin(), cells.end(), f) != cells.end()) continue;
-      Eigen::AlignedBox3d prism;
-      for (Id v : cell(f)) {
-        prism.extend(base[v]);
-        prism.extend(mid[v]);
-        prism.extend(top[v]);
-      }
-      if (!prism.intersects(all)) continue;
+    if (!chain_live_ready) {
+      chain_live.clear();
+      for (Id f = 0; f < Id(cell_capacity()); ++f)
+        if (!is_cell_removed(f)) chain_live.push_back(f);
+      chain_live_ready = true;
+    }
+    for (Id f : chain_live) {
+      // The operation's own old cells are removed now but come back if it is refused.
+      if (is_cell_removed(f)) continue;
+      const Eigen::AlignedBox3d& prism = prism_box(f);
+      if (!prism.intersects(all) || std::find(cells.begin(), cells.end(), f) != cells.end())
+        continue;
       bool near = false;
       for (const auto& b : boxes) near = near || prism.intersects(b);
       if (!near) continue;
@@ -1336,7 +1378,12 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.chain_mode = true;
     struct Off {
       ShellMesh& m;
-      ~Off() { m.chain_mode = false; }
+      ~Off() {
+        m.chain_mode = false;
+        m.chain_boxes.clear();
+        m.chain_live.clear();
+        m.chain_live_ready = false;
+      }
     } off{m};
     const editing::PassStats st = pass.run(m, edge_work("chain", feature, true));
     stats.passes.emplace_back("chain", st);
