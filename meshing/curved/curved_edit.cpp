@@ -108,16 +108,28 @@ class CurvedEditMesh : public TetMesh {
         ++face_uses[sorted_face(f[0], f[1], f[2])];
       }
     }
-    auto on_cavity_boundary = [&](const std::vector<Id>& support) {
-      if (support.size() == 1) return true;
-      if (support.size() == 4) return false;
-      for (const auto& [f, uses] : face_uses) {
-        if (uses != 1) continue;
-        bool inside = true;
-        for (Id v : support) inside = inside && std::find(f.begin(), f.end(), v) != f.end();
-        if (inside) return true;
+    // A node is on the cavity's boundary when its support (the corners of its sub-simplex) lies
+    // in a boundary face: that face itself for three corners, one of its edges for two.
+    std::set<Face> boundary_faces;
+    std::set<Edge> boundary_edges;
+    for (const auto& [f, uses] : face_uses)
+      if (uses == 1) {
+        boundary_faces.insert(f);
+        boundary_edges.insert({f[0], f[1]});
+        boundary_edges.insert({f[0], f[2]});
+        boundary_edges.insert({f[1], f[2]});
       }
-      return false;
+    auto on_cavity_boundary = [&](const std::vector<Id>& support) {
+      switch (support.size()) {
+        case 1:
+          return true;
+        case 2:
+          return boundary_edges.count(sorted_edge(support[0], support[1])) > 0;
+        case 3:
+          return boundary_faces.count(sorted_face(support[0], support[1], support[2])) > 0;
+        default:
+          return false;
+      }
     };
 
     double before = 0, sj_before = k_inf;
