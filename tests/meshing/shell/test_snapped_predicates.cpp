@@ -129,6 +129,28 @@ bool non_degenerate(const Tet& t) {
   return (t[1] - t[0]).cross(t[2] - t[0]).dot(t[3] - t[0]) != 0;  // exact on small integers
 }
 
+// exact_triangles_meet(t, u) against exact rationals: a coplanar pair must count as meeting
+// (conservative), any other pair as CGAL decides exactly. Counts the outcomes.
+struct PairCounts {
+  int meet = 0, miss = 0, coplanar = 0;
+};
+::testing::AssertionResult triangles_meet_as_reference(const ExactTri& t, const Tri& u,
+                                                       PairCounts& n) {
+  const std::array<EP, 3> et = exact(t), eu = exact(plain(u));
+  const bool ours = sh::exact_triangles_meet(t, u);
+  if (coplanar(et, eu)) {
+    ++n.coplanar;
+    if (ours) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << "a coplanar pair does not meet";
+  }
+  const bool cgal = CGAL::do_intersect(Exact::Triangle_3(et[0], et[1], et[2]),
+                                       Exact::Triangle_3(eu[0], eu[1], eu[2]));
+  n.meet += cgal;
+  n.miss += !cgal;
+  if (ours == cgal) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "meets " << ours << ", exactly " << cgal;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- plain doubles against CGAL
@@ -218,7 +240,8 @@ TEST(SnappedPredicates, SnappedPointsMatchExactRationalReference) {
     return i == 0 ? std::max(unit(rng), 1e-9) : s_list[std::size_t(rng() % s_list.size())];
   };
   int closed = 0, open = 0, section = 0, touch_only = 0, degen = 0, degen_closed = 0,
-      rounding_matters = 0, tri_meet = 0, tri_miss = 0, tri_coplanar = 0, dyadic = 0;
+      rounding_matters = 0, dyadic = 0;
+  PairCounts pairs;
   for (int trial = 0; trial < 2000; ++trial) {
     map = trial % 4 == 0 ? maps[std::size_t(1 + (trial / 4) % 3)] : maps[0];
     Tet T;
@@ -321,18 +344,7 @@ TEST(SnappedPredicates, SnappedPointsMatchExactRationalReference) {
       do u = {grid(), grid(), T[pick4(rng)]};
       while (degenerate(exact(plain(u))));
     }
-    const std::array<EP, 3> eu = exact(plain(u));
-    const bool ours = sh::exact_triangles_meet(t, u);
-    if (coplanar(et, eu)) {
-      ASSERT_TRUE(ours) << "coplanar pair, trial " << trial;
-      ++tri_coplanar;
-      continue;
-    }
-    const bool cgal = CGAL::do_intersect(Exact::Triangle_3(et[0], et[1], et[2]),
-                                         Exact::Triangle_3(eu[0], eu[1], eu[2]));
-    ASSERT_EQ(ours, cgal) << "trial " << trial;
-    tri_meet += cgal;
-    tri_miss += !cgal;
+    ASSERT_TRUE(triangles_meet_as_reference(t, u, pairs)) << "trial " << trial;
   }
   EXPECT_GT(closed, 1200);
   EXPECT_GT(open, 250);
@@ -342,9 +354,9 @@ TEST(SnappedPredicates, SnappedPointsMatchExactRationalReference) {
   EXPECT_GT(degen_closed, 20);
   EXPECT_GT(dyadic, 200);
   EXPECT_GT(rounding_matters, 100);  // the rounded points would have decided these wrongly
-  EXPECT_GT(tri_meet, 700);
-  EXPECT_GT(tri_miss, 700);
-  EXPECT_GT(tri_coplanar, 6);
+  EXPECT_GT(pairs.meet, 700);
+  EXPECT_GT(pairs.miss, 700);
+  EXPECT_GT(pairs.coplanar, 6);
 }
 
 // ------------------------------------------------- several snapped points on one segment (a chain)
@@ -359,8 +371,8 @@ TEST(SnappedPredicates, SnappedPointsOfOneSegmentMatchExactRationalReference) {
   std::uniform_int_distribution<int> coord(0, 4), pick4(0, 3), pick8(0, 7);
   auto grid = [&] { return Vector3d(coord(rng), coord(rng), coord(rng)); };
   const std::array<double, 8> s_list = {1.0 / 3, 2.0 / 3, 0.1, 0.7, 1.0 / 7, 0.5, 0.25, 0.999};
-  int closed = 0, open = 0, degen = 0, same_segment_faces = 0, zero_dots = 0, tri_meet = 0,
-      tri_miss = 0;
+  int closed = 0, open = 0, degen = 0, same_segment_faces = 0, zero_dots = 0;
+  PairCounts pairs;
   for (int trial = 0; trial < 3000; ++trial) {
     Tet T;
     do T = {grid(), grid(), grid(), grid()};
@@ -422,29 +434,19 @@ TEST(SnappedPredicates, SnappedPointsOfOneSegmentMatchExactRationalReference) {
     Tri u;
     do u = {pick4(rng) < 2 ? a : grid(), pick4(rng) < 2 ? b : grid(), T[pick4(rng)]};
     while (degenerate(exact(plain(u))));
-    const std::array<EP, 3> eu = exact(plain(u));
-    const bool ours = sh::exact_triangles_meet(t, u);
-    if (coplanar(et, eu)) {
-      ASSERT_TRUE(ours) << "coplanar pair, trial " << trial;
-      continue;
-    }
-    const bool cgal = CGAL::do_intersect(Exact::Triangle_3(et[0], et[1], et[2]),
-                                         Exact::Triangle_3(eu[0], eu[1], eu[2]));
-    ASSERT_EQ(ours, cgal) << "trial " << trial;
-    tri_meet += cgal;
-    tri_miss += !cgal;
+    ASSERT_TRUE(triangles_meet_as_reference(t, u, pairs)) << "trial " << trial;
   }
   EXPECT_GT(same_segment_faces, 600);
   EXPECT_GT(degen, 300);
   EXPECT_GT(closed, 1000);
   EXPECT_GT(open, 300);
   EXPECT_GT(zero_dots, 100);
-  EXPECT_GT(tri_meet, 300);
-  EXPECT_GT(tri_miss, 300);
+  EXPECT_GT(pairs.meet, 300);
+  EXPECT_GT(pairs.miss, 300);
   std::printf(
       "faces with two snapped corners %d, collinear %d, meeting the tet %d, missing %d, "
       "zero normal dots %d, triangle pairs meeting %d, missing %d\n",
-      same_segment_faces, degen, closed, open, zero_dots, tri_meet, tri_miss);
+      same_segment_faces, degen, closed, open, zero_dots, pairs.meet, pairs.miss);
 }
 
 // ---------------------------------------------------------------- a snapped point on a tet edge
