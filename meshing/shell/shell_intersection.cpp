@@ -165,7 +165,7 @@ NT det_of_differences(const ExactPoint& u1, const ExactPoint& u0, const ExactPoi
 }
 // det(u1 − u0, v1 − v0, w1 − w0) is affine in each of its six arguments, so a snapped argument
 // a + s (b − a) with 0 < s < 1 splits it into (1 − s) det(…a…) + s det(…b…), both weights
-// positive. Expanding every snapped argument (at most 64 terms) gives a sum of double
+// positive. Expanding every snapped argument (at most 8 terms here) gives a sum of double
 // determinants with positive weights: where no two terms have opposite signs, the sum has the
 // sign of its nonzero terms, and is exactly 0 when all are. The terms are exact double
 // predicates, so this decides exactly, and cheaply, the degenerate configurations chains make
