@@ -898,21 +898,70 @@ InputSurfaceIndex::~InputSurfaceIndex() = default;
 const Eigen::MatrixXd& InputSurfaceIndex::V() const { return m_impl->V; }
 const Eigen::MatrixXi& InputSurfaceIndex::F() const { return m_impl->F; }
 
+namespace {
+
+// Distance along the unit `d` from `o` to the triangle, the ray lying in the triangle's plane
+// and meeting it (both decided exactly by the caller): 0 when o is in the triangle, else the
+// nearest crossing of the ray with an edge.
+double coplanar_ray_distance(const Triangle& tri, const V3& o, const V3& d) {
+  if (tri.has_on(pt(o))) return 0.0;
+  const V3 c[3] = {V3(tri[0].x(), tri[0].y(), tri[0].z()), V3(tri[1].x(), tri[1].y(), tri[1].z()),
+                   V3(tri[2].x(), tri[2].y(), tri[2].z())};
+  const V3 n = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+  double best = std::numeric_limits<double>::infinity();
+  // An edge along the ray (parallel, den = 0) is skipped: where it lies on the ray, its ends are
+  // crossings of the two other edges.
+  for (int k = 0; k < 3; ++k) {
+    const V3 p = c[k], e = c[(k + 1) % 3] - c[k], w = p - o;
+    const double den = d.cross(e).dot(n);
+    if (!(std::abs(den) > 1e-12 * e.norm())) continue;
+    const double t = w.cross(e).dot(n) / den, u = w.cross(d).dot(n) / den;
+    if (u >= -1e-12 && u <= 1 + 1e-12) best = std::min(best, std::max(t, 0.0));
+  }
+  if (std::isfinite(best)) return best;
+  // Rounding missed every edge though the exact test found contact: a lower bound (the distance
+  // along d is linear on the triangle, smallest at a corner).
+  for (const V3& x : c) best = std::min(best, std::max((x - o).dot(d), 0.0));
+  return best;
+}
+
+}  // namespace
+
 double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
                                        const Eigen::Vector3d& direction,
                                        const std::vector<int>& ignore) const {
   const K::Ray_3 ray(pt(origin), K::Vector_3(direction.x(), direction.y(), direction.z()));
+  // CGAL 5.5's ray/triangle intersection is wrong for a ray in the triangle's plane: a ray
+  // pointing away from a coplanar triangle (do_intersect false) got the segment from its own
+  // source to a triangle corner, hence distance 0 — on CAD inputs, whose rays often lie in the
+  // plane of a distant face, a zero shell step ("cannot be made positive") or thickness. Coplanar
+  // faces are therefore skipped in the traversal and measured here; every face the traversal
+  // prunes is farther than its answer, so the smaller of the two is the first hit.
+  const Point second = ray.second_point();
+  double coplanar = std::numeric_limits<double>::infinity();
   auto skip = [&](const std::vector<Triangle>::const_iterator& it) {
-    return std::find(ignore.begin(), ignore.end(), m_impl->id(it)) != ignore.end();
+    if (std::find(ignore.begin(), ignore.end(), m_impl->id(it)) != ignore.end()) return true;
+    const Triangle& tri = *it;
+    if (CGAL::orientation(tri[0], tri[1], tri[2], ray.source()) != CGAL::COPLANAR ||
+        CGAL::orientation(tri[0], tri[1], tri[2], second) != CGAL::COPLANAR)
+      return false;
+    if (!tri.is_degenerate() && CGAL::do_intersect(tri, ray))
+      coplanar = std::min(coplanar, coplanar_ray_distance(tri, origin, direction.normalized()));
+    return true;
   };
   const auto hit = m_impl->tree.first_intersection(ray, skip);
-  if (!hit) return std::numeric_limits<double>::infinity();
-  if (const Point* p = boost::get<Point>(&hit->first))
-    return std::sqrt(CGAL::to_double(CGAL::squared_distance(*p, ray.source())));
-  if (const Segment* s = boost::get<Segment>(&hit->first))
-    return std::sqrt(std::min(CGAL::to_double(CGAL::squared_distance(s->source(), ray.source())),
-                              CGAL::to_double(CGAL::squared_distance(s->target(), ray.source()))));
-  return 0.0;
+  double found = std::numeric_limits<double>::infinity();
+  if (hit) {
+    if (const Point* p = boost::get<Point>(&hit->first))
+      found = std::sqrt(CGAL::to_double(CGAL::squared_distance(*p, ray.source())));
+    else if (const Segment* s = boost::get<Segment>(&hit->first))
+      found =
+          std::sqrt(std::min(CGAL::to_double(CGAL::squared_distance(s->source(), ray.source())),
+                             CGAL::to_double(CGAL::squared_distance(s->target(), ray.source()))));
+    else
+      found = 0.0;
+  }
+  return std::min(found, coplanar);
 }
 
 bool triangles_meet_beyond_pinch(const std::array<V3, 3>& a, int ka, const std::array<V3, 3>& b,

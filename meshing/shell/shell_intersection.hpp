@@ -97,8 +97,8 @@ class InputSurfaceIndex {
   InputSurfaceIndex(const InputSurfaceIndex&) = delete;
   InputSurfaceIndex& operator=(const InputSurfaceIndex&) = delete;
 
-  // Distance from `origin` along the unit `direction` to the first input face not in `ignore`
-  // (+infinity when the ray leaves without hitting).
+  // Distance from `origin` along `direction` (any length; the distance is Euclidean) to the
+  // first input face not in `ignore` (+infinity when the ray leaves without hitting).
   double ray_distance(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                       const std::vector<int>& ignore) const;
 

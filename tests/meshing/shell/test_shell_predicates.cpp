@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -909,4 +910,79 @@ TEST(InputSurfaceIndex, TouchingTetsMatchBruteForceOnIntegerGrids) {
   // Both outcomes occur often enough for the comparison to mean something.
   EXPECT_GT(touching, total / 10);
   EXPECT_LT(touching, total * 9 / 10);
+}
+
+// Rays in the plane of input faces (CAD inputs: a pillar along a flat face's plane). CGAL 5.5's
+// ray/triangle intersection returned the segment from the ray's source to a corner for a ray
+// pointing away from a coplanar triangle, so ray_distance answered 0 and the shell refused a valid
+// input ("cannot be made positive"). Reference: the ray clipped by the triangle's three edge
+// half-planes (coplanar faces) or met at the plane x = 7 (the upright face).
+TEST(InputSurfaceIndex, RayDistanceInTheFacesPlaneMatchesClipping) {
+  Eigen::MatrixXd V(9, 3);
+  V << 4, 0, 0, 6, 0, 0, 5, 2, 0,    // coplanar with every ray (z = 0)
+      0, 4, 0, 2, 4, 0, 0, 6, 0,     //
+      7, -1, -1, 7, 3, -1, 7, 1, 2;  // upright, crossing z = 0 on x = 7, y in [0, 2]
+  Eigen::MatrixXi F(3, 3);
+  F << 0, 1, 2, 3, 4, 5, 6, 7, 8;
+  const sh::InputSurfaceIndex index(V, F);
+  const double inf = std::numeric_limits<double>::infinity();
+  // The ray clipped by the face's three edge half-planes (in-plane inward normals): the face in
+  // the ray's plane; else the ray meets the face's plane at t and the point is tested the same way.
+  auto reference = [&](int f, const Vector3d& o, const Vector3d& d) {
+    const Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Vector3d n = (b - a).cross(c - a);
+    double lo = 0, hi = inf;
+    if (n.dot(d) != 0) {
+      lo = hi = n.dot(a - o) / n.dot(d);
+      if (lo < 0) return inf;
+    } else if (n.dot(o - a) != 0) {
+      return inf;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d p = V.row(F(f, k)), q = V.row(F(f, (k + 1) % 3)), r = V.row(F(f, (k + 2) % 3));
+      Vector3d nu = n.cross(q - p);
+      if (nu.dot(r - p) < 0) nu = -nu;
+      const double at0 = nu.dot(o - p), slope = nu.dot(d);
+      if (lo == hi) {  // a point of the plane
+        if (at0 + lo * slope < -1e-12 * nu.norm()) return inf;
+      } else if (slope == 0) {
+        if (at0 < 0) return inf;
+      } else if (slope > 0) {
+        lo = std::max(lo, -at0 / slope);
+      } else {
+        hi = std::min(hi, -at0 / slope);
+      }
+    }
+    return lo <= hi ? lo : inf;
+  };
+  const std::vector<Vector3d> dirs = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},  {0, -1, 0},
+                                      {1, 1, 0}, {1, -2, 0}, {-1, 2, 0}, {-3, -1, 0}};
+  int zero = 0, hits = 0, misses = 0, away_on_edge_line = 0;
+  for (int x = -2; x <= 9; ++x)
+    for (int y = -2; y <= 8; ++y)
+      for (const Vector3d& dir : dirs) {
+        // The direction unnormalized, so that the ray is exact (a rounded unit direction moves
+        // its line off a corner it grazes).
+        const Vector3d o(x, y, 0), d = dir.normalized();
+        const double expected =
+            std::min({reference(0, o, d), reference(1, o, d), reference(2, o, d)});
+        const double got = index.ray_distance(o, dir, {});
+        if (std::isinf(expected)) {
+          EXPECT_TRUE(std::isinf(got)) << o.transpose() << " dir " << dir.transpose();
+          ++misses;
+        } else {
+          EXPECT_NEAR(got, expected, 1e-12) << o.transpose() << " dir " << dir.transpose();
+          ++(expected == 0 ? zero : hits);
+        }
+        // The failing configuration: the ray's line through a coplanar face's edge, pointing away.
+        if (y == 0 && x > 6 && dir == Vector3d(1, 0, 0)) ++away_on_edge_line;
+      }
+  // Every outcome occurs: inside a face, a later hit, no hit, and the rays that used to get 0.
+  EXPECT_GT(zero, 0);
+  EXPECT_GT(hits, 50);
+  EXPECT_GT(misses, 50);
+  EXPECT_GT(away_on_edge_line, 0);
+  // Ignored faces are skipped, coplanar or not.
+  EXPECT_TRUE(std::isinf(index.ray_distance(Vector3d(5, 1, 0), Vector3d(1, 0, 0), {0, 2})));
+  EXPECT_NEAR(index.ray_distance(Vector3d(3, 1, 0), Vector3d(1, 0, 0), {2}), 1.5, 1e-12);
 }
