@@ -80,8 +80,19 @@ bool segment_crosses_wedge(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
 }  // namespace
 
 FiberProjection::FiberProjection(ShellFibers fibers, const SurfaceMesh& input)
-    : m_fibers(std::move(fibers)), m_V(input.V), m_reference(input.V), m_F(input.F) {
+    : m_fibers(std::move(fibers)),
+      m_input_V(input.V),
+      m_input_F(input.F),
+      m_V(input.V),
+      m_reference(input.V),
+      m_F(input.F) {
   validate_structure(m_fibers, input.num_vertices(), input.num_faces());
+  if (m_fibers.refined()) {
+    m_V.resize(input.V.rows() + m_fibers.surface_points.rows(), 3);
+    m_V << input.V, m_fibers.surface_points;
+    m_reference = m_V;
+    m_F = m_fibers.surface_faces;
+  }
   for (std::size_t i = 0; i < m_fibers.reference_vertices.size(); ++i)
     m_reference.row(m_fibers.reference_vertices[i]) =
         m_fibers.reference_positions.row(Eigen::Index(i));
@@ -103,7 +114,14 @@ FiberCrossing FiberProjection::input_point(int t, const Eigen::Vector3d& bary) c
   FiberCrossing r;
   r.face = t;
   r.bary = bary;
-  for (int k = 0; k < 3; ++k) r.position += bary[k] * Eigen::Vector3d(m_V.row(m_F(t, k)));
+  if (m_fibers.refined()) {  // refined face t -> its input face
+    r.face = m_fibers.surface_parent[std::size_t(t)];
+    r.bary.setZero();
+    for (int k = 0; k < 3; ++k)
+      r.bary += bary[k] * m_fibers.surface_bary.row(t).segment<3>(3 * k).transpose();
+  }
+  for (int k = 0; k < 3; ++k)
+    r.position += r.bary[k] * Eigen::Vector3d(m_input_V.row(m_input_F(r.face, k)));
   return r;
 }
 

@@ -17,6 +17,8 @@
 // tested in tests/mapping.
 //
 // Positions are input points (Σ bary_k · V[F(t, k)] of the input, not of the reference copy).
+// Fibers built on a refinement of the input (ShellFibers::refined) cross the refined surface; the
+// crossing is reported in the input face that holds it.
 // The object owns its data; queries are const and thread-safe.
 #include <Eigen/Core>
 #include <array>
@@ -60,6 +62,8 @@ class FiberProjection {
   std::optional<FiberCrossing> near_pinch(int f, int s, const std::array<double, 3>& w) const;
 
   ShellFibers m_fibers;
+  Eigen::MatrixXd m_input_V;                // the input (m_V, m_F: the refined surface if any)
+  Eigen::MatrixXi m_input_F;
   Eigen::MatrixXd m_V;                      // input vertices
   Eigen::MatrixXd m_reference;              // reference copy of the input vertices
   Eigen::MatrixXi m_F;                      // input faces

@@ -24,6 +24,25 @@ void validate_structure(const ShellFibers& s, int input_vertices, int input_face
   if (Eigen::Index(s.reference_vertices.size()) != s.reference_positions.rows() ||
       (s.reference_positions.rows() > 0 && s.reference_positions.cols() != 3))
     fail("reference_vertices and reference_positions differ in length");
+  if (s.refined()) {
+    const Eigen::Index nr = s.surface_faces.rows();
+    if (s.surface_faces.cols() != 3 || (s.surface_points.rows() > 0 && s.surface_points.cols() != 3))
+      fail("surface_faces and surface_points must be #F × 3 and #added × 3");
+    if (Eigen::Index(s.surface_parent.size()) != nr || s.surface_bary.rows() != nr ||
+        s.surface_bary.cols() != 9)
+      fail("surface_parent and surface_bary must have a row per refined face (bary: 9 columns)");
+    if (input_vertices >= 0) {
+      const int limit = input_vertices + int(s.surface_points.rows());
+      if (s.surface_faces.minCoeff() < 0 || s.surface_faces.maxCoeff() >= limit)
+        fail("a refined face has a vertex id outside 0.." + std::to_string(limit - 1));
+    }
+    for (const int t : s.surface_parent)
+      if (t < 0 || (input_faces >= 0 && t >= input_faces))
+        fail("a refined face's parent " + std::to_string(t) + " is no input face");
+    // From here on the refined surface is the one the ids refer to.
+    if (input_vertices >= 0) input_vertices += int(s.surface_points.rows());
+    if (input_faces >= 0) input_faces = int(nr);
+  }
   for (std::size_t i = 0; i < s.reference_vertices.size(); ++i) {
     const int v = s.reference_vertices[i];
     if (v < 0 || (input_vertices >= 0 && v >= input_vertices) ||
@@ -61,7 +80,10 @@ bool identical(const ShellFibers& a, const ShellFibers& b) {
   return same_bits(a.base, b.base) && same_bits(a.mid, b.mid) && same_bits(a.top, b.top) &&
          same_bits(a.faces, b.faces) && a.reference_vertices == b.reference_vertices &&
          same_bits(a.reference_positions, b.reference_positions) &&
-         a.candidate_offsets == b.candidate_offsets && a.candidate_faces == b.candidate_faces;
+         a.candidate_offsets == b.candidate_offsets && a.candidate_faces == b.candidate_faces &&
+         same_bits(a.surface_points, b.surface_points) &&
+         same_bits(a.surface_faces, b.surface_faces) && a.surface_parent == b.surface_parent &&
+         same_bits(a.surface_bary, b.surface_bary);
 }
 
 }  // namespace curvefem

@@ -33,6 +33,17 @@ struct ShellFibers {
   Eigen::MatrixXd reference_positions;  // #reference_vertices × 3: where they are there
   std::vector<int> candidate_offsets;   // #prisms + 1 (empty when there are no prisms)
   std::vector<int> candidate_faces;
+  // Built on a refinement of the input (the curved mesher's shape and thin refinements,
+  // beveling): the fibers cross the refined surface, whose vertices are the input's and then
+  // `surface_points` (ids #input V + i) and whose faces are `surface_faces`; candidate faces and
+  // reference vertices refer to it. Refined face t lies in input face surface_parent[t], its
+  // corner k at barycentric coordinates surface_bary(t, 3k .. 3k + 2) there. Empty: the input.
+  Eigen::MatrixXd surface_points;  // #added × 3
+  Eigen::MatrixXi surface_faces;   // #refined F × 3
+  std::vector<int> surface_parent;
+  Eigen::MatrixXd surface_bary;  // #refined F × 9
+
+  bool refined() const { return surface_faces.rows() > 0; }
 
   int num_prisms() const { return static_cast<int>(faces.rows()); }
   int num_vertices() const { return static_cast<int>(mid.rows()); }
@@ -46,8 +57,8 @@ struct ShellFibers {
 };
 
 /// Throws InputError naming the first structural defect: layer sizes, face ids, a face not rotated
-/// to its smallest id, candidate offsets, and (when input_vertices / input_faces ≥ 0) reference
-/// vertex ids and candidate face ids outside the input.
+/// to its smallest id, candidate offsets, the refinement's sizes, and (when input_vertices /
+/// input_faces ≥ 0) reference vertex ids and candidate face ids outside the (refined) input.
 void validate_structure(const ShellFibers& fibers, int input_vertices = -1, int input_faces = -1);
 
 /// Bit-for-bit equality of every member (a read file against the written data).

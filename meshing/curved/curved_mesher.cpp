@@ -741,6 +741,10 @@ struct CoarseState {
   sh::BeveledShell beveled;
   sh::ShellStats shell_stats;
   sh::ThinRefineStats thin_stats;
+  sh::ShapeRefineStats shape_stats;
+  // The feature edges as vertex pairs of the refined surface (the input's when nothing bisected
+  // one): the coarsening's chains run on them.
+  std::vector<std::array<int, 2>> surface_features;
   std::vector<Eigen::Vector3d> points, point_bary;
   std::vector<int> point_faces, point_input_face;
   sh::Shell shell;
@@ -810,10 +814,23 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     // input again.
     // Thin parts first (meshing/shell/thin_refine.hpp): input edges much longer than the object
     // is thick there are bisected, so the coarsening's thickness guard has vertices to keep.
+    // Poorly shaped long faces before that (refine_poor_shapes): CAD fans of needles and caps get
+    // vertices inside their flat faces. Feature edges are bisected only where the coarsening will
+    // run chains through the new vertices (otherwise they would all stay as frozen vertices).
+    sh::ShapeRefineOptions shape;
+    shape.max_mips = options.shape_refine_mips;
+    shape.min_edge = options.shape_refine * eps;
+    shape.feature_edges = options.feature_edges;
+    shape.bisect_features = options.feature_chains && options.constraint_points.empty() &&
+                            options.eps_samples < 2;
+    const sh::BeveledSurface shaped =
+        sh::refine_poor_shapes(input, shape, st.shape_stats, st.surface_features);
     sh::ThinRefineOptions thin;
     thin.max_edge_per_thickness = options.thin_refine_ratio;
-    thin.kept_edges = options.feature_edges;
-    const sh::BeveledSurface refined = sh::refine_thin_parts(input, thin, st.thin_stats);
+    thin.kept_edges = st.surface_features;
+    sh::BeveledSurface refined =
+        sh::refine_thin_parts(shaped.refined() ? shaped.mesh : input, thin, st.thin_stats);
+    if (shaped.refined()) refined = sh::compose(shaped, std::move(refined));
     if (refined.refined()) {
       st.beveled =
           sh::build_beveled_shell(refined.mesh, shell_options, st.shell_stats, {}, progress);
@@ -833,6 +850,12 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.thin_edges_after = st.thin_stats.thin_edges_after;
   stats.thin_max_ratio_before = st.thin_stats.max_ratio_before;
   stats.thin_max_ratio_after = st.thin_stats.max_ratio_after;
+  stats.shape_poor_before = st.shape_stats.poor_faces_before;
+  stats.shape_poor_after = st.shape_stats.poor_faces_after;
+  stats.shape_splits = st.shape_stats.splits;
+  stats.shape_feature_splits = st.shape_stats.feature_splits;
+  stats.shape_refined_faces = st.shape_stats.refined_faces;
+  stats.shape_budget_reached = st.shape_stats.budget_reached;
   stats.singular_vertices = st.shell_stats.singular_vertices;
   stats.shell_faces = int(beveled.shell.F.rows());
   if (built_now) {
@@ -1005,7 +1028,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     else if (stats.beveled_faces > 0)
       log::warn("mesh: feature chains are not coarsened on a beveled shell: feature vertices stay");
     else {
-      simplify_options.feature_edges = options.feature_edges;
+      simplify_options.feature_edges = st.surface_features;
       simplify_options.collapse_chains = true;
     }
   }
@@ -1021,7 +1044,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     repair_options.repair = true;
     repair_options.owned_points = st.owned;
     repair_options.collapse_chains = false;
-    repair_options.feature_edges = options.feature_edges;  // never split (SimplifyOptions::repair)
+    repair_options.feature_edges = st.surface_features;  // never split (SimplifyOptions::repair)
     // First with only the missed faces' input vertices strict; where that is refused (a split's
     // new faces would need full curving that their slabs cannot certify, etc.), with every
     // strict vertex (the two edge steps around the misses), whose new faces need none.
@@ -1730,14 +1753,17 @@ std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
   try {
     return run(options, state);
   } catch (const MeshingError& e) {
-    const int thin_refined = state.thin_stats.refined_faces;
-    if (thin_refined == 0) throw;
+    const int thin_refined = state.thin_stats.refined_faces,
+              shape_refined = state.shape_stats.refined_faces;
+    if (thin_refined == 0 && shape_refined == 0) throw;
     // The refined surface's shell could not be meshed (seen on a plate 0.1 ε thick: the slab
     // layer's inner surface stayed self-intersecting): the unrefined input, as before.
-    log::warn("mesh: on the thin-refined input (", thin_refined, " input faces refined) ", e.what(),
-              "; meshing the input without the thin refinement");
+    log::warn("mesh: on the refined input (", thin_refined, " input faces refined for thin parts, ",
+              shape_refined, " for their shape) ", e.what(),
+              "; meshing the input without the refinements");
     CurvedMeshOptions plain = options;
     plain.thin_refine_ratio = 0;
+    plain.shape_refine = 0;
     CoarseState plain_state;
     std::vector<CurvedMesh> out = run(plain, plain_state);
     for (CurvedMeshStats& s : stats) s.thin_fallback = e.what();

@@ -104,6 +104,14 @@ struct CurvedMeshOptions {
   // input edges longer than this many times the local thickness are bisected (same surface), so
   // the guard above has vertices to keep where the input itself is too coarse (a CAD plate).
   double thin_refine_ratio = 8;
+  // Shape refinement of the input before the shell (meshing/shell/thin_refine.hpp,
+  // refine_poor_shapes; 0: off): input faces with a 2-D MIPS above shape_refine_mips whose
+  // longest edge is longer than shape_refine × ε have it bisected, feature edges included (their
+  // halves join the feature chains; kept whole when the chains are off), so that CAD
+  // tessellations (fans of needles and caps) offer the coarsening vertices inside their flat
+  // faces. The fibers then cross the refined surface (Shell::refinement, ShellFibers).
+  double shape_refine = 8;
+  double shape_refine_mips = 20;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.
@@ -177,8 +185,13 @@ struct CurvedMeshStats {
   // input edges above the ratio and the worst edge / thickness, before and after.
   int thin_refined_faces = 0, thin_splits = 0, thin_edges_before = 0, thin_edges_after = 0;
   double thin_max_ratio_before = 0, thin_max_ratio_after = 0;
-  // Non-empty: meshing the thin-refined input failed with this error, and the mesh is that of the
-  // unrefined input (the counts above are then 0).
+  // Shape refinement (CurvedMeshOptions::shape_refine): faces that qualified before and after,
+  // bisections (of which on feature edges), input faces refined.
+  int shape_poor_before = 0, shape_poor_after = 0, shape_splits = 0, shape_feature_splits = 0,
+      shape_refined_faces = 0;
+  bool shape_budget_reached = false;
+  // Non-empty: meshing the thin- or shape-refined input failed with this error, and the mesh is
+  // that of the unrefined input (the counts above are then 0).
   std::string thin_fallback;
   int shell_faces = 0, coarse_faces = 0;
   // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness

@@ -362,6 +362,34 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
                through_split_point(map.feature_edges[i][0], map.feature_edges[i][1], p.first,
                                    q.first);
       }
+      if (!ok && p.first >= 0 && q.first >= 0) {
+        // The input refined the feature edge (the shape refinement bisects feature edges, and
+        // the coarsening may keep a bisection point): a or b inside a boundary edge whose end is
+        // such a point, on the segment and no input vertex's image, and from there a path as
+        // above.
+        const int va = map.feature_edges[i][0], vb = map.feature_edges[i][1];
+        const Eigen::Vector3d A = input.V.row(va), B = input.V.row(vb);
+        auto split_point = [&](int m) {
+          if (images.count(m)) return false;
+          const Eigen::Vector3d X = map.boundary.nodes.row(m);
+          const double t = std::clamp((X - A).dot(B - A) / (B - A).squaredNorm(), 0.0, 1.0);
+          return (A + t * (B - A) - X).norm() <= 1e-9 * unit;
+        };
+        auto ends = [&](const std::pair<int, int>& w) {
+          std::vector<int> out;
+          if (w.second < 0) {
+            out.push_back(w.first);
+          } else {
+            for (int m : {w.first, w.second})
+              if (split_point(m)) out.push_back(m);
+          }
+          return out;
+        };
+        for (int x : ends(p))
+          for (int y : ends(q))
+            ok = ok || x == y || edges.count({std::min(x, y), std::max(x, y)}) > 0 ||
+                 through_split_point(va, vb, x, y);
+      }
       if (!ok) {
         ++r.features_off_edges;
         if (r.first_feature_off < 0) r.first_feature_off = int(i);

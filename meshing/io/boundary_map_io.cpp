@@ -14,13 +14,17 @@ namespace curvefem::io {
 namespace {
 nlohmann::ordered_json rows(const Eigen::MatrixXd& M) {
   auto out = nlohmann::ordered_json::array();
-  for (int r = 0; r < M.rows(); ++r) out.push_back({M(r, 0), M(r, 1), M(r, 2)});
+  for (int r = 0; r < M.rows(); ++r) {
+    auto row = nlohmann::ordered_json::array();
+    for (int c = 0; c < M.cols(); ++c) row.push_back(M(r, c));
+    out.push_back(std::move(row));
+  }
   return out;
 }
-Eigen::MatrixXd read_rows(const nlohmann::json& j) {
-  Eigen::MatrixXd M(Eigen::Index(j.size()), 3);
+Eigen::MatrixXd read_rows(const nlohmann::json& j, int cols = 3) {
+  Eigen::MatrixXd M(Eigen::Index(j.size()), cols);
   for (std::size_t r = 0; r < j.size(); ++r)
-    for (int c = 0; c < 3; ++c) M(Eigen::Index(r), c) = j[r].at(c).get<double>();
+    for (int c = 0; c < cols; ++c) M(Eigen::Index(r), c) = j[r].at(std::size_t(c)).get<double>();
   return M;
 }
 }  // namespace
@@ -101,6 +105,18 @@ void write_boundary_map(const std::filesystem::path& path, const BoundaryMap& ma
       candidates.push_back(std::vector<int>(c.begin(), c.end()));
     }
     s["candidates"] = std::move(candidates);
+    if (fibers->refined()) {  // the refined surface the fibers cross (ShellFibers)
+      nlohmann::ordered_json r;
+      r["points"] = rows(fibers->surface_points);
+      auto RF = nlohmann::ordered_json::array();
+      for (Eigen::Index f = 0; f < fibers->surface_faces.rows(); ++f)
+        RF.push_back({fibers->surface_faces(f, 0), fibers->surface_faces(f, 1),
+                      fibers->surface_faces(f, 2)});
+      r["faces"] = std::move(RF);
+      r["parent"] = fibers->surface_parent;
+      r["bary"] = rows(fibers->surface_bary);
+      s["surface"] = std::move(r);
+    }
     j["fibers"] = std::move(s);
   }
   write_text_file_atomic(path, j.dump() + "\n");
@@ -224,6 +240,18 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
         fibers.candidate_offsets.push_back(int(fibers.candidate_faces.size()));
       }
       if (fibers.num_prisms() == 0 && candidates.empty()) fibers.candidate_offsets.clear();
+      if (s.contains("surface")) {
+        const auto& r = s.at("surface");
+        fibers.surface_points = read_rows(r.at("points"));
+        const auto& RF = r.at("faces");
+        fibers.surface_faces.resize(Eigen::Index(RF.size()), 3);
+        for (std::size_t f = 0; f < RF.size(); ++f)
+          for (int c = 0; c < 3; ++c)
+            fibers.surface_faces(Eigen::Index(f), c) = RF[f].at(c).get<int>();
+        fibers.surface_parent = r.at("parent").get<std::vector<int>>();
+        fibers.surface_bary = read_rows(r.at("bary"), 9);
+        if (fibers.surface_points.rows() == 0) fibers.surface_points.resize(0, 3);
+      }
       try {
         validate_structure(fibers);
       } catch (const InputError& e) {

@@ -335,6 +335,31 @@ void restore_input_ids(Shell& shell, const BeveledSurface& surface) {
     if (f >= 0) f = surface.face_parent[std::size_t(f)];
   for (int& v : shell.input_vertex)
     if (v >= surface.input_vertices) v = -1;
+  if (surface.refined()) {
+    const int nv = surface.input_vertices;
+    shell.refinement.points = surface.mesh.V.bottomRows(surface.mesh.V.rows() - nv);
+    shell.refinement.faces = surface.mesh.F;
+    shell.refinement.parent = surface.face_parent;
+    shell.refinement.bary = surface.corner_bary;
+    shell.refinement.reference = shell.reference;
+  }
+  // The reference copy's snaps (feature chains) in input terms: a snapped vertex that is no input
+  // vertex (a shape-refinement point on a feature edge) is dropped; an end that is none is kept
+  // by its position.
+  std::vector<SnappedVertex> kept;
+  for (SnappedVertex q : shell.reference) {
+    if (q.vertex < 0 || q.vertex >= surface.input_vertices) continue;
+    if (q.a >= surface.input_vertices) {
+      q.pa = surface.mesh.V.row(q.a).transpose();
+      q.a = -1;
+    }
+    if (q.b >= surface.input_vertices) {
+      q.pb = surface.mesh.V.row(q.b).transpose();
+      q.b = -1;
+    }
+    kept.push_back(q);
+  }
+  shell.reference = std::move(kept);
 }
 
 }  // namespace curvefem::meshing::shell

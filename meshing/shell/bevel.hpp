@@ -100,7 +100,8 @@ BeveledShell build_beveled_shell(const SurfaceMesh& input, const ShellOptions& o
                                  const ProgressFn& progress = {});
 
 // Rewrites a shell built on surface.mesh (or coarsened from it) so it refers to the unrefined
-// input: face_parent becomes the input face, input_vertex of a vertex added by beveling -1.
+// input: face_parent becomes the input face, input_vertex of a vertex added by beveling or
+// refinement -1, and the reference snaps refer to input vertices (SnappedVertex: ends by position).
 void restore_input_ids(Shell& shell, const BeveledSurface& surface);
 
 }  // namespace curvefem::meshing::shell

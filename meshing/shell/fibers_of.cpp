@@ -66,8 +66,23 @@ ShellFibers fibers_of(const Shell& shell, const SurfaceMesh& input) {
     const int r = min_rotation(F);
     for (int c = 0; c < 3; ++c) out.faces(f, c) = F[(r + c) % 3];
   }
-  // The reference copy as the projection sees it (rounded snapped points).
-  const InputSurfaceIndex index(input.V, input.F, shell.reference);
+  // The reference copy as the projection sees it (rounded snapped points), of the refined surface
+  // when the shell was built on one (Shell::refinement).
+  const Shell::Refinement& rf = shell.refinement;
+  Eigen::MatrixXd V = input.V;
+  if (!rf.empty()) {
+    V.resize(input.V.rows() + rf.points.rows(), 3);
+    V << input.V, rf.points;
+    out.surface_points = rf.points;
+    out.surface_faces = rf.faces;
+    out.surface_parent = rf.parent;
+    out.surface_bary.resize(rf.faces.rows(), 9);
+    for (Eigen::Index t = 0; t < rf.faces.rows(); ++t)
+      for (int k = 0; k < 3; ++k)
+        out.surface_bary.row(t).segment<3>(3 * k) = rf.bary[std::size_t(t)].col(k).transpose();
+  }
+  const InputSurfaceIndex index(V, rf.empty() ? input.F : rf.faces,
+                                rf.empty() ? shell.reference : rf.reference);
   const std::vector<SnappedVertex> snaps = index.snaps();  // increasing vertex order
   out.reference_positions.resize(Eigen::Index(snaps.size()), 3);
   for (std::size_t i = 0; i < snaps.size(); ++i) {

@@ -31,6 +31,21 @@ struct Shell {
   // that copy, exactly; P projects onto it, and a point of it stands for the input point with
   // the same face and barycentric coordinates.
   std::vector<SnappedVertex> reference;
+  // A shell built on a refinement of the input (the curved mesher's shape and thin refinements,
+  // beveling) and then rewritten to the input's ids (restore_input_ids): the refined surface,
+  // whose vertices are the input's and then `points`, with its faces' places in the input faces
+  // and the snaps of *its* reference copy (surface ids). `reference` above then has the input
+  // vertices' snaps only, an approximation of that copy (bisection points on and next to feature
+  // chains move with it there but not in the input's faces); fibers_of crosses the refined
+  // surface itself. Empty (no faces): built on the input.
+  struct Refinement {
+    Eigen::MatrixXd points;                 // #added × 3
+    Eigen::MatrixXi faces;                  // #refined F × 3
+    std::vector<int> parent;                // input face of each refined face
+    std::vector<Eigen::Matrix3d> bary;      // column k: corner k in the parent face
+    std::vector<SnappedVertex> reference;  // snaps of the refined surface's reference copy
+    bool empty() const { return faces.rows() == 0; }
+  } refinement;
 };
 
 struct ShellOptions {

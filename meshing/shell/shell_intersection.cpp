@@ -532,11 +532,17 @@ struct InputSurfaceIndex::Impl {
   std::vector<int> moved, moved_at, moved_corners;
   std::vector<std::vector<int>> vf;  // vertex -> faces (built at the first snap)
   bool is_moved(int f) const { return !moved_at.empty() && moved_at[std::size_t(f)] >= 0; }
+  Eigen::Vector3d end_a(const SnappedVertex& q) const {
+    return q.a >= 0 ? Eigen::Vector3d(V.row(q.a).transpose()) : q.pa;
+  }
+  Eigen::Vector3d end_b(const SnappedVertex& q) const {
+    return q.b >= 0 ? Eigen::Vector3d(V.row(q.b).transpose()) : q.pb;
+  }
   ExactPoint corner(int f, int k) const {
     const int x = F(f, k);
     if (!snap.empty() && snap[std::size_t(x)].vertex >= 0) {
       const SnappedVertex& q = snap[std::size_t(x)];
-      return ExactPoint::on_segment(V.row(q.a).transpose(), V.row(q.b).transpose(), q.s);
+      return ExactPoint::on_segment(end_a(q), end_b(q), q.s);
     }
     return ExactPoint(V.row(x).transpose());
   }
@@ -650,10 +656,13 @@ InputSurfaceIndex::InputSurfaceIndex(const Eigen::MatrixXd& V, const Eigen::Matr
 void InputSurfaceIndex::snap_vertex(const SnappedVertex& q) {
   Impl& m = *m_impl;
   const int nv = int(m.V.rows());
-  if (q.vertex < 0 || q.vertex >= nv || q.a < 0 || q.a >= nv || q.b < 0 || q.b >= nv ||
-      q.a == q.vertex || q.b == q.vertex || !(q.s > 0 && q.s < 1))
+  if (q.vertex < 0 || q.vertex >= nv || q.a < -1 || q.a >= nv || q.b < -1 || q.b >= nv ||
+      q.a == q.vertex || q.b == q.vertex || !(q.s > 0 && q.s < 1) ||
+      (q.a < 0 && !q.pa.allFinite()) || (q.b < 0 && !q.pb.allFinite()))
     throw std::invalid_argument("InputSurfaceIndex::snap_vertex: bad snap of vertex " +
-                                std::to_string(q.vertex));
+                                std::to_string(q.vertex) + " onto (" + std::to_string(q.a) + ", " +
+                                std::to_string(q.b) + ") at " + std::to_string(q.s) + " (" +
+                                std::to_string(nv) + " vertices)");
   if (m.snap.empty()) {
     m.Vref = m.V;
     m.snap.assign(std::size_t(nv), SnappedVertex{});
@@ -675,7 +684,7 @@ void InputSurfaceIndex::snap_vertex(const SnappedVertex& q) {
   const bool was = m.snap[std::size_t(q.vertex)].vertex >= 0;
   m.snap[std::size_t(q.vertex)] = q;
   const ExactPoint p =
-      ExactPoint::on_segment(m.V.row(q.a).transpose(), m.V.row(q.b).transpose(), q.s);
+      ExactPoint::on_segment(m.end_a(q), m.end_b(q), q.s);
   m.Vref.row(q.vertex) = p.p.transpose();
   {
     CGAL::Protect_FPU_rounding<true> guard;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -55,9 +56,14 @@ bool segment_crosses_wedge(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
 // A vertex of the reference copy of the input (feature chains, thesis §5.3) moved onto the
 // straight coarse feature edge between input vertices a and b: it stands for the point
 // V[a] + s (V[b] − V[a]) itself, which is decided on exactly, not for its rounding to doubles.
+// An end that is no vertex of the surface indexed (a = -1 or b = -1: the shell was coarsened on a
+// refinement of the input whose vertex it is, restore_input_ids) is given by its position.
 struct SnappedVertex {
   int vertex = -1, a = -1, b = -1;
   double s = 0;  // in (0, 1)
+  // When a, b < 0 (NaN otherwise: an end of -1 without its position is refused).
+  Eigen::Vector3d pa = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()),
+                  pb = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 // Exact closed-set tests with corners of the reference copy given as snapped points (above) or

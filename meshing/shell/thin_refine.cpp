@@ -7,8 +7,10 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <queue>
 #include <set>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 
 #include "meshing/core/error.hpp"
@@ -142,6 +144,41 @@ struct Refiner {
     return r;
   }
 
+  // The input as the starting surface: identity parents.
+  void init() {
+    const int nv = input.num_vertices(), nf = input.num_faces();
+    V.resize(std::size_t(nv));
+    for (int v = 0; v < nv; ++v) V[std::size_t(v)] = input.V.row(v).transpose();
+    F.resize(std::size_t(nf));
+    parent.resize(std::size_t(nf));
+    W.assign(std::size_t(nf), Eigen::Matrix3d::Identity());
+    for (int f = 0; f < nf; ++f) {
+      for (int c = 0; c < 3; ++c) F[std::size_t(f)][std::size_t(c)] = input.F(f, c);
+      parent[std::size_t(f)] = f;
+      add_face(f);
+    }
+  }
+
+  // The refined surface into `out` (tags follow the parent); returns the input faces refined.
+  int write(BeveledSurface& out) const {
+    const int n = int(F.size()), nf = input.num_faces();
+    out.mesh.V.resize(Eigen::Index(V.size()), 3);
+    for (std::size_t v = 0; v < V.size(); ++v) out.mesh.V.row(Eigen::Index(v)) = V[v];
+    out.mesh.F.resize(n, 3);
+    if (input.has_tags()) out.mesh.tags.resize(n);
+    std::vector<int> children(std::size_t(nf), 0);
+    for (int f = 0; f < n; ++f) {
+      for (int c = 0; c < 3; ++c) out.mesh.F(f, c) = F[std::size_t(f)][std::size_t(c)];
+      if (input.has_tags()) out.mesh.tags[f] = input.tags[parent[std::size_t(f)]];
+      ++children[std::size_t(parent[std::size_t(f)])];
+    }
+    out.face_parent = parent;
+    out.corner_bary = W;
+    out.beveled_faces =
+        int(std::count_if(children.begin(), children.end(), [](int c) { return c > 1; }));
+    return out.beveled_faces;
+  }
+
   void count(double limit, int& thin, double& worst) {
     thin = 0;
     worst = 0;
@@ -170,22 +207,11 @@ BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptio
                                  ThinRefineStats& stats) {
   Stopwatch watch;
   stats = {};
-  const int nv = input.num_vertices(), nf = input.num_faces();
+  const int nf = input.num_faces();
   BeveledSurface out = unbeveled_surface(input, ExtrusionDirections{});
   if (!(options.max_edge_per_thickness > 0) || nf == 0) return out;
   Refiner r(input);
-  r.V.resize(std::size_t(nv));
-  for (int v = 0; v < nv; ++v) r.V[std::size_t(v)] = input.V.row(v).transpose();
-  r.F.resize(std::size_t(nf));
-  r.parent.resize(std::size_t(nf));
-  r.W.assign(std::size_t(nf), Eigen::Matrix3d::Identity());
-  for (int f = 0; f < nf; ++f) {
-    for (int c = 0; c < 3; ++c) {
-      r.F[std::size_t(f)][std::size_t(c)] = input.F(f, c);
-    }
-    r.parent[std::size_t(f)] = f;
-    r.add_face(f);
-  }
+  r.init();
   const double limit = options.max_edge_per_thickness;
   std::set<std::uint64_t> kept;
   for (const auto& e : options.kept_edges) kept.insert(edge_key(e[0], e[1]));
@@ -230,24 +256,7 @@ BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptio
   }
   r.count(limit, stats.thin_edges_after, stats.max_ratio_after);
 
-  if (stats.splits > 0) {
-    const int n = int(r.F.size());
-    out.mesh.V.resize(Eigen::Index(r.V.size()), 3);
-    for (std::size_t v = 0; v < r.V.size(); ++v) out.mesh.V.row(Eigen::Index(v)) = r.V[v];
-    out.mesh.F.resize(n, 3);
-    if (input.has_tags()) out.mesh.tags.resize(n);
-    std::vector<int> children(std::size_t(nf), 0);
-    for (int f = 0; f < n; ++f) {
-      for (int c = 0; c < 3; ++c) out.mesh.F(f, c) = r.F[std::size_t(f)][std::size_t(c)];
-      if (input.has_tags()) out.mesh.tags[f] = input.tags[r.parent[std::size_t(f)]];
-      ++children[std::size_t(r.parent[std::size_t(f)])];
-    }
-    out.face_parent = r.parent;
-    out.corner_bary = r.W;
-    out.beveled_faces =
-        int(std::count_if(children.begin(), children.end(), [](int c) { return c > 1; }));
-    stats.refined_faces = out.beveled_faces;
-  }
+  if (stats.splits > 0) stats.refined_faces = r.write(out);
   stats.seconds = watch.seconds();
   if (stats.thin_edges_before > 0)
     log::info("thin refinement: ", stats.thin_edges_before, " input edges longer than ",
@@ -256,6 +265,114 @@ BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptio
               " rounds refined ", stats.refined_faces, " input faces; ", stats.thin_edges_after,
               " left (worst ", stats.max_ratio_after, ")",
               stats.budget_reached ? ", face budget reached" : "", ", ", stats.seconds, " s");
+  return out;
+}
+
+namespace {
+
+// 2-D MIPS energy of a triangle (2 for the equilateral one; +inf when flat).
+double triangle_mips(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const double area2 = (b - a).cross(c - a).norm();
+  const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return area2 > 0 ? sum / (std::sqrt(3.0) * area2) : HUGE_VAL;
+}
+
+}  // namespace
+
+BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOptions& options,
+                                  ShapeRefineStats& stats,
+                                  std::vector<std::array<int, 2>>& refined_features) {
+  Stopwatch watch;
+  stats = {};
+  refined_features = options.feature_edges;
+  const int nf = input.num_faces();
+  BeveledSurface out = unbeveled_surface(input, ExtrusionDirections{});
+  if (!(options.min_edge > 0) || nf == 0) return out;
+  std::set<std::uint64_t> features;
+  for (const auto& e : options.feature_edges) features.insert(edge_key(e[0], e[1]));
+  auto mips_of = [](const std::vector<Eigen::Vector3d>& V, const std::array<int, 3>& t) {
+    return triangle_mips(V[std::size_t(t[0])], V[std::size_t(t[1])], V[std::size_t(t[2])]);
+  };
+  // The longest edge of a face that qualifies (poor and long), or {-1, -1}.
+  auto target = [&](const std::vector<Eigen::Vector3d>& V, const std::array<int, 3>& t,
+                    bool apply_feature_rule) -> std::pair<std::array<int, 2>, double> {
+    std::array<int, 2> e{-1, -1};
+    double len2 = -1;
+    for (int c = 0; c < 3; ++c) {
+      const int a = t[std::size_t(c)], b = t[std::size_t((c + 1) % 3)];
+      const double l2 = (V[std::size_t(a)] - V[std::size_t(b)]).squaredNorm();
+      if (l2 > len2) len2 = l2, e = {a, b};
+    }
+    const double len = std::sqrt(len2);
+    if (!(len > options.min_edge) || !(mips_of(V, t) > options.max_mips)) return {{-1, -1}, 0};
+    if (apply_feature_rule && !options.bisect_features && features.count(edge_key(e[0], e[1])))
+      return {{-1, -1}, 0};
+    return {e, len};
+  };
+  {
+    std::vector<Eigen::Vector3d> V0(std::size_t(input.num_vertices()));
+    for (int v = 0; v < input.num_vertices(); ++v) V0[std::size_t(v)] = input.V.row(v).transpose();
+    for (int f = 0; f < nf; ++f) {
+      const std::array<int, 3> t{input.F(f, 0), input.F(f, 1), input.F(f, 2)};
+      if (target(V0, t, false).first[0] >= 0) ++stats.poor_faces_before;
+    }
+  }
+  if (stats.poor_faces_before == 0) {
+    stats.seconds = watch.seconds();
+    return out;
+  }
+  Refiner r(input);
+  r.init();
+  // Longest first; an entry is stale when its face changed since (generation).
+  std::vector<int> generation(std::size_t(nf), 0);
+  using Entry = std::tuple<double, int, int>;  // (length, face, generation)
+  std::priority_queue<Entry> queue;
+  auto push = [&](int f) {
+    const auto [e, len] = target(r.V, r.F[std::size_t(f)], true);
+    if (e[0] >= 0) queue.emplace(len, f, generation[std::size_t(f)]);
+  };
+  for (int f = 0; f < nf; ++f) push(f);
+  while (!queue.empty()) {
+    const auto [len, f, gen] = queue.top();
+    queue.pop();
+    if (gen != generation[std::size_t(f)]) continue;
+    const auto [e, l] = target(r.V, r.F[std::size_t(f)], true);
+    if (e[0] < 0) continue;
+    if (int(r.F.size()) + 2 > nf + options.max_added_faces) {
+      stats.budget_reached = true;
+      break;
+    }
+    const auto fs = r.faces_of(e[0], e[1]);
+    const int m = int(r.V.size());
+    std::vector<int> touched;
+    r.split(e[0], e[1], fs, touched);
+    ++stats.splits;
+    if (features.erase(edge_key(e[0], e[1]))) {
+      features.insert(edge_key(e[0], m));
+      features.insert(edge_key(m, e[1]));
+      ++stats.feature_splits;
+    }
+    generation.resize(r.F.size(), 0);
+    for (int t : touched) {
+      ++generation[std::size_t(t)];
+      push(t);
+    }
+  }
+  for (const auto& t : r.F)
+    if (target(r.V, t, false).first[0] >= 0) ++stats.poor_faces_after;
+  if (stats.splits > 0) {
+    stats.refined_faces = r.write(out);
+    refined_features.clear();
+    for (const std::uint64_t k : features)
+      refined_features.push_back({int(k >> 32), int(k & 0xffffffffu)});
+  }
+  stats.seconds = watch.seconds();
+  log::info("shape refinement: ", stats.poor_faces_before, " input faces with a 2-D MIPS above ",
+            options.max_mips, " and an edge longer than ", options.min_edge, "; ", stats.splits,
+            " bisections (", stats.feature_splits, " on feature edges) refined ",
+            stats.refined_faces, " input faces into ", r.F.size() - std::size_t(nf) +
+            std::size_t(stats.refined_faces), "; ", stats.poor_faces_after, " left",
+            stats.budget_reached ? ", face budget reached" : "", ", ", stats.seconds, " s");
   return out;
 }
 

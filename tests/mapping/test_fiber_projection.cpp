@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 
 #include "mapping/boundary_inverse.hpp"
@@ -59,8 +60,39 @@ bool share_vertex(const SurfaceMesh& m, int a, int b) {
 // vertices (where φ⁻¹ is evaluated by `curvefem mesh`'s round trip).
 Agreement compare(const cv::CurvedMesh& cm, const SurfaceMesh& input, int per_prism,
                   unsigned seed) {
-  const sh::ShellProjection exact(cm.shell, input);
+  // A shell built on a refinement of the input (Shell::refinement: the mesher's shape and thin
+  // refinements) projects onto the refined surface, with that surface's reference copy; its
+  // crossing is taken to the input face that holds it the way the fibers report it.
+  const auto& rf = cm.shell.refinement;
+  SurfaceMesh surface = input;
+  sh::Shell shell = cm.shell;
+  if (!rf.empty()) {
+    surface.V.resize(input.V.rows() + rf.points.rows(), 3);
+    surface.V << input.V, rf.points;
+    surface.F = rf.faces;
+    surface.tags.resize(0);
+    shell.reference = rf.reference;
+  }
+  const sh::ShellProjection exact(shell, surface);
   const FiberProjection fibers(sh::fibers_of(cm.shell, input), input);
+  struct Crossing {
+    int face;
+    Eigen::Vector3d bary, position;
+  };
+  auto exact_project = [&](int f, double u, double v) -> std::optional<Crossing> {
+    const auto e = exact.project(sh::PrismPoint{f, u, v, 0.0});
+    if (!e) return std::nullopt;
+    Crossing c{e->face, e->bary, e->position};
+    if (!rf.empty()) {
+      c.face = rf.parent[std::size_t(e->face)];
+      c.bary.setZero();
+      for (int k = 0; k < 3; ++k) c.bary += e->bary[k] * rf.bary[std::size_t(e->face)].col(k);
+      c.position.setZero();
+      for (int k = 0; k < 3; ++k)
+        c.position += c.bary[k] * Eigen::Vector3d(input.V.row(input.F(c.face, k)));
+    }
+    return c;
+  };
   const double unit = bbox_longest_edge(input.V);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(0, 1);
@@ -68,7 +100,7 @@ Agreement compare(const cv::CurvedMesh& cm, const SurfaceMesh& input, int per_pr
   auto check = [&](int f, double u, double v, bool random = false) {
     ++a.points;
     a.random_points += random;
-    const auto e = exact.project(sh::PrismPoint{f, u, v, 0.0});
+    const auto e = exact_project(f, u, v);
     const auto g = fibers.project(f, u, v);
     if (!e || !g) {
       if (!e && !g)

@@ -56,6 +56,7 @@ struct MeshArgs {
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
+  double shape_refine = meshing::curved::CurvedMeshOptions{}.shape_refine;
   double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
@@ -215,6 +216,11 @@ void register_mesh(CLI::App& app) {
                   "local thickness (same surface; where the input itself is too coarse for "
                   "--max-edge-per-thickness to help, e.g. a CAD plate; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--shape-refine", args->shape_refine,
+                  "before the shell, bisect the longest edge of input faces whose 2-D MIPS "
+                  "exceeds 20 and whose longest edge exceeds this many eps (same surface; CAD "
+                  "tessellations' needle and cap fans get vertices inside their faces; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
                 "(meshing/curved/README.md, step 7; off: the full shear)");
@@ -273,6 +279,7 @@ void register_mesh(CLI::App& app) {
     options.shell_split_mips = args->split_mips;
     options.max_edge_per_thickness = args->max_edge_per_thickness;
     options.thin_refine_ratio = args->thin_refine_ratio;
+    options.shape_refine = args->shape_refine;
     options.shape_slack = args->shape_slack;
     options.curve_quality_floor = args->curve_quality_floor;
     options.exterior_padding = args->padding;

@@ -8,10 +8,12 @@
 #include <string>
 
 #include "meshing/core/adversarial.hpp"
+#include "meshing/core/fiber_projection.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/features.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
+#include "meshing/shell/fibers_of.hpp"
 
 using namespace curvefem;
 namespace cv = curvefem::meshing::curved;
@@ -188,9 +190,12 @@ TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFir
   // guard, which this test keeps: the shape slack (on by default since 2026-12-03) lets the
   // unrefined bar's needle sides coarsen by itself (24 tets, 8.9e-3, 16 below 0.01, max MIPS
   // 1.9e3), and the refined bar then ends with 82 tets, 4.3e-3, 17 below 0.01, max MIPS 4.2e3.
+  // The shape refinement (on by default since 2026-12-04) is off here: it refines this bar's
+  // needle sides by itself (CurvedAdversarial.NeedleSidesOfABarAreRefinedForTheirShape).
   const SurfaceMesh input = make_adversarial("box_thin_long");
   cv::CurvedMeshOptions o = default_options(input, 3);
   o.shape_slack = 0;
+  o.shape_refine = 0;
   ASSERT_GT(o.thin_refine_ratio, 0);  // on by default
   const Meshed with = mesh_with(input, o, "refined");
   o.thin_refine_ratio = 0;
@@ -209,6 +214,54 @@ TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFir
   EXPECT_GT(a.min_scaled_jacobian, 5 * b.min_scaled_jacobian);
   EXPECT_LT(a.tets_sj_below_1e2 * 3, b.tets_sj_below_1e2);
   EXPECT_LT(a.max_mips * 5, b.max_mips);
+}
+
+TEST(CurvedAdversarial, NeedleSidesOfABarAreRefinedForTheirShape) {
+  // The same bar with the default options: the shape refinement bisects every input face with a
+  // 2-D MIPS above 20 whose longest edge is longer than 8 ε (its sides' needles, feature edges
+  // included), so the coarsening has vertices inside the bar's faces and along its edges.
+  const SurfaceMesh input = make_adversarial("box_thin_long");
+  cv::CurvedMeshOptions o = default_options(input, 3);
+  ASSERT_GT(o.shape_refine, 0);  // on by default
+  const Meshed with = mesh_with(input, o, "shape-refined");
+  o.shape_refine = 0;
+  const Meshed without = mesh_with(input, o, "not shape-refined");
+  const cv::CurvedValidation &a = with.v, &b = without.v;
+  std::printf(
+      "bar, shape refinement: %d poor faces, %d bisections (%d on feature edges); min sJ "
+      "%.3g vs %.3g, below 0.01 %d vs %d, max MIPS %.3g vs %.3g, tets %d vs %d\n",
+      with.stats.shape_poor_before, with.stats.shape_splits, with.stats.shape_feature_splits,
+      a.min_scaled_jacobian, b.min_scaled_jacobian, a.tets_sj_below_1e2, b.tets_sj_below_1e2,
+      a.max_mips, b.max_mips, a.tets, b.tets);
+  EXPECT_TRUE(a.valid(0.01));
+  EXPECT_TRUE(b.valid(0.01));
+  EXPECT_GT(with.stats.shape_splits, 0);
+  EXPECT_GT(with.stats.shape_feature_splits, 0);
+  EXPECT_EQ(with.stats.shape_poor_after, 0);
+  EXPECT_EQ(without.stats.shape_splits, 0);
+  EXPECT_EQ(a.feature_edges, 48);  // the input's feature edges, each along the boundary's edges
+  EXPECT_EQ(a.features_off_edges, 0);
+  EXPECT_TRUE(with.stats.thin_fallback.empty());
+  EXPECT_GT(a.min_scaled_jacobian, 2 * b.min_scaled_jacobian);
+  EXPECT_LT(a.max_mips * 2, b.max_mips);
+  // φ⁻¹ by the saved fibers, which cross the refined surface (Shell::refinement), brings every
+  // input vertex's image back to it.
+  ASSERT_FALSE(with.mesh.shell.refinement.empty());
+  const curvefem::FiberProjection fibers(
+      curvefem::meshing::shell::fibers_of(with.mesh.shell, input), input);
+  const double unit = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).maxCoeff();
+  int missed = 0;
+  double worst = 0;
+  for (int v = 0; v < with.mesh.map.num_input_vertices(); ++v) {
+    const auto c = fibers.project(with.mesh.map.vertex_face[v], with.mesh.map.vertex_uv(v, 0),
+                                  with.mesh.map.vertex_uv(v, 1));
+    if (!c)
+      ++missed;
+    else
+      worst = std::max(worst, (c->position - input.V.row(v).transpose()).norm() / unit);
+  }
+  EXPECT_EQ(missed, 0);
+  EXPECT_LE(worst, 1e-12);
 }
 
 TEST(CurvedAdversarial, TheThinSplitRingMeshesAtOrderFour) {

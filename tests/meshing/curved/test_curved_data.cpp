@@ -136,6 +136,10 @@ TEST(CurvedData, CurvedAwareCoarseningWidensAroundPulledSlabsOnBunny) {
   if (!run) GTEST_SKIP() << k_no_data;
   const curvefem::SurfaceMesh& input = run->input;
   cv::CurvedMeshOptions& o = run->options;
+  // The bunny unrefined: its two long filled-hole faces, bisected by the shape refinement (on by
+  // default since 2026-12-04), no longer send the coarsening through a widened attempt (attempt
+  // 2, 704 faces), and the widening is what this test is about.
+  o.shape_refine = 0;
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, input);

@@ -718,6 +718,17 @@ TEST(SnappedPredicates, BadSnapsThrow) {
   }
   // Nothing was snapped by the failed calls.
   EXPECT_TRUE(index.snaps().empty());
+  // An end given by its position (restore_input_ids: a coarse vertex that is no vertex here)
+  // snaps like the vertex at that position.
+  {
+    sh::InputSurfaceIndex by_id(surf.V, F), by_position(surf.V, F);
+    by_id.snap_vertex({2, 0, 1, 0.5});
+    sh::SnappedVertex q{2, 0, -1, 0.5};
+    q.pb = surf.V.row(1).transpose();
+    by_position.snap_vertex(q);
+    EXPECT_EQ(by_id.reference_V(), by_position.reference_V());
+    EXPECT_EQ(by_id.face_triangle(0), by_position.face_triangle(0));
+  }
   EXPECT_EQ(index.face_triangle(0)[0], surf.x());
   // A good snap after bad ones works, and a bad one leaves it in place.
   index.snap_vertex({2, 0, 1, 0.25});

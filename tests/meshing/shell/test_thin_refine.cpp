@@ -7,6 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -185,4 +189,172 @@ TEST(ThinRefine, ComposedWithABevelTheRefinedFacesFindTheirInputFaces) {
     EXPECT_EQ(face, chain_face);
     EXPECT_LE((bary - chain_bary).norm(), 1e-15);
   }
+}
+
+namespace {
+
+double mips(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  return ((b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm()) /
+         (std::sqrt(3.0) * (b - a).cross(c - a).norm());
+}
+
+// Faces with a 2-D MIPS above `limit` whose longest edge is longer than `min_edge` (counted here,
+// independently of the refinement).
+int poor_faces(const SurfaceMesh& s, double limit, double min_edge) {
+  int n = 0;
+  for (int f = 0; f < s.num_faces(); ++f) {
+    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    n += longest > min_edge && mips(a, b, c) > limit;
+  }
+  return n;
+}
+
+// A CAD-style cylinder (radius 1, height h, n rim vertices): each side quad two needles, each cap
+// a fan from one rim vertex (no vertex inside a cap), outward oriented.
+SurfaceMesh fan_cylinder(int n, double h) {
+  SurfaceMesh s;
+  s.V.resize(2 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / n;
+    s.V.row(i) << std::cos(t), std::sin(t), 0;
+    s.V.row(n + i) << std::cos(t), std::sin(t), h;
+  }
+  std::vector<Eigen::Vector3i> F;
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    F.emplace_back(i, j, n + j);
+    F.emplace_back(i, n + j, n + i);
+  }
+  for (int i = 1; i + 1 < n; ++i) {
+    F.emplace_back(0, i + 1, i);          // bottom, facing -z
+    F.emplace_back(n, n + i, n + i + 1);  // top, facing +z
+  }
+  s.F.resize(Eigen::Index(F.size()), 3);
+  for (std::size_t f = 0; f < F.size(); ++f) s.F.row(Eigen::Index(f)) = F[f].transpose();
+  return s;
+}
+
+// Edges whose two faces meet at more than 60 degrees.
+std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& s) {
+  std::map<std::pair<int, int>, std::vector<int>> faces_of;
+  for (int f = 0; f < s.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = s.F(f, c), b = s.F(f, (c + 1) % 3);
+      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  auto normal = [&](int f) {
+    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    return Eigen::Vector3d((b - a).cross(c - a).normalized());
+  };
+  std::vector<std::array<int, 2>> out;
+  for (const auto& [e, fs] : faces_of)
+    if (normal(fs[0]).dot(normal(fs[1])) < 0.5) out.push_back({e.first, e.second});
+  return out;
+}
+
+}  // namespace
+
+TEST(ShapeRefine, NeedleAndCapFansAreBisectedUntilNoLongFaceIsPoorlyShaped) {
+  // 48 rim vertices, height 4: the side needles are 4 long and 0.13 wide (MIPS about 35), the
+  // caps' fans from one rim vertex have chords up to 2 long.
+  const SurfaceMesh cyl = fan_cylinder(48, 4.0);
+  expect_closed_oriented(cyl);
+  sh::ShapeRefineOptions o;
+  o.min_edge = 0.5;
+  o.max_mips = 20;
+  o.feature_edges = sharp_edges(cyl);
+  ASSERT_EQ(o.feature_edges.size(), 96u);  // the two rims
+  sh::ShapeRefineStats st;
+  std::vector<std::array<int, 2>> features;
+  const sh::BeveledSurface r = sh::refine_poor_shapes(cyl, o, st, features);
+  std::printf(
+      "%d poor faces -> %d, %d bisections (%d on features), %d input faces refined, %d "
+      "faces\n",
+      st.poor_faces_before, st.poor_faces_after, st.splits, st.feature_splits, st.refined_faces,
+      r.mesh.num_faces());
+  ASSERT_TRUE(r.refined());
+  EXPECT_EQ(st.poor_faces_before, poor_faces(cyl, 20, 0.5));
+  EXPECT_GE(st.poor_faces_before, 96);  // every side needle at least
+  EXPECT_EQ(st.poor_faces_after, 0);
+  EXPECT_EQ(poor_faces(r.mesh, 20, 0.5), 0);
+  EXPECT_FALSE(st.budget_reached);
+  EXPECT_EQ(r.mesh.num_faces(), cyl.num_faces() + 2 * st.splits);
+  EXPECT_EQ(r.mesh.num_vertices(), cyl.num_vertices() + st.splits);
+  EXPECT_EQ(st.refined_faces, r.beveled_faces);
+  EXPECT_EQ(st.feature_splits, 0);  // the rims' edges (0.13) are never a long face's longest
+  EXPECT_EQ(features.size(), o.feature_edges.size());
+  expect_closed_oriented(r.mesh);
+  expect_same_surface(cyl, r);
+
+  sh::ShapeRefineOptions off = o;
+  off.min_edge = 0;
+  sh::ShapeRefineStats none;
+  const sh::BeveledSurface same = sh::refine_poor_shapes(cyl, off, none, features);
+  EXPECT_FALSE(same.refined());
+  EXPECT_EQ(none.splits, 0);
+  EXPECT_EQ(features.size(), o.feature_edges.size());
+}
+
+TEST(ShapeRefine, LongFeatureEdgesAreBisectedWithTheirFacesAndReturnedAsChains) {
+  // An 8 x 0.25 x 0.25 bar, two triangles per side: every side face is a needle (MIPS about 37)
+  // with a long box edge, which the bisections reach once the diagonals are cut.
+  const SurfaceMesh bar = curvefem::make_box({0, 0, 0}, {8, 0.25, 0.25}, 1);
+  sh::ShapeRefineOptions o;
+  o.min_edge = 1.0;
+  o.max_mips = 20;
+  o.feature_edges = sharp_edges(bar);
+  ASSERT_EQ(o.feature_edges.size(), 12u);
+  sh::ShapeRefineStats st;
+  std::vector<std::array<int, 2>> features;
+  const sh::BeveledSurface r = sh::refine_poor_shapes(bar, o, st, features);
+  ASSERT_TRUE(r.refined());
+  EXPECT_EQ(st.poor_faces_before, poor_faces(bar, 20, 1.0));
+  EXPECT_EQ(st.poor_faces_after, 0);
+  EXPECT_GT(st.feature_splits, 0);
+  EXPECT_EQ(features.size(), o.feature_edges.size() + std::size_t(st.feature_splits));
+  expect_closed_oriented(r.mesh);
+  expect_same_surface(bar, r);
+  // The refined feature edges are edges of the refined surface, each on one input feature edge,
+  // and together exactly as long as the input's.
+  std::set<std::pair<int, int>> edges;
+  for (int f = 0; f < r.mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = r.mesh.F(f, c), b = r.mesh.F(f, (c + 1) % 3);
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  double input_length = 0, refined_length = 0;
+  for (const auto& e : o.feature_edges) input_length += (bar.V.row(e[0]) - bar.V.row(e[1])).norm();
+  for (const auto& e : features) {
+    EXPECT_TRUE(edges.count({std::min(e[0], e[1]), std::max(e[0], e[1])}));
+    const Eigen::Vector3d a = r.mesh.V.row(e[0]), b = r.mesh.V.row(e[1]);
+    refined_length += (a - b).norm();
+    bool on_one = false;
+    for (const auto& g : o.feature_edges) {
+      const Eigen::Vector3d p = bar.V.row(g[0]), q = bar.V.row(g[1]);
+      on_one |= (q - p).cross(a - p).norm() <= 1e-12 && (q - p).cross(b - p).norm() <= 1e-12 &&
+                (a - p).dot(q - p) >= 0 && (b - p).dot(q - p) >= 0 &&
+                (a - p).norm() <= (q - p).norm() && (b - p).norm() <= (q - p).norm();
+    }
+    EXPECT_TRUE(on_one) << "refined feature " << e[0] << "-" << e[1];
+  }
+  EXPECT_NEAR(refined_length, input_length, 1e-12);
+
+  // Without feature bisection no box edge is cut; the faces whose longest edge is one stay.
+  o.bisect_features = false;
+  sh::ShapeRefineStats kst;
+  const sh::BeveledSurface k = sh::refine_poor_shapes(bar, o, kst, features);
+  EXPECT_EQ(kst.feature_splits, 0);
+  EXPECT_EQ(features.size(), o.feature_edges.size());
+  std::set<std::pair<int, int>> kedges;
+  for (int f = 0; f < k.mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = k.mesh.F(f, c), b = k.mesh.F(f, (c + 1) % 3);
+      kedges.insert({std::min(a, b), std::max(a, b)});
+    }
+  for (const auto& e : o.feature_edges)
+    EXPECT_TRUE(kedges.count({std::min(e[0], e[1]), std::max(e[0], e[1])}));
+  EXPECT_GT(kst.poor_faces_after, 0);
+  expect_closed_oriented(k.mesh);
+  expect_same_surface(bar, k);
 }
