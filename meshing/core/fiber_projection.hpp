@@ -62,7 +62,7 @@ class FiberProjection {
   std::optional<FiberCrossing> near_pinch(int f, int s, const std::array<double, 3>& w) const;
 
   ShellFibers m_fibers;
-  Eigen::MatrixXd m_input_V;                // the input (m_V, m_F: the refined surface if any)
+  Eigen::MatrixXd m_input_V;  // the input (m_V, m_F: the refined surface if any)
   Eigen::MatrixXi m_input_F;
   Eigen::MatrixXd m_V;                      // input vertices
   Eigen::MatrixXd m_reference;              // reference copy of the input vertices

@@ -26,7 +26,8 @@ void validate_structure(const ShellFibers& s, int input_vertices, int input_face
     fail("reference_vertices and reference_positions differ in length");
   if (s.refined()) {
     const Eigen::Index nr = s.surface_faces.rows();
-    if (s.surface_faces.cols() != 3 || (s.surface_points.rows() > 0 && s.surface_points.cols() != 3))
+    if (s.surface_faces.cols() != 3 ||
+        (s.surface_points.rows() > 0 && s.surface_points.cols() != 3))
       fail("surface_faces and surface_points must be #F × 3 and #added × 3");
     if (Eigen::Index(s.surface_parent.size()) != nr || s.surface_bary.rows() != nr ||
         s.surface_bary.cols() != 9)

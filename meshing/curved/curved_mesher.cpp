@@ -821,8 +821,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     shape.max_mips = options.shape_refine_mips;
     shape.min_edge = options.shape_refine * eps;
     shape.feature_edges = options.feature_edges;
-    shape.bisect_features = options.feature_chains && options.constraint_points.empty() &&
-                            options.eps_samples < 2;
+    shape.bisect_features =
+        options.feature_chains && options.constraint_points.empty() && options.eps_samples < 2;
     const sh::BeveledSurface shaped =
         sh::refine_poor_shapes(input, shape, st.shape_stats, st.surface_features);
     sh::ThinRefineOptions thin;

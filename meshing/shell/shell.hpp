@@ -39,10 +39,10 @@ struct Shell {
   // chains move with it there but not in the input's faces); fibers_of crosses the refined
   // surface itself. Empty (no faces): built on the input.
   struct Refinement {
-    Eigen::MatrixXd points;                 // #added × 3
-    Eigen::MatrixXi faces;                  // #refined F × 3
-    std::vector<int> parent;                // input face of each refined face
-    std::vector<Eigen::Matrix3d> bary;      // column k: corner k in the parent face
+    Eigen::MatrixXd points;                // #added × 3
+    Eigen::MatrixXi faces;                 // #refined F × 3
+    std::vector<int> parent;               // input face of each refined face
+    std::vector<Eigen::Matrix3d> bary;     // column k: corner k in the parent face
     std::vector<SnappedVertex> reference;  // snaps of the refined surface's reference copy
     bool empty() const { return faces.rows() == 0; }
   } refinement;

@@ -683,8 +683,7 @@ void InputSurfaceIndex::snap_vertex(const SnappedVertex& q) {
   }
   const bool was = m.snap[std::size_t(q.vertex)].vertex >= 0;
   m.snap[std::size_t(q.vertex)] = q;
-  const ExactPoint p =
-      ExactPoint::on_segment(m.end_a(q), m.end_b(q), q.s);
+  const ExactPoint p = ExactPoint::on_segment(m.end_a(q), m.end_b(q), q.s);
   m.Vref.row(q.vertex) = p.p.transpose();
   {
     CGAL::Protect_FPU_rounding<true> guard;

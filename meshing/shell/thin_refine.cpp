@@ -370,9 +370,10 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
   log::info("shape refinement: ", stats.poor_faces_before, " input faces with a 2-D MIPS above ",
             options.max_mips, " and an edge longer than ", options.min_edge, "; ", stats.splits,
             " bisections (", stats.feature_splits, " on feature edges) refined ",
-            stats.refined_faces, " input faces into ", r.F.size() - std::size_t(nf) +
-            std::size_t(stats.refined_faces), "; ", stats.poor_faces_after, " left",
-            stats.budget_reached ? ", face budget reached" : "", ", ", stats.seconds, " s");
+            stats.refined_faces, " input faces into ",
+            r.F.size() - std::size_t(nf) + std::size_t(stats.refined_faces), "; ",
+            stats.poor_faces_after, " left", stats.budget_reached ? ", face budget reached" : "",
+            ", ", stats.seconds, " s");
   return out;
 }
 
