@@ -146,7 +146,7 @@ SavedBoundaryMap read_boundary_map(const std::filesystem::path& path) {
                        std::to_string(k_boundary_map_version) + " (with the shell's fibers)");
     if (version < 1 || version > k_boundary_map_version)
       throw InputError(path.string() + ": boundary map version " + std::to_string(version) +
-                       " is not supported (this build reads 1 without a shell, and " +
+                       " is not supported (this build reads 1 without a shell, and 2 to " +
                        std::to_string(k_boundary_map_version) + ")");
     map.boundary.kind = CellKind::triangle;
     map.boundary.order = j.at("order").get<int>();

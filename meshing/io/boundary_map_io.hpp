@@ -20,7 +20,9 @@
 
 namespace curvefem::io {
 
-inline constexpr int k_boundary_map_version = 2;
+// 3 (2026-12-04): the fibers may carry the refined surface they cross (ShellFibers::surface_*),
+// which a reader of version 2 would ignore and so evaluate φ⁻¹ on the wrong triangles.
+inline constexpr int k_boundary_map_version = 3;
 
 /// `input`: the dense input's path, recorded for later runs (absolute, or relative to the file's
 /// folder). `fibers` (optional): the coarse shell's fibers the boundary was curved in (φ⁻¹ = P_T

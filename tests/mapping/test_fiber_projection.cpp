@@ -325,6 +325,18 @@ TEST(BoundaryMapFile, RoundTripsTheMapAndFibersBitForBitAndPhiInverseExactly) {
   const SurfaceMesh cylinder = make_cylinder(32, 4, 3, 1.0);
   o.feature_edges = cv::detect_feature_edges(cylinder, 60);
   EXPECT_EQ(round_trip("cylinder", cylinder, o), cylinder.num_vertices() + 500);
+  // A shell built on the shape-refined input (needle sides, feature edges bisected): the fibers
+  // carry the refined surface (ShellFibers::surface_*), written and read back bit for bit.
+  const SurfaceMesh bar = make_adversarial("box_thin_long");
+  o.feature_edges = cv::detect_feature_edges(bar, 60);
+  ASSERT_GT(o.shape_refine, 0);
+  {
+    cv::CurvedMeshStats stats;
+    const cv::CurvedMesh cm = cv::build_curved_mesh(bar, o, stats);
+    ASSERT_GT(stats.shape_feature_splits, 0);
+    ASSERT_TRUE(sh::fibers_of(cm.shell, bar).refined());
+  }
+  EXPECT_EQ(round_trip("bar", bar, o), bar.num_vertices() + 500);
   // Distance points, and a spatially varying ε (half of it where z > 0).
   const SurfaceMesh sphere = make_icosphere(2);
   o.feature_edges.clear();
