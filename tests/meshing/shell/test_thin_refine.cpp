@@ -41,6 +41,17 @@ void expect_closed_oriented(const SurfaceMesh& s) {
   }
 }
 
+// The edges of a mesh as (smaller id, larger id).
+std::set<std::pair<int, int>> edge_set(const SurfaceMesh& s) {
+  std::set<std::pair<int, int>> edges;
+  for (int f = 0; f < s.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = s.F(f, c), b = s.F(f, (c + 1) % 3);
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  return edges;
+}
+
 // The refined surface is the input: input vertices unchanged and first, every refined corner at
 // its barycentric place in its parent, the parents' areas split exactly among their children.
 void expect_same_surface(const SurfaceMesh& input, const sh::BeveledSurface& r) {
@@ -113,12 +124,7 @@ TEST(ThinRefine, APlateFarThinnerThanItsEdgesIsBisectedUntilNoEdgeIsThin) {
   sh::ThinRefineStats kst;
   const sh::BeveledSurface k = sh::refine_thin_parts(plate, o, kst);
   EXPECT_GT(kst.splits, 0);
-  std::set<std::pair<int, int>> edges;
-  for (int f = 0; f < k.mesh.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = k.mesh.F(f, c), b = k.mesh.F(f, (c + 1) % 3);
-      edges.insert({std::min(a, b), std::max(a, b)});
-    }
+  const std::set<std::pair<int, int>> edges = edge_set(k.mesh);
   for (const auto& e : o.kept_edges)
     EXPECT_TRUE(edges.count({std::min(e[0], e[1]), std::max(e[0], e[1])}))
         << "kept edge " << e[0] << "-" << e[1] << " was bisected";
@@ -317,12 +323,7 @@ TEST(ShapeRefine, LongFeatureEdgesAreBisectedWithTheirFacesAndReturnedAsChains) 
   expect_same_surface(bar, r);
   // The refined feature edges are edges of the refined surface, each on one input feature edge,
   // and together exactly as long as the input's.
-  std::set<std::pair<int, int>> edges;
-  for (int f = 0; f < r.mesh.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = r.mesh.F(f, c), b = r.mesh.F(f, (c + 1) % 3);
-      edges.insert({std::min(a, b), std::max(a, b)});
-    }
+  const std::set<std::pair<int, int>> edges = edge_set(r.mesh);
   double input_length = 0, refined_length = 0;
   for (const auto& e : o.feature_edges) input_length += (bar.V.row(e[0]) - bar.V.row(e[1])).norm();
   for (const auto& e : features) {
@@ -346,12 +347,7 @@ TEST(ShapeRefine, LongFeatureEdgesAreBisectedWithTheirFacesAndReturnedAsChains) 
   const sh::BeveledSurface k = sh::refine_poor_shapes(bar, o, kst, features);
   EXPECT_EQ(kst.feature_splits, 0);
   EXPECT_EQ(features.size(), o.feature_edges.size());
-  std::set<std::pair<int, int>> kedges;
-  for (int f = 0; f < k.mesh.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = k.mesh.F(f, c), b = k.mesh.F(f, (c + 1) % 3);
-      kedges.insert({std::min(a, b), std::max(a, b)});
-    }
+  const std::set<std::pair<int, int>> kedges = edge_set(k.mesh);
   for (const auto& e : o.feature_edges)
     EXPECT_TRUE(kedges.count({std::min(e[0], e[1]), std::max(e[0], e[1])}));
   EXPECT_GT(kst.poor_faces_after, 0);
