@@ -302,13 +302,15 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         if (std::abs(l[c] - 1) <= 1e-9) images.insert(cells(f, c));
     }
     const double unit = bbox_longest_edge(input.V);
-    auto through_split_point = [&](int va, int vb, int a, int b) {
+    // Does boundary node m lie on the input segment from vertex va to vertex vb?
+    auto on_input_segment = [&](int va, int vb, int m) {
       const Eigen::Vector3d A = input.V.row(va), B = input.V.row(vb);
-      auto on_segment = [&](int m) {
-        const Eigen::Vector3d X = map.boundary.nodes.row(m);
-        const double t = std::clamp((X - A).dot(B - A) / (B - A).squaredNorm(), 0.0, 1.0);
-        return (A + t * (B - A) - X).norm() <= 1e-9 * unit;
-      };
+      const Eigen::Vector3d X = map.boundary.nodes.row(m);
+      const double t = std::clamp((X - A).dot(B - A) / (B - A).squaredNorm(), 0.0, 1.0);
+      return (A + t * (B - A) - X).norm() <= 1e-9 * unit;
+    };
+    auto through_split_point = [&](int va, int vb, int a, int b) {
+      auto on_segment = [&](int m) { return on_input_segment(va, vb, m); };
       // Breadth-first from a to b through corner nodes on the segment that no input vertex maps
       // to (the shell's split points: pinch splits and bevel points, several per edge).
       std::vector<int> frontier{a};
@@ -368,13 +370,7 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
         // such a point, on the segment and no input vertex's image, and from there a path as
         // above.
         const int va = map.feature_edges[i][0], vb = map.feature_edges[i][1];
-        const Eigen::Vector3d A = input.V.row(va), B = input.V.row(vb);
-        auto split_point = [&](int m) {
-          if (images.count(m)) return false;
-          const Eigen::Vector3d X = map.boundary.nodes.row(m);
-          const double t = std::clamp((X - A).dot(B - A) / (B - A).squaredNorm(), 0.0, 1.0);
-          return (A + t * (B - A) - X).norm() <= 1e-9 * unit;
-        };
+        auto split_point = [&](int m) { return !images.count(m) && on_input_segment(va, vb, m); };
         auto ends = [&](const std::pair<int, int>& w) {
           std::vector<int> out;
           if (w.second < 0) {

@@ -41,6 +41,24 @@ void expect_closed_oriented(const SurfaceMesh& s) {
   }
 }
 
+// Edges whose two faces meet at more than 60 degrees.
+std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& s) {
+  std::map<std::pair<int, int>, std::vector<int>> faces_of;
+  for (int f = 0; f < s.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = s.F(f, c), b = s.F(f, (c + 1) % 3);
+      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  auto normal = [&](int f) {
+    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    return Eigen::Vector3d((b - a).cross(c - a).normalized());
+  };
+  std::vector<std::array<int, 2>> out;
+  for (const auto& [e, fs] : faces_of)
+    if (normal(fs[0]).dot(normal(fs[1])) < 0.5) out.push_back({e.first, e.second});
+  return out;
+}
+
 // The edges of a mesh as (smaller id, larger id).
 std::set<std::pair<int, int>> edge_set(const SurfaceMesh& s) {
   std::set<std::pair<int, int>> edges;
@@ -106,20 +124,7 @@ TEST(ThinRefine, APlateFarThinnerThanItsEdgesIsBisectedUntilNoEdgeIsThin) {
 
   // With the box's sharp edges kept (the mesher passes the feature edges): none of them is
   // bisected, the rest still is.
-  std::map<std::pair<int, int>, std::vector<int>> faces_of;
-  for (int f = 0; f < plate.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = plate.F(f, c), b = plate.F(f, (c + 1) % 3);
-      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
-    }
-  auto unit_normal = [&](int f) {
-    const Eigen::Vector3d a = plate.V.row(plate.F(f, 0)), b = plate.V.row(plate.F(f, 1)),
-                          c = plate.V.row(plate.F(f, 2));
-    return Eigen::Vector3d((b - a).cross(c - a).normalized());
-  };
-  for (const auto& [e, fs] : faces_of)
-    if (unit_normal(fs[0]).dot(unit_normal(fs[1])) < 0.5)
-      o.kept_edges.push_back({e.first, e.second});
+  o.kept_edges = sharp_edges(plate);
   ASSERT_EQ(o.kept_edges.size(), 4u * 3u * 4u);  // 12 box edges of 4 segments
   sh::ThinRefineStats kst;
   const sh::BeveledSurface k = sh::refine_thin_parts(plate, o, kst);
@@ -239,24 +244,6 @@ SurfaceMesh fan_cylinder(int n, double h) {
   s.F.resize(Eigen::Index(F.size()), 3);
   for (std::size_t f = 0; f < F.size(); ++f) s.F.row(Eigen::Index(f)) = F[f].transpose();
   return s;
-}
-
-// Edges whose two faces meet at more than 60 degrees.
-std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& s) {
-  std::map<std::pair<int, int>, std::vector<int>> faces_of;
-  for (int f = 0; f < s.num_faces(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = s.F(f, c), b = s.F(f, (c + 1) % 3);
-      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
-    }
-  auto normal = [&](int f) {
-    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
-    return Eigen::Vector3d((b - a).cross(c - a).normalized());
-  };
-  std::vector<std::array<int, 2>> out;
-  for (const auto& [e, fs] : faces_of)
-    if (normal(fs[0]).dot(normal(fs[1])) < 0.5) out.push_back({e.first, e.second});
-  return out;
 }
 
 }  // namespace
