@@ -946,6 +946,7 @@ double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
   // faces are therefore skipped in the traversal and measured here; every face the traversal
   // prunes is farther than its answer, so the smaller of the two is the first hit.
   const Point second = ray.second_point();
+  const V3 unit_direction = direction.normalized();
   double coplanar = std::numeric_limits<double>::infinity();
   auto skip = [&](const std::vector<Triangle>::const_iterator& it) {
     if (std::find(ignore.begin(), ignore.end(), m_impl->id(it)) != ignore.end()) return true;
@@ -954,7 +955,7 @@ double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
         CGAL::orientation(tri[0], tri[1], tri[2], second) != CGAL::COPLANAR)
       return false;
     if (!tri.is_degenerate() && CGAL::do_intersect(tri, ray))
-      coplanar = std::min(coplanar, coplanar_ray_distance(tri, origin, direction.normalized()));
+      coplanar = std::min(coplanar, coplanar_ray_distance(tri, origin, unit_direction));
     return true;
   };
   const auto hit = m_impl->tree.first_intersection(ray, skip);
