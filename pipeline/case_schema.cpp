@@ -48,7 +48,7 @@ const std::vector<CaseKeyRow> k_rows = {
      .doc = R"md(box: n × n squares (two triangles each) per side)md"},
     {.keys = {{.path = "geometry.features", .type = T::any, .default_json = R"("auto")", .allowed = {"auto", "none"}}},
      .type = R"md(string \| object)md",
-     .doc = R"md(feature edges kept sharp by the curved mesher: `"auto"` (dihedral angle > 60°), `"none"`, `{"angle": DEG}`, `{"file": "edges.json"}` (a JSON list of input vertex-index pairs, or `{"edges": [...]}`); only with a surface)md"},
+     .doc = R"md(feature edges kept sharp by the curved mesher: `"auto"` (dihedral angle > 60°), `"none"`, `{"angle": DEG}`, `{"file": "edges.json"}` (a JSON list of input vertex-index pairs, or `{"edges": [...]}`); only with a surface. Detected feature curves (connected feature edges) whose bounding box is smaller than 2 ε are not kept; a file's edges all are)md"},
     {.keys = {{.path = "geometry.features.angle", .type = T::number, .range = CaseKeyRange{0, 180, true, true}}},
      .type = R"md(number in (0, 180))md",
      .doc = R"md(`{"angle": DEG}`: feature edges are those whose dihedral angle exceeds DEG)md"},

@@ -112,6 +112,7 @@ cv::CurvedMeshOptions curved_options(const CaseSpec& spec, const StageContext& c
   options.threads = ctx.threads;
   options.deterministic = spec.deterministic;
   options.feature_edges = case_feature_edges(spec, input);
+  if (spec.features == FeatureMode::file) options.feature_min_size = 0;  // the user's own list
   options.exterior = spec.exterior;
   options.exterior_padding = spec.padding;
   return options;

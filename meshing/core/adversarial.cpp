@@ -237,6 +237,48 @@ SurfaceMesh make_split_ring(double r_in, double r_out, double height, double gap
   return m;
 }
 
+SurfaceMesh make_box_with_spikes(int n, int spikes, double radius, double height) {
+  const SurfaceMesh box = make_box({0, 0, 0}, {1, 1, 1}, n);
+  std::vector<int> top;
+  for (int f = 0; f < box.num_faces(); ++f)
+    if (box.V(box.F(f, 0), 2) == 1 && box.V(box.F(f, 1), 2) == 1 && box.V(box.F(f, 2), 2) == 1)
+      top.push_back(f);
+  if (spikes < 0 || spikes > int(top.size()))
+    throw InputError("make_box_with_spikes: " + std::to_string(spikes) + " spikes on " +
+                     std::to_string(top.size()) + " top faces");
+  std::vector<Eigen::Vector3d> V(box.V.rows());
+  for (int v = 0; v < int(V.size()); ++v) V[std::size_t(v)] = box.V.row(v).transpose();
+  std::vector<Eigen::Vector3i> F;
+  std::set<int> spiked;
+  for (int i = 0; i < spikes; ++i)  // spread over the top, away from its rim when there is room
+    spiked.insert(top[std::size_t((2 * i + 1) * int(top.size()) / (2 * spikes))]);
+  for (int f = 0; f < box.num_faces(); ++f) {
+    const Eigen::Vector3i c = box.F.row(f).transpose();
+    if (!spiked.count(f)) {
+      F.push_back(c);
+      continue;
+    }
+    const Eigen::Vector3d g =
+        (V[std::size_t(c[0])] + V[std::size_t(c[1])] + V[std::size_t(c[2])]) / 3;
+    const int ring = int(V.size());
+    for (int k = 0; k < 3; ++k) V.push_back(g + radius * (V[std::size_t(c[k])] - g).normalized());
+    const int tip = int(V.size());
+    V.push_back(g + Eigen::Vector3d(0, 0, height));
+    for (int k = 0; k < 3; ++k) {
+      const int a = c[k], b = c[(k + 1) % 3], p = ring + k, q = ring + (k + 1) % 3;
+      F.emplace_back(a, b, q);
+      F.emplace_back(a, q, p);
+      F.emplace_back(p, q, tip);
+    }
+  }
+  SurfaceMesh out;
+  out.V.resize(Eigen::Index(V.size()), 3);
+  for (std::size_t v = 0; v < V.size(); ++v) out.V.row(Eigen::Index(v)) = V[v].transpose();
+  out.F.resize(Eigen::Index(F.size()), 3);
+  for (std::size_t f = 0; f < F.size(); ++f) out.F.row(Eigen::Index(f)) = F[f].transpose();
+  return out;
+}
+
 SurfaceMesh make_strip_cylinder(int n_bottom, int n_top, double radius, double height, int rings) {
   if (n_bottom < 3 || n_top < 3 || rings < 1 || !(radius > 0) || !(height > 0))
     throw InputError("strip cylinder: n >= 3 on both rims, rings >= 1, radius and height > 0");
@@ -331,6 +373,9 @@ const std::vector<AdversarialSurface>& adversarial_surfaces() {
        "rims of 256 and 128 vertices"},
       {"box_sharp", "a unit box, 8 x 8 quads per side (sharp CAD edges and corners)"},
       {"box_thin_long", "a 1 x 0.02 x 0.02 bar: a needle-like CAD part"},
+      {"box_small_spikes",
+       "a unit box (16 x 16 quads per side) with 6 sharp spikes 0.7 ε high and 0.6 ε across on "
+       "its top: feature curves smaller than ε, ending in corners"},
       {"sphere_coarse", "an icosahedron: 20 faces, every vertex a cone point"},
       {"kissing_spheres_01", "two unit spheres 0.1 ε apart (two components): curved near contact"},
       {"kissing_spheres_001", "two unit spheres 0.01 ε apart"},
@@ -373,6 +418,7 @@ SurfaceMesh make_adversarial(const std::string& name) {
   if (name == "cylinder_flat") return make_cylinder(64, 2, 6, 0.05);
   if (name == "strip_cylinder") return make_strip_cylinder(256, 128, 1.0, 4.0, 6);
   if (name == "box_sharp") return make_box({0, 0, 0}, {1, 1, 1}, 8);
+  if (name == "box_small_spikes") return make_box_with_spikes(16, 6, 0.3 * eps, 0.7 * eps);
   if (name == "box_thin_long") return make_box({0, 0, 0}, {1, 0.02, 0.02}, 4);
   if (name == "sphere_coarse") return make_icosphere(0);
   if (name == "kissing_spheres_01" || name == "kissing_spheres_001") {

@@ -56,4 +56,10 @@ SurfaceMesh make_split_ring(double r_in, double r_out, double height, double gap
 /// bands around a centre vertex. Side faces are height long and about 2π radius / n wide.
 SurfaceMesh make_strip_cylinder(int n_bottom, int n_top, double radius, double height, int rings);
 
+/// The unit box, n x n quads per side, with `spikes` sharp three-sided spikes on its top: each
+/// replaces a top triangle by a ring of three points `radius` from its centroid (toward its
+/// corners) and a tip `height` above the centroid. Their rims and ridges are feature curves a
+/// fraction of ε across, ending in corners.
+SurfaceMesh make_box_with_spikes(int n, int spikes, double radius, double height);
+
 }  // namespace curvefem

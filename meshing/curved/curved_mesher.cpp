@@ -1749,9 +1749,30 @@ std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
     }
     return out;
   };
+  // Feature curves smaller than the finest bound (CurvedMeshOptions::feature_min_size).
+  CurvedMeshOptions pruned = options;
+  int small_curves = 0, small_edges = 0;
+  if (options.feature_min_size > 0 && !options.feature_edges.empty()) {
+    const EpsLevel& finest = levels[order.front()];
+    pruned.feature_edges = drop_small_feature_components(
+        input, options.feature_edges,
+        options.feature_min_size * finest.eps_rel * bbox_longest_edge(input.V), finest.eps_scale,
+        &small_curves);
+    small_edges = int(options.feature_edges.size() - pruned.feature_edges.size());
+    if (small_curves > 0)
+      log::info("mesh: ", small_curves, " feature curves (", small_edges, " edges) smaller than ",
+                options.feature_min_size, " eps are not kept as features");
+  }
+  auto note_small = [&](std::vector<CurvedMesh> out) {
+    for (CurvedMeshStats& s : stats) {
+      s.small_feature_curves = small_curves;
+      s.small_feature_edges = small_edges;
+    }
+    return out;
+  };
   CoarseState state;
   try {
-    return run(options, state);
+    return note_small(run(pruned, state));
   } catch (const MeshingError& e) {
     const int thin_refined = state.thin_stats.refined_faces,
               shape_refined = state.shape_stats.refined_faces;
@@ -1761,13 +1782,13 @@ std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
     log::warn("mesh: on the refined input (", thin_refined, " input faces refined for thin parts, ",
               shape_refined, " for their shape) ", e.what(),
               "; meshing the input without the refinements");
-    CurvedMeshOptions plain = options;
+    CurvedMeshOptions plain = pruned;
     plain.thin_refine_ratio = 0;
     plain.shape_refine = 0;
     CoarseState plain_state;
     std::vector<CurvedMesh> out = run(plain, plain_state);
     for (CurvedMeshStats& s : stats) s.thin_fallback = e.what();
-    return out;
+    return note_small(std::move(out));
   }
 }
 

@@ -48,6 +48,14 @@ struct CurvedMeshOptions {
   // ε = 1% change by -5% to +3%.
   double thickness_per_edge = 1.0;
   std::vector<std::array<int, 2>> feature_edges;  // input vertex pairs (validated by the caller)
+  // Feature curves smaller than the bound are not kept (0: every given edge is): a connected set
+  // of feature edges whose bounding box diagonal is below feature_min_size × ε (the finest
+  // level's, times the smallest eps_scale at its vertices) is dropped from feature_edges before
+  // anything else (drop_small_feature_components). Such curves — a hole's rim of a fraction of
+  // ε, creases where tessellation slivers fold — end in frozen corners (or chains whose snapping
+  // folds their tiny faces), so the coarse surface kept edges of their size beside faces of ε's,
+  // and the slab tets on them were needles and caps. Callers passing a feature file set it 0.
+  double feature_min_size = 2;
   // The distance bound holds at every input vertex, and also at
   //   - constraint points: points on the input surface (within 1e-6 of the bbox edge of it;
   //     InputError otherwise), snapped onto it;
@@ -179,6 +187,9 @@ struct CurvedMeshOptions {
 
 struct CurvedMeshStats {
   int input_vertices = 0, input_faces = 0, feature_edges = 0, frozen_vertices = 0;
+  // Given feature edges and connected curves of them dropped as smaller than
+  // CurvedMeshOptions::feature_min_size × ε.
+  int small_feature_edges = 0, small_feature_curves = 0;
   int singular_vertices = 0;
   int beveled_faces = 0;  // input faces refined by topological beveling (0: not needed)
   // Thin-part refinement (CurvedMeshOptions::thin_refine_ratio): input faces refined, bisections,

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <string>
 
 #include "meshing/core/error.hpp"
@@ -33,6 +34,41 @@ std::vector<std::array<int, 2>> detect_feature_edges(const SurfaceMesh& mesh, do
   for (const auto& [e, faces] : edge_faces(mesh)) {
     if (faces.size() != 2) continue;  // boundary or non-manifold: check rejects those earlier
     if (normal(faces[0]).dot(normal(faces[1])) < cos_bound) out.push_back(e);
+  }
+  return out;
+}
+
+std::vector<std::array<int, 2>> drop_small_feature_components(
+    const SurfaceMesh& mesh, const std::vector<std::array<int, 2>>& edges, double min_extent,
+    const std::vector<double>& scale, int* dropped_components) {
+  std::vector<int> parent(std::size_t(mesh.num_vertices()));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int v) {
+    while (parent[std::size_t(v)] != v)
+      v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
+    return v;
+  };
+  for (const auto& e : edges) parent[std::size_t(find(e[0]))] = find(e[1]);
+  struct Component {
+    Eigen::AlignedBox3d box;
+    double scale = HUGE_VAL;  // the smallest at its vertices
+  };
+  std::map<int, Component> components;
+  for (const auto& e : edges)
+    for (int v : e) {
+      Component& c = components[find(v)];
+      c.box.extend(mesh.V.row(v).transpose());
+      c.scale = std::min(c.scale, scale.empty() ? 1.0 : scale[std::size_t(v)]);
+    }
+  std::vector<std::array<int, 2>> out;
+  for (const auto& e : edges) {
+    const Component& c = components.at(find(e[0]));
+    if (c.box.diagonal().norm() >= min_extent * c.scale) out.push_back(e);
+  }
+  if (dropped_components) {
+    *dropped_components = 0;
+    for (const auto& [root, c] : components)
+      *dropped_components += c.box.diagonal().norm() < min_extent * c.scale;
   }
   return out;
 }

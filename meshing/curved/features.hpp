@@ -14,6 +14,15 @@ namespace curvefem::meshing::curved {
 // Edges (a < b) whose two faces' normals make an angle above `angle_deg` degrees; sorted.
 std::vector<std::array<int, 2>> detect_feature_edges(const SurfaceMesh& mesh, double angle_deg);
 
+// `edges` without the connected components (edges sharing a vertex) whose bounding box has a
+// diagonal below `min_extent` × the smallest `scale` at their vertices (scale empty: 1): curves
+// smaller than the distance bound — a small hole's rim, a crease of two tessellation slivers —
+// that a coarse surface could follow only with elements of their size. Sorted like `edges`;
+// `dropped_components`, if given, receives how many components were left out.
+std::vector<std::array<int, 2>> drop_small_feature_components(
+    const SurfaceMesh& mesh, const std::vector<std::array<int, 2>>& edges, double min_extent,
+    const std::vector<double>& scale = {}, int* dropped_components = nullptr);
+
 // Throws InputError naming the pair if an edge is not an edge of the mesh; returns the edges
 // sorted with a < b and without duplicates.
 std::vector<std::array<int, 2>> validate_feature_edges(const SurfaceMesh& mesh,

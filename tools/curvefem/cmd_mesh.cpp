@@ -58,6 +58,7 @@ struct MeshArgs {
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
   double shape_refine = meshing::curved::CurvedMeshOptions{}.shape_refine;
   double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
+  double feature_min_size = -1;  // unset: the default for detected features, 0 for a file
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
@@ -134,6 +135,11 @@ void register_mesh(CLI::App& app) {
   auto* fa = sub->add_option("--feature-angle", args->feature_angle,
                              "mark edges whose dihedral angle exceeds DEG degrees (default 60)");
   auto* fn = sub->add_flag("--no-features", args->no_features, "no feature edges");
+  sub->add_option("--feature-min-size", args->feature_min_size,
+                  "feature curves (connected feature edges) whose bounding box is smaller than "
+                  "this many eps are not kept as features (default 2 for detected features, 0 "
+                  "with --features; 0: keep all)")
+      ->check(CLI::NonNegativeNumber);
   ff->excludes(fa)->excludes(fn);
   fa->excludes(fn);
   sub->add_option("--optimize-sweeps", args->optimize_sweeps,
@@ -287,10 +293,12 @@ void register_mesh(CLI::App& app) {
     if (!args->features.empty()) {
       options.feature_edges = cv::validate_feature_edges(input, read_feature_file(args->features));
       feature_source = args->features;
+      options.feature_min_size = 0;
     } else if (!args->no_features) {
       options.feature_edges = cv::detect_feature_edges(input, args->feature_angle);
       feature_source = "dihedral angle > " + std::to_string(args->feature_angle) + " deg";
     }
+    if (args->feature_min_size >= 0) options.feature_min_size = args->feature_min_size;
     // One level (--eps) or several (--eps-levels) from one shell and one coarsening.
     const std::vector<double> eps_values =
         args->eps_levels.empty() ? std::vector<double>{args->eps} : args->eps_levels;

@@ -320,3 +320,55 @@ TEST(CurvedAdversarial, CollapsesAskedForByAFlatCellAreNotDroppedByTheQueue) {
   EXPECT_LE(m.v.tets_sj_below_1e2, 14);
   EXPECT_LE(m.v.max_mips, 2000.0);
 }
+
+TEST(CurvedAdversarial, FeatureCurvesAreDroppedByTheExtentOfTheirComponentAndTheLocalBound) {
+  // Three components: a unit square loop, a 0.05-long path and a single 0.15-long edge.
+  SurfaceMesh m;
+  m.V.resize(9, 3);
+  m.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0,  // square
+      5, 5, 5, 5.03, 5, 5, 5.03, 5.04, 5,     // path: bbox diagonal 0.05
+      9, 9, 9, 9.15, 9, 9;                    // edge: 0.15
+  const std::vector<std::array<int, 2>> edges = {{0, 1}, {1, 2}, {2, 3}, {0, 3},
+                                                 {4, 5}, {5, 6}, {7, 8}};
+  int dropped = -1;
+  auto kept = cv::drop_small_feature_components(m, edges, 0.1, {}, &dropped);
+  EXPECT_EQ(dropped, 1);
+  EXPECT_EQ(kept, (std::vector<std::array<int, 2>>{{0, 1}, {1, 2}, {2, 3}, {0, 3}, {7, 8}}));
+  kept = cv::drop_small_feature_components(m, edges, 0.2, {}, &dropped);
+  EXPECT_EQ(dropped, 2);
+  EXPECT_EQ(kept.size(), 4u);
+  // A smaller local bound at one vertex of a component keeps the whole component.
+  std::vector<double> scale(9, 1.0);
+  scale[5] = 0.4;  // path: 0.1 x 0.4 = 0.04 < 0.05
+  kept = cv::drop_small_feature_components(m, edges, 0.1, scale, &dropped);
+  EXPECT_EQ(dropped, 0);
+  EXPECT_EQ(kept.size(), edges.size());
+  kept = cv::drop_small_feature_components(m, edges, 1e9, {}, &dropped);
+  EXPECT_EQ(dropped, 3);
+  EXPECT_TRUE(kept.empty());
+}
+
+TEST(CurvedAdversarial, SpikesSmallerThanEpsAreNotKeptAsFeaturesUnlessAskedFor) {
+  // Six sharp spikes 0.6 ε across and 0.7 ε high on a box: their rims and ridges are feature
+  // curves ending in corners, which no collapse may move. Dropped (the default, 2 ε), the
+  // coarsening flattens them within ε; kept, every spike stays exactly.
+  const SurfaceMesh input = make_adversarial("box_small_spikes");
+  const cv::CurvedMeshOptions o = default_options(input, 3);
+  ASSERT_EQ(o.feature_edges.size(), 228u);  // 192 box edges, 6 x 6 spike edges
+  const Meshed dropped = mesh_with(input, o, "small features dropped");
+  EXPECT_EQ(dropped.stats.small_feature_curves, 6);
+  EXPECT_EQ(dropped.stats.small_feature_edges, 36);
+  EXPECT_EQ(dropped.v.feature_edges, 192);
+  EXPECT_EQ(dropped.v.features_off_edges, 0);
+  EXPECT_TRUE(dropped.v.valid(0.01));
+  EXPECT_GT(dropped.v.max_distance_rel, 1e-3);  // the spikes are flattened, not kept
+  cv::CurvedMeshOptions all = o;
+  all.feature_min_size = 0;
+  const Meshed kept = mesh_with(input, all, "every feature kept");
+  EXPECT_EQ(kept.stats.small_feature_curves, 0);
+  EXPECT_EQ(kept.v.feature_edges, 228);
+  EXPECT_EQ(kept.v.features_off_edges, 0);
+  EXPECT_TRUE(kept.v.valid(0.01));
+  EXPECT_LT(kept.v.max_distance_rel, 1e-9);  // every spike vertex is a frozen corner
+  EXPECT_LT(dropped.mesh.map.boundary.num_cells(), kept.mesh.map.boundary.num_cells());
+}
