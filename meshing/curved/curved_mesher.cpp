@@ -820,6 +820,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     sh::ShapeRefineOptions shape;
     shape.max_mips = options.shape_refine_mips;
     shape.min_edge = options.shape_refine * eps;
+    shape.min_cone_angle = options.shape_refine_spike_angle * M_PI / 180;
     shape.feature_edges = options.feature_edges;
     shape.bisect_features =
         options.feature_chains && options.constraint_points.empty() && options.eps_samples < 2;
@@ -851,6 +852,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.thin_max_ratio_before = st.thin_stats.max_ratio_before;
   stats.thin_max_ratio_after = st.thin_stats.max_ratio_after;
   stats.shape_poor_before = st.shape_stats.poor_faces_before;
+  stats.shape_spike_faces = st.shape_stats.spike_faces;
   stats.shape_poor_after = st.shape_stats.poor_faces_after;
   stats.shape_splits = st.shape_stats.splits;
   stats.shape_feature_splits = st.shape_stats.feature_splits;

@@ -120,6 +120,11 @@ struct CurvedMeshOptions {
   // faces. The fibers then cross the refined surface (Shell::refinement, ShellFibers).
   double shape_refine = 8;
   double shape_refine_mips = 20;
+  // ShapeRefineOptions::min_cone_angle in degrees (0: off, the default): faces whose sharpest
+  // corner is a cone tip of total face angle below it are spike sides and not bisected. 90
+  // restores the needle spheres (meshing/curved/README.md, step 1); off until the fiber misses it
+  // exposed on a noisy sphere are fixed.
+  double shape_refine_spike_angle = 0;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.
@@ -196,10 +201,11 @@ struct CurvedMeshStats {
   // input edges above the ratio and the worst edge / thickness, before and after.
   int thin_refined_faces = 0, thin_splits = 0, thin_edges_before = 0, thin_edges_after = 0;
   double thin_max_ratio_before = 0, thin_max_ratio_after = 0;
-  // Shape refinement (CurvedMeshOptions::shape_refine): faces that qualified before and after,
-  // bisections (of which on feature edges), input faces refined.
-  int shape_poor_before = 0, shape_poor_after = 0, shape_splits = 0, shape_feature_splits = 0,
-      shape_refined_faces = 0;
+  // Shape refinement (CurvedMeshOptions::shape_refine): faces that qualified before and after
+  // (of those before, spike_faces were left alone at cone tips: ShapeRefineOptions::
+  // min_cone_angle), bisections (of which on feature edges), input faces refined.
+  int shape_poor_before = 0, shape_poor_after = 0, shape_spike_faces = 0, shape_splits = 0,
+      shape_feature_splits = 0, shape_refined_faces = 0;
   bool shape_budget_reached = false;
   // Non-empty: meshing the thin- or shape-refined input failed with this error, and the mesh is
   // that of the unrefined input (the counts above are then 0).

@@ -293,9 +293,34 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
   auto mips_of = [](const std::vector<Eigen::Vector3d>& V, const std::array<int, 3>& t) {
     return triangle_mips(V[std::size_t(t[0])], V[std::size_t(t[1])], V[std::size_t(t[2])]);
   };
+  // Total face angle at each input vertex (bisection points are flat: 2π).
+  std::vector<double> angle_sum(std::size_t(input.num_vertices()), 0.0);
+  auto corner_angle = [](const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                         const Eigen::Vector3d& r) {
+    return std::atan2((q - p).cross(r - p).norm(), (q - p).dot(r - p));
+  };
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int p = input.F(f, c), q = input.F(f, (c + 1) % 3), r = input.F(f, (c + 2) % 3);
+      angle_sum[std::size_t(p)] += corner_angle(
+          input.V.row(p).transpose(), input.V.row(q).transpose(), input.V.row(r).transpose());
+    }
+  // A side of a spike: the face's sharpest corner is a cone tip.
+  auto at_spike = [&](const std::vector<Eigen::Vector3d>& V, const std::array<int, 3>& t) {
+    int sharpest = 0;
+    double smallest = HUGE_VAL;
+    for (int c = 0; c < 3; ++c) {
+      const double a = corner_angle(V[std::size_t(t[std::size_t(c)])],
+                                    V[std::size_t(t[std::size_t((c + 1) % 3)])],
+                                    V[std::size_t(t[std::size_t((c + 2) % 3)])]);
+      if (a < smallest) smallest = a, sharpest = t[std::size_t(c)];
+    }
+    return sharpest < input.num_vertices() &&
+           angle_sum[std::size_t(sharpest)] < options.min_cone_angle;
+  };
   // The longest edge of a face that qualifies (poor and long), or {-1, -1}.
   auto target = [&](const std::vector<Eigen::Vector3d>& V, const std::array<int, 3>& t,
-                    bool apply_feature_rule) -> std::pair<std::array<int, 2>, double> {
+                    bool apply_rules) -> std::pair<std::array<int, 2>, double> {
     std::array<int, 2> e{-1, -1};
     double len2 = -1;
     for (int c = 0; c < 3; ++c) {
@@ -305,8 +330,9 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
     }
     const double len = std::sqrt(len2);
     if (!(len > options.min_edge) || !(mips_of(V, t) > options.max_mips)) return {{-1, -1}, 0};
-    if (apply_feature_rule && !options.bisect_features && features.count(edge_key(e[0], e[1])))
+    if (apply_rules && !options.bisect_features && features.count(edge_key(e[0], e[1])))
       return {{-1, -1}, 0};
+    if (apply_rules && at_spike(V, t)) return {{-1, -1}, 0};
     return {e, len};
   };
   {
@@ -314,7 +340,9 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
     for (int v = 0; v < input.num_vertices(); ++v) V0[std::size_t(v)] = input.V.row(v).transpose();
     for (int f = 0; f < nf; ++f) {
       const std::array<int, 3> t{input.F(f, 0), input.F(f, 1), input.F(f, 2)};
-      if (target(V0, t, false).first[0] >= 0) ++stats.poor_faces_before;
+      if (target(V0, t, false).first[0] < 0) continue;
+      ++stats.poor_faces_before;
+      stats.spike_faces += at_spike(V0, t);
     }
   }
   if (stats.poor_faces_before == 0) {
@@ -372,8 +400,8 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
             " bisections (", stats.feature_splits, " on feature edges) refined ",
             stats.refined_faces, " input faces into ",
             r.F.size() - std::size_t(nf) + std::size_t(stats.refined_faces), "; ",
-            stats.poor_faces_after, " left", stats.budget_reached ? ", face budget reached" : "",
-            ", ", stats.seconds, " s");
+            stats.poor_faces_after, " left (", stats.spike_faces, " at spike tips)",
+            stats.budget_reached ? ", face budget reached" : "", ", ", stats.seconds, " s");
   return out;
 }
 

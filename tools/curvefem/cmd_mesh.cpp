@@ -57,6 +57,7 @@ struct MeshArgs {
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
   double shape_refine = meshing::curved::CurvedMeshOptions{}.shape_refine;
+  double shape_refine_spike_angle = 0;
   double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
   double feature_min_size = -1;  // unset: the default for detected features, 0 for a file
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
@@ -227,6 +228,10 @@ void register_mesh(CLI::App& app) {
                   "exceeds 20 and whose longest edge exceeds this many eps (same surface; CAD "
                   "tessellations' needle and cap fans get vertices inside their faces; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--shape-refine-spike-angle", args->shape_refine_spike_angle,
+                  "the shape refinement leaves alone faces whose sharpest corner is a cone tip of "
+                  "total face angle below DEG degrees (spike sides; default 0: off)")
+      ->check(CLI::Range(0.0, 360.0));
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
                 "(meshing/curved/README.md, step 7; off: the full shear)");
@@ -286,6 +291,7 @@ void register_mesh(CLI::App& app) {
     options.max_edge_per_thickness = args->max_edge_per_thickness;
     options.thin_refine_ratio = args->thin_refine_ratio;
     options.shape_refine = args->shape_refine;
+    options.shape_refine_spike_angle = args->shape_refine_spike_angle;
     options.shape_slack = args->shape_slack;
     options.curve_quality_floor = args->curve_quality_floor;
     options.exterior_padding = args->padding;

@@ -257,6 +257,7 @@ TEST(ShapeRefine, NeedleAndCapFansAreBisectedUntilNoLongFaceIsPoorlyShaped) {
   o.min_edge = 0.5;
   o.max_mips = 20;
   o.feature_edges = sharp_edges(cyl);
+  o.min_cone_angle = M_PI / 2;             // no fan apex is a spike tip
   ASSERT_EQ(o.feature_edges.size(), 96u);  // the two rims
   sh::ShapeRefineStats st;
   std::vector<std::array<int, 2>> features;
@@ -276,6 +277,7 @@ TEST(ShapeRefine, NeedleAndCapFansAreBisectedUntilNoLongFaceIsPoorlyShaped) {
   EXPECT_EQ(r.mesh.num_vertices(), cyl.num_vertices() + st.splits);
   EXPECT_EQ(st.refined_faces, r.beveled_faces);
   EXPECT_EQ(st.feature_splits, 0);  // the rims' edges (0.13) are never a long face's longest
+  EXPECT_EQ(st.spike_faces, 0);     // the fans' apexes are rim vertices (total angle 3π/2)
   EXPECT_EQ(features.size(), o.feature_edges.size());
   expect_closed_oriented(r.mesh);
   expect_same_surface(cyl, r);
@@ -340,4 +342,31 @@ TEST(ShapeRefine, LongFeatureEdgesAreBisectedWithTheirFacesAndReturnedAsChains) 
   EXPECT_GT(kst.poor_faces_after, 0);
   expect_closed_oriented(k.mesh);
   expect_same_surface(bar, k);
+}
+
+TEST(ShapeRefine, TheSidesOfSpikesAreLeftAloneAndCountedAsSpikeFaces) {
+  // Eight needles 0.3 long leaning 0.4° out of a sphere: their sides are needles whose sharpest
+  // corner is the tip (total face angle about 2π sin 0.4° = 0.044). Bisecting them only adds
+  // needles to the spike.
+  const SurfaceMesh spiky = curvefem::make_adversarial("needle_sphere_8");
+  sh::ShapeRefineOptions o;
+  o.min_edge = 0.1;
+  o.max_mips = 20;
+  o.min_cone_angle = M_PI / 2;
+  sh::ShapeRefineStats st;
+  std::vector<std::array<int, 2>> features;
+  const sh::BeveledSurface r = sh::refine_poor_shapes(spiky, o, st, features);
+  std::printf("%d poor faces, %d at spike tips, %d bisections, %d left\n", st.poor_faces_before,
+              st.spike_faces, st.splits, st.poor_faces_after);
+  EXPECT_EQ(st.poor_faces_before, poor_faces(spiky, 20, 0.1));
+  EXPECT_GT(st.spike_faces, 0);
+  EXPECT_EQ(st.poor_faces_after, st.spike_faces);  // every other poor face was refined away
+  expect_same_surface(spiky, r);
+  // Without the rule the spikes' sides are bisected too.
+  sh::ShapeRefineOptions all = o;
+  all.min_cone_angle = 0;
+  sh::ShapeRefineStats every;
+  sh::refine_poor_shapes(spiky, all, every, features);
+  EXPECT_EQ(every.spike_faces, 0);
+  EXPECT_GT(every.splits, st.splits);
 }
