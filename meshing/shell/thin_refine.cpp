@@ -299,7 +299,7 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
                          const Eigen::Vector3d& r) {
     return std::atan2((q - p).cross(r - p).norm(), (q - p).dot(r - p));
   };
-  for (int f = 0; f < nf; ++f)
+  for (int f = 0; f < nf && options.min_cone_angle > 0; ++f)
     for (int c = 0; c < 3; ++c) {
       const int p = input.F(f, c), q = input.F(f, (c + 1) % 3), r = input.F(f, (c + 2) % 3);
       angle_sum[std::size_t(p)] += corner_angle(
@@ -307,6 +307,7 @@ BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOpt
     }
   // A side of a spike: the face's sharpest corner is a cone tip.
   auto at_spike = [&](const std::vector<Eigen::Vector3d>& V, const std::array<int, 3>& t) {
+    if (!(options.min_cone_angle > 0)) return false;
     int sharpest = 0;
     double smallest = HUGE_VAL;
     for (int c = 0; c < 3; ++c) {
