@@ -271,12 +271,7 @@ SurfaceMesh make_box_with_spikes(int n, int spikes, double radius, double height
       F.emplace_back(p, q, tip);
     }
   }
-  SurfaceMesh out;
-  out.V.resize(Eigen::Index(V.size()), 3);
-  for (std::size_t v = 0; v < V.size(); ++v) out.V.row(Eigen::Index(v)) = V[v].transpose();
-  out.F.resize(Eigen::Index(F.size()), 3);
-  for (std::size_t f = 0; f < F.size(); ++f) out.F.row(Eigen::Index(f)) = F[f].transpose();
-  return out;
+  return from_lists(V, F);
 }
 
 SurfaceMesh make_strip_cylinder(int n_bottom, int n_top, double radius, double height, int rings) {

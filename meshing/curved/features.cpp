@@ -52,6 +52,7 @@ std::vector<std::array<int, 2>> drop_small_feature_components(
   struct Component {
     Eigen::AlignedBox3d box;
     double scale = HUGE_VAL;  // the smallest at its vertices
+    bool kept = false;
   };
   std::map<int, Component> components;
   for (const auto& e : edges)
@@ -60,16 +61,15 @@ std::vector<std::array<int, 2>> drop_small_feature_components(
       c.box.extend(mesh.V.row(v).transpose());
       c.scale = std::min(c.scale, scale.empty() ? 1.0 : scale[std::size_t(v)]);
     }
+  int dropped = 0;
+  for (auto& [root, c] : components) {
+    c.kept = c.box.diagonal().norm() >= min_extent * c.scale;
+    dropped += !c.kept;
+  }
+  if (dropped_components) *dropped_components = dropped;
   std::vector<std::array<int, 2>> out;
-  for (const auto& e : edges) {
-    const Component& c = components.at(find(e[0]));
-    if (c.box.diagonal().norm() >= min_extent * c.scale) out.push_back(e);
-  }
-  if (dropped_components) {
-    *dropped_components = 0;
-    for (const auto& [root, c] : components)
-      *dropped_components += c.box.diagonal().norm() < min_extent * c.scale;
-  }
+  for (const auto& e : edges)
+    if (components.at(find(e[0])).kept) out.push_back(e);
   return out;
 }
 

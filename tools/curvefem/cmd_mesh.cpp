@@ -57,7 +57,7 @@ struct MeshArgs {
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
   double shape_refine = meshing::curved::CurvedMeshOptions{}.shape_refine;
-  double shape_refine_spike_angle = 0;
+  double shape_refine_spike_angle = meshing::curved::CurvedMeshOptions{}.shape_refine_spike_angle;
   double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
   double feature_min_size = -1;  // unset: the default for detected features, 0 for a file
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
