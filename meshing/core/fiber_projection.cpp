@@ -8,20 +8,13 @@
 #include <utility>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/exact_predicates.hpp"
 #include "meshing/core/prism_split.hpp"
 
 namespace curvefem {
 namespace {
 
 constexpr double k_eps = std::numeric_limits<double>::epsilon();
-// A crossing may lie this far (in segment parameter) beyond a fiber segment's ends, and its
-// barycentric coordinates this far below 0: the exact predicates of the shell projection decide
-// such cases one way or the other, and a neighbouring face gives the same point up to ~1e-12.
-constexpr double k_segment_tolerance = 1e-12;
-constexpr double k_bary_tolerance = 1e-10;
-// Barycentric coordinates above this count as inside (exact up to rounding): such a crossing is
-// preferred over one accepted only by the tolerance.
-constexpr double k_bary_inside = -1e-13;
 
 // Barycentric coordinates of x, a point of the plane of tri (the solve of projection.cpp).
 Eigen::Vector3d barycentric(const std::array<Eigen::Vector3d, 3>& tri, const Eigen::Vector3d& x) {
@@ -56,25 +49,17 @@ Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p,
   return best;
 }
 
-// Sign of det[u, v, w], 0 within the rounding of its evaluation.
-int sign_det(const Eigen::Vector3d& u, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
-  const double d = u.dot(v.cross(w));
-  const double bound = 16 * k_eps * u.norm() * v.norm() * w.norm();
-  return d > bound ? 1 : (d < -bound ? -1 : 0);
-}
-
 // Does the closed segment [p, q] cross the plane of the wedge {apex + α(a − apex) + β(b − apex) :
-// α, β ≥ 0} at a point of the wedge? The decisions of meshing/shell's exact
-// segment_crosses_wedge, taken in floating point.
+// α, β ≥ 0} at a point of the wedge? meshing/shell's segment_crosses_wedge, with the same exact
+// predicates.
 bool segment_crosses_wedge(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                            const Eigen::Vector3d& apex, const Eigen::Vector3d& a,
                            const Eigen::Vector3d& b) {
-  if ((a - apex).cross(b - apex).squaredNorm() == 0) return false;
-  const int sp = sign_det(a - apex, b - apex, p - apex),
-            sq = sign_det(a - apex, b - apex, q - apex);
+  if (exact::collinear(apex, a, b)) return false;
+  const int sp = exact::orient3d(apex, a, b, p), sq = exact::orient3d(apex, a, b, q);
   if ((sp == 0 && sq == 0) || sp * sq > 0) return false;
   const int dir = sq != 0 ? sq : -sp;
-  return sign_det(q - p, apex - p, a - p) * dir >= 0 && sign_det(q - p, b - p, apex - p) * dir >= 0;
+  return exact::orient3d(p, q, apex, a) * dir >= 0 && exact::orient3d(p, q, b, apex) * dir >= 0;
 }
 
 }  // namespace
@@ -140,50 +125,35 @@ std::array<Eigen::Vector3d, 7> FiberProjection::fiber(int face, double u, double
   return fiber_at(face, {1 - u - v, u, v});
 }
 
-// The crossing of segment [a, b] with the candidate faces of prism f closest to a (segment_hit of
-// meshing/shell, whose parameter and barycentric solves are repeated here operation for
-// operation, so an agreeing face gives the same bits). `tolerant`: also crossings just beyond the
-// segment's ends or the faces' edges (k_segment_tolerance, k_bary_tolerance), those well inside a
-// face first.
+// The crossing of segment [a, b] with the candidate faces of prism f closest to a: the faces the
+// closed segment meets, decided exactly (the decisions of meshing/shell's segment_hit, which
+// uses CGAL's exact predicates), then the parameter and barycentric solves of that function
+// repeated operation for operation, so the same face gives the same bits.
 std::optional<FiberCrossing> FiberProjection::segment_hit(int f, const Eigen::Vector3d& a,
-                                                          const Eigen::Vector3d& b,
-                                                          bool tolerant) const {
+                                                          const Eigen::Vector3d& b) const {
   if (a == b) return std::nullopt;
   const Eigen::Vector3d lo = a.cwiseMin(b), hi = a.cwiseMax(b);
-  const double s_tol = tolerant ? k_segment_tolerance : 0.0;
-  const double w_tol = tolerant ? k_bary_tolerance : 0.0;
-  int best = -1, best_tier = 2;
+  int best = -1;
   double best_t = std::numeric_limits<double>::infinity();
   Eigen::Vector3d best_w;
   for (const int t : m_fibers.candidates(f)) {
     const Eigen::Vector3d &tlo = m_lo[std::size_t(t)], &thi = m_hi[std::size_t(t)];
-    const double pad = 1e-9 * ((hi - lo).maxCoeff() + (thi - tlo).maxCoeff());
-    if (((tlo.array() - pad) > hi.array()).any() || ((thi.array() + pad) < lo.array()).any())
-      continue;
+    if ((tlo.array() > hi.array()).any() || (thi.array() < lo.array()).any()) continue;
     const auto tri = triangle(t);
     const Eigen::Vector3d &p0 = tri[0], &p1 = tri[1], &p2 = tri[2];
     const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     const double area = n.squaredNorm();
-    if (!(area > 0)) continue;
-    // The plane is crossed within the segment (up to the tolerance).
-    const double da = n.dot(a - p0), db = n.dot(b - p0);
-    if (da == db) continue;  // parallel (or in the plane: no transversal crossing)
-    const double s = da / (da - db);
-    if (!(s >= -s_tol && s <= 1 + s_tol)) continue;
+    if (!(area > 0) || !exact::segment_meets_triangle(a, b, p0, p1, p2)) continue;
     const double denom = n.dot(b - a);
     double tt = 0.0;
     if (std::abs(denom) > 0) tt = std::clamp(n.dot(p0 - a) / denom, 0.0, 1.0);
+    if (tt >= best_t) continue;
     const Eigen::Vector3d x = a + tt * (b - a);
     Eigen::Vector3d w;
     w[1] = n.dot((x - p0).cross(p2 - p0)) / area;
     w[2] = n.dot((p1 - p0).cross(x - p0)) / area;
     w[0] = 1.0 - w[1] - w[2];
-    const double low = w.minCoeff();
-    if (!(low >= -w_tol)) continue;
-    const int tier = low >= k_bary_inside ? 0 : 1;
-    if (tier > best_tier || (tier == best_tier && tt >= best_t)) continue;
     best = t;
-    best_tier = tier;
     best_t = tt;
     best_w = w;
   }
@@ -191,18 +161,11 @@ std::optional<FiberCrossing> FiberProjection::segment_hit(int f, const Eigen::Ve
   return input_point(best, best_w);
 }
 
-// Is x on the closed reference triangle of input face t (a corner, or within rounding of it)?
-// Degenerate triangles contain nothing.
+// Is x on the closed reference triangle of input face t (exactly, as the shell projection's
+// faces_containing decides)? Degenerate triangles contain nothing.
 bool FiberProjection::contains(int t, const Eigen::Vector3d& x) const {
   const auto tri = triangle(t);
-  const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-  if (!(n.squaredNorm() > 0)) return false;
-  for (int k = 0; k < 3; ++k)
-    if (tri[k] == x) return true;
-  double scale = 0;
-  for (int k = 0; k < 3; ++k) scale = std::max(scale, (tri[(k + 1) % 3] - tri[k]).norm());
-  if (std::abs(n.dot(x - tri[0])) / n.norm() > 1e-12 * scale) return false;
-  return barycentric(tri, x).minCoeff() >= -1e-12;
+  return exact::triangle_contains(tri[0], tri[1], tri[2], x);
 }
 
 std::vector<int> FiberProjection::star(int f, const Eigen::Vector3d& x) const {
@@ -317,11 +280,8 @@ std::optional<FiberCrossing> FiberProjection::project(int face, double u, double
   if (s >= 0 && w[(s + 1) % 3] <= 0 && w[(s + 2) % 3] <= 0)
     return at_pinch(face, m_fibers.mid.row(F[s]).transpose());
   const auto z = fiber_at(face, w);
-  // Crossings found in floating point first, then those within the tolerance (where the exact
-  // predicates of the shell projection may have decided either way).
-  for (const bool tolerant : {false, true})
-    for (const auto& seg : k_fiber_walk)
-      if (auto hit = segment_hit(face, z[seg[0]], z[seg[1]], tolerant)) return hit;
+  for (const auto& seg : k_fiber_walk)
+    if (auto hit = segment_hit(face, z[seg[0]], z[seg[1]])) return hit;
   // Rounding can hide the crossing of a fiber shrunk toward a pinch point.
   if (s >= 0) return near_pinch(face, s, w);
   return std::nullopt;

@@ -5,16 +5,15 @@
 //
 // (u, v) are barycentric coordinates in prism f's face rotated to its smallest vertex id (point =
 // (1 − u − v)·c0 + u·c1 + v·c2). The search follows meshing/shell/projection.cpp step by step: the
-// fiber polyline's 6 segments from the middle outwards, the first one crossing a candidate face
-// of the prism gives the answer (the crossing closest to its start; crossings within the
-// tolerance below only if no segment has a plain one); at a pinched corner the fiber
+// fiber polyline's 6 segments from the middle outwards, the first one meeting a candidate face
+// of the prism gives the answer (the crossing closest to its start); at a pinched corner the fiber
 // is the pinch point, whose input point is taken; a fiber shrunk toward a pinch point by rounding
-// is solved on the fiber scaled up about that point. The shell projection decides crossings with
-// exact predicates; this evaluator uses floating point, and where no crossing is found plainly it
-// accepts one up to 1e-12 of the segment beyond its ends and 1e-10 below 0 in barycentric
-// coordinates (those within 1e-13 first), so on an input edge or vertex it may report a
-// neighbouring face with the same point up to rounding. Agreement with ShellProjection::project is
-// tested in tests/mapping.
+// is solved on the fiber scaled up about that point. Every decision (does a segment meet a face,
+// does a point lie on one, does a segment cross a wedge) is taken with the exact predicates of
+// meshing/core/exact_predicates.hpp, which decide as the shell projection's CGAL predicates do,
+// and every crossing is computed by the same floating-point operations: on the same fiber both
+// give the same face and bits, up to the choice between faces that share the crossing point.
+// Agreement with ShellProjection::project is tested in tests/mapping.
 //
 // Positions are input points (Σ bary_k · V[F(t, k)] of the input, not of the reference copy).
 // Fibers built on a refinement of the input (ShellFibers::refined) cross the refined surface; the
@@ -57,7 +56,7 @@ class FiberProjection {
   bool contains(int t, const Eigen::Vector3d& x) const;
   std::vector<int> star(int f, const Eigen::Vector3d& x) const;
   std::optional<FiberCrossing> segment_hit(int f, const Eigen::Vector3d& a,
-                                           const Eigen::Vector3d& b, bool tolerant) const;
+                                           const Eigen::Vector3d& b) const;
   std::optional<FiberCrossing> at_pinch(int f, const Eigen::Vector3d& x) const;
   std::optional<FiberCrossing> near_pinch(int f, int s, const std::array<double, 3>& w) const;
 
