@@ -120,11 +120,10 @@ struct CurvedMeshOptions {
   // faces. The fibers then cross the refined surface (Shell::refinement, ShellFibers).
   double shape_refine = 8;
   double shape_refine_mips = 20;
-  // ShapeRefineOptions::min_cone_angle in degrees (0: off, the default): faces whose sharpest
-  // corner is a cone tip of total face angle below it are spike sides and not bisected. 90
-  // restores the needle spheres (meshing/curved/README.md, step 1); off until the fiber misses it
-  // exposed on a noisy sphere are fixed.
-  double shape_refine_spike_angle = 0;
+  // ShapeRefineOptions::min_cone_angle in degrees (0: off): faces whose sharpest corner is a cone
+  // tip of total face angle below it are spike sides and not bisected. 90 restores the needle
+  // spheres and changes none of the 19 dev meshes (meshing/curved/README.md, step 1).
+  double shape_refine_spike_angle = 90;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.

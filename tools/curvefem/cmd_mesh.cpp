@@ -230,7 +230,7 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--shape-refine-spike-angle", args->shape_refine_spike_angle,
                   "the shape refinement leaves alone faces whose sharpest corner is a cone tip of "
-                  "total face angle below DEG degrees (spike sides; default 0: off)")
+                  "total face angle below DEG degrees (spike sides; default 90, 0: off)")
       ->check(CLI::Range(0.0, 360.0));
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
