@@ -112,7 +112,10 @@ cv::CurvedMeshOptions curved_options(const CaseSpec& spec, const StageContext& c
   options.threads = ctx.threads;
   options.deterministic = spec.deterministic;
   options.feature_edges = case_feature_edges(spec, input);
-  if (spec.features == FeatureMode::file) options.feature_min_size = 0;  // the user's own list
+  if (spec.features == FeatureMode::file) {  // the user's own list
+    options.feature_min_size = 0;
+    options.feature_end_trim = 0;
+  }
   options.exterior = spec.exterior;
   options.exterior_padding = spec.padding;
   return options;

@@ -1765,10 +1765,25 @@ std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
       log::info("mesh: ", small_curves, " feature curves (", small_edges, " edges) smaller than ",
                 options.feature_min_size, " eps are not kept as features");
   }
+  int trimmed_ends = 0, trimmed_edges = 0;
+  if (options.feature_end_trim > 0 && !pruned.feature_edges.empty()) {
+    const EpsLevel& finest = levels[order.front()];
+    const std::size_t before = pruned.feature_edges.size();
+    pruned.feature_edges =
+        trim_feature_ends(input, pruned.feature_edges,
+                          options.feature_end_trim * finest.eps_rel * bbox_longest_edge(input.V),
+                          finest.eps_scale, &trimmed_ends);
+    trimmed_edges = int(before - pruned.feature_edges.size());
+    if (trimmed_ends > 0)
+      log::info("mesh: ", trimmed_ends, " open feature-curve ends cut back by ",
+                options.feature_end_trim, " eps (", trimmed_edges, " edges)");
+  }
   auto note_small = [&](std::vector<CurvedMesh> out) {
     for (CurvedMeshStats& s : stats) {
       s.small_feature_curves = small_curves;
       s.small_feature_edges = small_edges;
+      s.trimmed_feature_ends = trimmed_ends;
+      s.trimmed_feature_edges = trimmed_edges;
     }
     return out;
   };

@@ -73,6 +73,49 @@ std::vector<std::array<int, 2>> drop_small_feature_components(
   return out;
 }
 
+std::vector<std::array<int, 2>> trim_feature_ends(const SurfaceMesh& mesh,
+                                                  const std::vector<std::array<int, 2>>& edges,
+                                                  double length, const std::vector<double>& scale,
+                                                  int* trimmed_ends) {
+  std::vector<std::vector<int>> incident(std::size_t(mesh.num_vertices()));  // edge indices
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    for (int v : edges[i]) incident[std::size_t(v)].push_back(int(i));
+  std::vector<char> removed(edges.size(), 0);
+  std::vector<int> degree(incident.size());
+  for (std::size_t v = 0; v < incident.size(); ++v) degree[v] = int(incident[v].size());
+  std::vector<int> open_ends;  // before any cut: a cut's new end is not cut again
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    if (degree[std::size_t(v)] == 1) open_ends.push_back(v);
+  int ends = 0;
+  for (const int v : open_ends) {
+    if (degree[std::size_t(v)] != 1) continue;  // reached from the curve's other end
+    const double limit = length * (scale.empty() ? 1.0 : scale[std::size_t(v)]);
+    if (!(limit > 0)) continue;
+    double arc = 0;
+    int at = v;
+    bool cut = false;
+    while (degree[std::size_t(at)] == 1 && arc < limit) {
+      int e = -1;
+      for (int i : incident[std::size_t(at)])
+        if (!removed[std::size_t(i)]) e = i;
+      const auto& ab = edges[std::size_t(e)];
+      const int next = ab[0] == at ? ab[1] : ab[0];
+      removed[std::size_t(e)] = 1;
+      cut = true;
+      --degree[std::size_t(at)];
+      --degree[std::size_t(next)];
+      arc += (mesh.V.row(ab[0]) - mesh.V.row(ab[1])).norm();
+      at = next;
+    }
+    ends += cut;
+  }
+  if (trimmed_ends) *trimmed_ends = ends;
+  std::vector<std::array<int, 2>> out;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (!removed[i]) out.push_back(edges[i]);
+  return out;
+}
+
 std::vector<std::array<int, 2>> validate_feature_edges(const SurfaceMesh& mesh,
                                                        std::vector<std::array<int, 2>> edges) {
   const auto all = edge_faces(mesh);

@@ -60,6 +60,7 @@ struct MeshArgs {
   double shape_refine_spike_angle = meshing::curved::CurvedMeshOptions{}.shape_refine_spike_angle;
   double shape_slack = meshing::curved::CurvedMeshOptions{}.shape_slack;
   double feature_min_size = -1;  // unset: the default for detected features, 0 for a file
+  double feature_end_trim = -1;  // likewise
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
@@ -140,6 +141,10 @@ void register_mesh(CLI::App& app) {
                   "feature curves (connected feature edges) whose bounding box is smaller than "
                   "this many eps are not kept as features (default 2 for detected features, 0 "
                   "with --features; 0: keep all)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--feature-end-trim", args->feature_end_trim,
+                  "open ends of feature curves are cut back by this many eps (default 0; 0 with "
+                  "--features unless given; 0: off)")
       ->check(CLI::NonNegativeNumber);
   ff->excludes(fa)->excludes(fn);
   fa->excludes(fn);
@@ -300,11 +305,13 @@ void register_mesh(CLI::App& app) {
       options.feature_edges = cv::validate_feature_edges(input, read_feature_file(args->features));
       feature_source = args->features;
       options.feature_min_size = 0;
+      options.feature_end_trim = 0;
     } else if (!args->no_features) {
       options.feature_edges = cv::detect_feature_edges(input, args->feature_angle);
       feature_source = "dihedral angle > " + std::to_string(args->feature_angle) + " deg";
     }
     if (args->feature_min_size >= 0) options.feature_min_size = args->feature_min_size;
+    if (args->feature_end_trim >= 0) options.feature_end_trim = args->feature_end_trim;
     // One level (--eps) or several (--eps-levels) from one shell and one coarsening.
     const std::vector<double> eps_values =
         args->eps_levels.empty() ? std::vector<double>{args->eps} : args->eps_levels;

@@ -348,6 +348,54 @@ TEST(CurvedAdversarial, FeatureCurvesAreDroppedByTheExtentOfTheirComponentAndThe
   EXPECT_TRUE(kept.empty());
 }
 
+TEST(CurvedAdversarial, OpenEndsOfFeatureCurvesAreCutBackByArcLengthUpToJunctions) {
+  // A closed square (untouched), an open path of ten 0.1 edges (vertices 4..14), and a star of
+  // three paths from junction 15: 2, 5 and 5 edges of 0.1.
+  SurfaceMesh m;
+  std::vector<Eigen::Vector3d> P = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  for (int i = 0; i <= 10; ++i) P.push_back({5 + 0.1 * i, 0, 0});  // 4..14
+  P.push_back({9, 9, 9});                                          // 15: junction
+  for (int i = 1; i <= 2; ++i) P.push_back({9 + 0.1 * i, 9, 9});   // 16, 17
+  for (int i = 1; i <= 5; ++i) P.push_back({9, 9 + 0.1 * i, 9});   // 18..22
+  for (int i = 1; i <= 5; ++i) P.push_back({9, 9, 9 + 0.1 * i});   // 23..27
+  m.V.resize(Eigen::Index(P.size()), 3);
+  for (std::size_t i = 0; i < P.size(); ++i) m.V.row(Eigen::Index(i)) = P[i].transpose();
+  std::vector<std::array<int, 2>> edges = {{0, 1}, {1, 2}, {2, 3}, {0, 3}};
+  for (int i = 4; i < 14; ++i) edges.push_back({i, i + 1});
+  edges.push_back({15, 16}), edges.push_back({16, 17});
+  edges.push_back({15, 18});
+  for (int i = 18; i < 22; ++i) edges.push_back({i, i + 1});
+  edges.push_back({15, 23});
+  for (int i = 23; i < 27; ++i) edges.push_back({i, i + 1});
+  auto has = [](const std::vector<std::array<int, 2>>& es, int a, int b) {
+    return std::find(es.begin(), es.end(), std::array<int, 2>{a, b}) != es.end();
+  };
+  int ends = -1;
+  // 0.25: three edges (0.3) from each end of the path and of the star's long arms; the short
+  // arm (0.2) goes whole, up to the junction, which then joins the two others.
+  auto kept = cv::trim_feature_ends(m, edges, 0.25, {}, &ends);
+  EXPECT_EQ(ends, 5);
+  EXPECT_EQ(kept.size(), edges.size() - 3 - 3 - 2 - 3 - 3);
+  for (int i = 7; i < 11; ++i) EXPECT_TRUE(has(kept, i, i + 1)) << i;  // the path's middle
+  EXPECT_FALSE(has(kept, 6, 7));
+  EXPECT_FALSE(has(kept, 11, 12));
+  EXPECT_FALSE(has(kept, 15, 16));
+  EXPECT_TRUE(has(kept, 15, 18) && has(kept, 18, 19) && !has(kept, 19, 20));
+  for (const auto& e : std::vector<std::array<int, 2>>{{0, 1}, {1, 2}, {2, 3}, {0, 3}})
+    EXPECT_TRUE(has(kept, e[0], e[1]));  // closed curve
+  // A smaller local bound at one end cuts less there: 0.25 x 0.3 = 0.075, one edge.
+  std::vector<double> scale(P.size(), 1.0);
+  scale[4] = 0.3;
+  kept = cv::trim_feature_ends(m, edges, 0.25, scale, &ends);
+  EXPECT_FALSE(has(kept, 4, 5));
+  EXPECT_TRUE(has(kept, 5, 6));
+  // Cut back by more than its length, an open curve goes whole, from its first end.
+  kept = cv::trim_feature_ends(m, edges, 5.0, {}, &ends);
+  EXPECT_EQ(kept.size(), 4u);
+  EXPECT_EQ(cv::trim_feature_ends(m, edges, 0.0, {}, &ends), edges);
+  EXPECT_EQ(ends, 0);
+}
+
 TEST(CurvedAdversarial, SpikesSmallerThanEpsAreNotKeptAsFeaturesUnlessAskedFor) {
   // Six sharp spikes 0.6 ε across and 0.7 ε high on a box: their rims and ridges are feature
   // curves ending in corners, which no collapse may move. Dropped (the default, 2 ε), the
