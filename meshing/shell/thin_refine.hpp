@@ -79,9 +79,8 @@ BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptio
 // total face angle below min_cone_angle (radians; 2π on a flat surface, 3π/2 at a box corner,
 // about 0.04 at the tip of a needle leaning 0.4°) is a side of a thin cone, not of a CAD fan, and
 // bisecting it only adds needles to the spike (needle_sphere_32: min scaled Jacobian 5e-5 ->
-// 1.5e-6 with them bisected). Off by default for now: with π/2 the refined surface of a noisy
-// sphere (test_fiber_projection) has fibers that miss their crossing at 3 prism-edge points
-// (meshing/curved/README.md, step 1).
+// 1.5e-6 with them bisected). 0 here; the curved mesher passes π/2
+// (CurvedMeshOptions::shape_refine_spike_angle, meshing/curved/README.md, step 1).
 struct ShapeRefineOptions {
   double max_mips = 10;
   double min_edge = 0;        // absolute length; <= 0: off
