@@ -1,6 +1,9 @@
 #include "meshing/editing/tet_mesh.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
 
 #include "meshing/core/error.hpp"
 
@@ -19,6 +22,33 @@ int edge_index(int i, int j) {
 bool face_has(int f, int i) {
   return k_faces[f][0] == i || k_faces[f][1] == i || k_faces[f][2] == i;
 }
+// The candidates whose key appears first, in candidate order (the order a linear scan of the
+// keys seen so far gives, which the schedulers' seeding depends on). Small lists (the cavity of
+// one operation) are scanned; large ones (a whole mesh) are sorted, so this is O(n log n).
+template <class Tuple, class Key>
+std::vector<Tuple> first_of_each_key(const std::vector<Key>& keys,
+                                     const std::vector<Tuple>& candidates) {
+  std::vector<Tuple> out;
+  if (keys.size() <= 64) {
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (std::find(keys.begin(), keys.begin() + std::ptrdiff_t(i), keys[i]) ==
+          keys.begin() + std::ptrdiff_t(i))
+        out.push_back(candidates[i]);
+    return out;
+  }
+  std::vector<std::uint32_t> order(keys.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = std::uint32_t(i);
+  std::sort(order.begin(), order.end(), [&keys](std::uint32_t a, std::uint32_t b) {
+    return keys[a] < keys[b] || (keys[a] == keys[b] && a < b);
+  });
+  std::vector<char> first(keys.size(), 0);
+  for (std::size_t r = 0; r < order.size(); ++r)
+    if (r == 0 || keys[order[r]] != keys[order[r - 1]]) first[order[r]] = 1;
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    if (first[i]) out.push_back(candidates[i]);
+  return out;
+}
+
 int face_index(int i, int j, int k) {
   for (int f = 0; f < 4; ++f)
     if (face_has(f, i) && face_has(f, j) && face_has(f, k)) return f;
@@ -175,38 +205,36 @@ std::vector<TetMesh::Tuple> TetMesh::get_tets() const {
 }
 
 std::vector<TetMesh::Tuple> TetMesh::edges_of_tets(const std::vector<Id>& tets) const {
-  std::vector<std::pair<Id, Id>> seen;
-  std::vector<Tuple> out;
+  std::vector<std::array<Id, 3>> keys;
+  std::vector<Tuple> candidates;
   for (Id t : tets) {
     if (is_cell_removed(t)) continue;
     const Cell& c = cell(t);
     for (int e = 0; e < 6; ++e) {
-      std::pair<Id, Id> key = std::minmax(c[k_edges[e][0]], c[k_edges[e][1]]);
-      if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
-      seen.push_back(key);
+      const auto [a, b] = std::minmax(c[k_edges[e][0]], c[k_edges[e][1]]);
+      keys.push_back({a, b, k_no_id});
       int lf = 0;
       while (!(face_has(lf, k_edges[e][0]) && face_has(lf, k_edges[e][1]))) ++lf;
-      out.push_back(tuple(t, k_edges[e][0], e, lf));
+      candidates.push_back(tuple(t, k_edges[e][0], e, lf));
     }
   }
-  return out;
+  return first_of_each_key(keys, candidates);
 }
 
 std::vector<TetMesh::Tuple> TetMesh::faces_of_tets(const std::vector<Id>& tets) const {
-  std::vector<std::array<Id, 3>> seen;
-  std::vector<Tuple> out;
+  std::vector<std::array<Id, 3>> keys;
+  std::vector<Tuple> candidates;
   for (Id t : tets) {
     if (is_cell_removed(t)) continue;
     const Cell& c = cell(t);
     for (int f = 0; f < 4; ++f) {
       std::array<Id, 3> key{c[k_faces[f][0]], c[k_faces[f][1]], c[k_faces[f][2]]};
       std::sort(key.begin(), key.end());
-      if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
-      seen.push_back(key);
-      out.push_back(tuple(t, k_faces[f][0], edge_index(k_faces[f][0], k_faces[f][1]), f));
+      keys.push_back(key);
+      candidates.push_back(tuple(t, k_faces[f][0], edge_index(k_faces[f][0], k_faces[f][1]), f));
     }
   }
-  return out;
+  return first_of_each_key(keys, candidates);
 }
 
 std::vector<Id> TetMesh::edge_ring(Id a, Id b, const std::vector<Id>& tets) const {

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <random>
+#include <set>
 
 #include "meshing/core/primitives.hpp"
 #include "meshing/editing/scheduler.hpp"
@@ -339,6 +340,89 @@ TEST(EditingTet, RandomOperationsKeepValidityPositivityAndRollBackExactly) {
   double total = 0;
   for (Id c : m.live_cells()) total += m.volume(c) / 6.0;
   EXPECT_GT(total, 0.0);
+}
+
+// faces_of_tets / edges_of_tets over a whole mesh (the flip passes seed with every live tet):
+// each face and edge exactly once, as the tuple met first in tet order, for short lists (a
+// cavity, scanned) and long ones (sorted) alike.
+TEST(EditingTet, FacesAndEdgesOfTetsListEachOnceInFirstMetOrder) {
+  const auto cube = curvefem::make_cube_tets(4);
+  ed::TetMesh m;
+  std::vector<ed::TetMesh::Cell> cells;
+  for (int t = 0; t < cube.cells.rows(); ++t)
+    cells.push_back(
+        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
+  m.initialize(cube.nodes.rows(), cells);
+  std::vector<Id> tets = m.live_cells();
+  std::reverse(tets.begin(), tets.end());  // not the storage order
+  for (std::size_t n : {std::size_t(2), std::size_t(11), tets.size()}) {
+    const std::vector<Id> some(tets.begin(), tets.begin() + std::ptrdiff_t(n));
+    // Reference: the first tuple of every face / edge in the order the tets list them.
+    std::vector<std::array<Id, 3>> faces_expected;
+    std::vector<std::pair<Id, Id>> edges_expected;
+    std::set<std::array<Id, 3>> faces_seen;
+    std::set<std::pair<Id, Id>> edges_seen;
+    for (Id t : some) {
+      const auto c = m.cell(t);
+      for (int skip = 3; skip >= 0; --skip) {  // the order does not matter within a tet below
+        std::array<Id, 3> f{};
+        int k = 0;
+        for (int j = 0; j < 4; ++j)
+          if (j != skip) f[std::size_t(k++)] = c[std::size_t(j)];
+        std::sort(f.begin(), f.end());
+        if (faces_seen.insert(f).second) faces_expected.push_back(f);
+      }
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) {
+          const std::pair<Id, Id> e = std::minmax(c[std::size_t(a)], c[std::size_t(b)]);
+          if (edges_seen.insert(e).second) edges_expected.push_back(e);
+        }
+    }
+    auto first_tet = [&](auto has) {
+      for (std::size_t i = 0; i < some.size(); ++i)
+        if (has(m.cell(some[i]))) return i;
+      return some.size();
+    };
+    auto holds = [](const auto& c, std::initializer_list<Id> vs) {
+      for (Id v : vs)
+        if (std::find(c.begin(), c.end(), v) == c.end()) return false;
+      return true;
+    };
+    // Each tuple lies in the first tet holding its face / edge, and those tets come in order.
+    std::set<std::array<Id, 3>> faces_got;
+    std::size_t count = 0, last = 0;
+    for (const auto& tu : m.faces_of_tets(some)) {
+      auto f = m.face_vertices(tu);
+      std::sort(f.begin(), f.end());
+      faces_got.insert(f);
+      ++count;
+      const std::size_t i = first_tet([&](const auto& c) { return holds(c, {f[0], f[1], f[2]}); });
+      ASSERT_LT(i, some.size());
+      EXPECT_EQ(tu.tid, some[i]) << n;
+      EXPECT_GE(i, last) << n;
+      last = i;
+    }
+    EXPECT_EQ(faces_got, faces_seen) << n;
+    EXPECT_EQ(count, faces_expected.size()) << n;
+    std::set<std::pair<Id, Id>> edges_got;
+    count = 0, last = 0;
+    for (const auto& tu : m.edges_of_tets(some)) {
+      const Id u = tu.vid, w = m.other_vertex(tu);
+      const std::pair<Id, Id> e = std::minmax(u, w);
+      edges_got.insert(e);
+      ++count;
+      const std::size_t i = first_tet([&](const auto& c) { return holds(c, {e.first, e.second}); });
+      ASSERT_LT(i, some.size());
+      EXPECT_EQ(tu.tid, some[i]) << n;
+      EXPECT_GE(i, last) << n;
+      last = i;
+    }
+    EXPECT_EQ(edges_got, edges_seen) << n;
+    EXPECT_EQ(count, edges_expected.size()) << n;
+  }
+  // The whole mesh: as many faces and edges as the mesh has.
+  EXPECT_EQ(m.faces_of_tets(m.live_cells()).size(), m.get_faces().size());
+  EXPECT_EQ(m.edges_of_tets(m.live_cells()).size(), m.get_edges().size());
 }
 
 TEST(EditingTet, SwapsRoundTrip) {
