@@ -139,39 +139,36 @@ class CurvedEditMesh : public TetMesh {
     }
 
     // The new cells' nodes, then the checks from the cheapest to the dearest, each over all new
-    // cells before the next: energy, scaled Jacobian, certificate.
+    // cells before the next: energy (each cell as soon as it is built: most operations are
+    // refused there, and building the rest is wasted), scaled Jacobian, certificate.
     std::map<NodeKey, Eigen::Vector3d> staged;  // new nodes shared by several new cells
     std::vector<Eigen::MatrixXd> Xs;
-    auto build = [&]() {
-      staged.clear();
-      Xs.clear();
-      for (Id t : r.new_cells) {
-        const Cell& c = cell(t);
-        Eigen::MatrixXd& X = Xs.emplace_back(Eigen::Index(lattice->size()), 3);
-        Eigen::Vector3d P[4];
-        for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
-        for (std::size_t n = 0; n < lattice->size(); ++n) {
-          const auto& alpha = (*lattice)[n];
-          const NodeKey key = make_node_key(c.data(), alpha, 4);
-          std::vector<Id> support;
-          for (int j = 0; j < 4; ++j)
-            if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
-          Eigen::Vector3d x;
-          if (support.size() == 1 && support[0] == split_vertex) {
-            x = split_x;
-            staged.emplace(key, x);
-          } else if (on_cavity_boundary(support)) {
-            const auto it = node_of.find(key);
-            CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
-            x = pos[std::size_t(it->second)];
-          } else if (const auto it = staged.find(key); it != staged.end()) {
-            x = it->second;
-          } else {
-            x = place(c, alpha, P);
-            staged.emplace(key, x);
-          }
-          X.row(Eigen::Index(n)) = x.transpose();
+    auto build_cell = [&](Id t) {
+      const Cell& c = cell(t);
+      Eigen::MatrixXd& X = Xs.emplace_back(Eigen::Index(lattice->size()), 3);
+      Eigen::Vector3d P[4];
+      for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
+      for (std::size_t n = 0; n < lattice->size(); ++n) {
+        const auto& alpha = (*lattice)[n];
+        const NodeKey key = make_node_key(c.data(), alpha, 4);
+        std::vector<Id> support;
+        for (int j = 0; j < 4; ++j)
+          if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
+        Eigen::Vector3d x;
+        if (support.size() == 1 && support[0] == split_vertex) {
+          x = split_x;
+          staged.emplace(key, x);
+        } else if (on_cavity_boundary(support)) {
+          const auto it = node_of.find(key);
+          CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
+          x = pos[std::size_t(it->second)];
+        } else if (const auto it = staged.find(key); it != staged.end()) {
+          x = it->second;
+        } else {
+          x = place(c, alpha, P);
+          staged.emplace(key, x);
         }
+        X.row(Eigen::Index(n)) = x.transpose();
       }
     };
     struct ClearSplit {
@@ -222,10 +219,10 @@ class CurvedEditMesh : public TetMesh {
         }
       }
     }
-    build();
-    const std::size_t nn = Xs.size();
+    const std::size_t nn = r.new_cells.size();
     std::vector<double> new_energy(nn), new_sj(nn);
     for (std::size_t i = 0; i < nn; ++i) {
+      build_cell(r.new_cells[i]);
       new_energy[i] = cell_energy(k, Xs[i]);
       if (!(new_energy[i] < before * (1.0 - 1e-9))) return ++stats->rejected_energy, false;
     }

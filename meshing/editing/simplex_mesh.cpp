@@ -471,21 +471,45 @@ void SimplexMesh<N>::reject(Rejection why) {
 template <int N>
 bool SimplexMesh<N>::link_condition(Id a, Id b) const {
   // A facet through v lies in no cell outside v's star, so counting within the star decides
-  // whether it is on the boundary (and is far cheaper than a global lookup).
-  auto facet_is_boundary = [&](const Id* f, const std::vector<Id>& star) {
-    int count = 0;
+  // whether it is on the boundary (and is far cheaper than a global lookup). The facets of the
+  // star through `v0` (and `v1`) are listed once, sorted: a boundary facet is one used once.
+  auto facet_key = [](const Id* f) {
+    Key k{k_no_id, k_no_id, k_no_id};
+    std::copy(f, f + (N - 1), k.begin());
+    std::sort(k.begin(), k.begin() + (N - 1));
+    return k;
+  };
+  auto boundary_facets = [&](const std::vector<Id>& star, Id v0, Id v1) {
+    std::vector<Key> all;
+    all.reserve(star.size() * std::size_t(N));
     for (Id c : star) {
       const Cell& cv = cell(c);
-      bool all = true;
-      for (int i = 0; i < N - 1 && all; ++i)
-        all = std::find(cv.begin(), cv.end(), f[i]) != cv.end();
-      if (all && ++count > 1) return false;
+      for (int skip = 0; skip < N; ++skip) {
+        if (cv[skip] == v0 || cv[skip] == v1) continue;
+        Id f[N - 1];
+        int k = 0;
+        for (int i = 0; i < N; ++i)
+          if (i != skip) f[k++] = cv[i];
+        all.push_back(facet_key(f));
+      }
     }
-    return count == 1;
+    std::sort(all.begin(), all.end());
+    std::vector<Key> once;
+    for (std::size_t i = 0; i < all.size();) {
+      std::size_t j = i + 1;
+      while (j < all.size() && all[j] == all[i]) ++j;
+      if (j == i + 1) once.push_back(all[i]);
+      i = j;
+    }
+    return once;
+  };
+  auto facet_is_boundary = [&](const Id* f, const std::vector<Key>& boundary) {
+    return std::binary_search(boundary.begin(), boundary.end(), facet_key(f));
   };
   auto vertex_link = [&](Id v) {
     std::vector<Key> link;
     const std::vector<Id>& star = vertex_cells(v);
+    const std::vector<Key> boundary = boundary_facets(star, v, k_no_id);
     for (Id c : star) {
       const Cell& cv = cell(c);
       Id rest[N];
@@ -500,7 +524,7 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
         int k = 0;
         for (int i = 0; i < N; ++i)
           if (i != skip) f[k++] = cv[i];
-        if (!facet_is_boundary(f, star)) continue;
+        if (!facet_is_boundary(f, boundary)) continue;
         Id g[N - 1];
         int q = 0;
         for (int i = 0; i < N - 1; ++i)
@@ -515,6 +539,7 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
   std::vector<Key> la = vertex_link(a), lb = vertex_link(b), lab;
   const Id edge[2] = {a, b};
   const std::vector<Id> edge_star = cells_containing(std::span<const Id>(edge, 2));
+  const std::vector<Key> edge_boundary = boundary_facets(edge_star, a, b);
   for (Id c : edge_star) {
     const Cell& cv = cell(c);
     Id rest[N];
@@ -528,7 +553,7 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
       int k = 0;
       for (int i = 0; i < N; ++i)
         if (i != skip) f[k++] = cv[i];
-      if (!facet_is_boundary(f, edge_star)) continue;
+      if (!facet_is_boundary(f, edge_boundary)) continue;
       Id g[N - 1];
       int q = 0;
       for (int i = 0; i < N - 1; ++i)
