@@ -473,6 +473,14 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
   // A facet through v lies in no cell outside v's star, so counting within the star decides
   // whether it is on the boundary (and is far cheaper than a global lookup). The facets of the
   // star through `v0` (and `v1`) are listed once, sorted: a boundary facet is one used once.
+  // The facet of cell cv opposite its corner `skip`, in cell order.
+  auto facet = [](const Cell& cv, int skip) {
+    std::array<Id, N - 1> f{};
+    int k = 0;
+    for (int i = 0; i < N; ++i)
+      if (i != skip) f[std::size_t(k++)] = cv[i];
+    return f;
+  };
   auto facet_key = [](const Id* f) {
     Key k{k_no_id, k_no_id, k_no_id};
     std::copy(f, f + (N - 1), k.begin());
@@ -486,11 +494,8 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
       const Cell& cv = cell(c);
       for (int skip = 0; skip < N; ++skip) {
         if (cv[skip] == v0 || cv[skip] == v1) continue;
-        Id f[N - 1];
-        int k = 0;
-        for (int i = 0; i < N; ++i)
-          if (i != skip) f[k++] = cv[i];
-        all.push_back(facet_key(f));
+        const auto f = facet(cv, skip);
+        all.push_back(facet_key(f.data()));
       }
     }
     std::sort(all.begin(), all.end());
@@ -520,11 +525,8 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
       // Boundary facets of c through v: facet minus v, plus the virtual vertex.
       for (int skip = 0; skip < N; ++skip) {
         if (cv[skip] == v) continue;
-        Id f[N - 1];
-        int k = 0;
-        for (int i = 0; i < N; ++i)
-          if (i != skip) f[k++] = cv[i];
-        if (!facet_is_boundary(f, boundary)) continue;
+        const auto f = facet(cv, skip);
+        if (!facet_is_boundary(f.data(), boundary)) continue;
         Id g[N - 1];
         int q = 0;
         for (int i = 0; i < N - 1; ++i)
@@ -549,11 +551,8 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
     add_subsets(lab, rest, m);
     for (int skip = 0; skip < N; ++skip) {
       if (cv[skip] == a || cv[skip] == b) continue;
-      Id f[N - 1];
-      int k = 0;
-      for (int i = 0; i < N; ++i)
-        if (i != skip) f[k++] = cv[i];
-      if (!facet_is_boundary(f, edge_boundary)) continue;
+      const auto f = facet(cv, skip);
+      if (!facet_is_boundary(f.data(), edge_boundary)) continue;
       Id g[N - 1];
       int q = 0;
       for (int i = 0; i < N - 1; ++i)
