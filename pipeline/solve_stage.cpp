@@ -325,6 +325,14 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
     }
     out.u = sol.u;
     out.solve = sol.solve;
+    out.physics["load_functional"] = {
+        {"value", sol.load_functional},
+        {"volume", sol.load_functional_volume},
+        {"definition",
+         "l(u_h) = integral of f u_h + of g u_h over the Neumann faces + of h u_inf u_h over the "
+         "Robin faces, on this mesh (the load vector times u_h); volume: its part integral of f "
+         "u_h (faces a selection cuts are integrated with an indicator at the quadrature points, "
+         "first-order accurate at the cut: the volume part has no such term)"}};
     out.physics["free_dofs"] = sol.free_dofs;
     out.physics["nitsche_faces"] = sol.nitsche_faces;
     out.null_space_dim = sol.null_space_dim;
@@ -415,6 +423,17 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
     out.solve = sol.solve;
     add_stages(sol.timings);
     out.null_space_dim = sol.null_space_dim;
+    out.physics["load_functional"] = {
+        {"value", sol.load_functional},
+        {"volume", sol.load_functional_volume},
+        {"definition",
+         spec.physics == Physics::linear_elasticity
+             ? "l(u_h) = integral of b.u_h + of t.u_h over the traction faces, on this mesh (the "
+               "external load vector times u_h; the compliance when the supports do not move); "
+               "volume: its part integral of b.u_h"
+             : "l(u_h) = integral of b.u_h + of t.u_h over the traction faces at the last load "
+               "step, on this mesh (the external load vector times u_h); volume: its part "
+               "integral of b.u_h"}};
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
     if (out.null_space_dim > 0) {
       // Tractions only: no supports; the load's own balance is what counts.

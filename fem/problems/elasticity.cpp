@@ -40,9 +40,11 @@ int stiffness_degree(const LagrangeMesh& mesh, const FunctionSpace& space,
                                               space.degree, mesh.order, QuadratureUse::stiffness));
 }
 
-/// External load: body force (volume) and tractions (faces), scaled by s.
+/// External load: body force (volume) and tractions (faces); `body`, if given, receives the
+/// body force's part.
 Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& space,
-                              const ElasticityProblem& problem, const Setup& setup) {
+                              const ElasticityProblem& problem, const Setup& setup,
+                              Eigen::VectorXd* body = nullptr) {
   Eigen::VectorXd F = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(space.num_dofs));
   const int n = setup.n;
   if (problem.body_force) {
@@ -57,6 +59,7 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
     };
     assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, nullptr, &F);
   }
+  if (body) *body = F;
   // Tractions: evaluated at every face point in parallel, summed serially in point order.
   const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
   for (const auto& bc : problem.traction) {
@@ -239,7 +242,9 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   };
   assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, K.valuePtr(),
                  nullptr);
-  Eigen::VectorXd F = external_load(mesh, space, problem, setup);
+  Eigen::VectorXd body;
+  Eigen::VectorXd F = external_load(mesh, space, problem, setup, &body);
+  const Eigen::VectorXd load = F;  // l(v) before the Nitsche terms join F
   std::vector<DirichletFaceSplit> splits;
   for (const auto& bc : problem.dirichlet) {
     splits.push_back(
@@ -268,12 +273,16 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
           c.resultant.tail<3>().transpose(), "), relative ", c.relative, " > ",
           k_compatibility_tolerance, " (force scale ", c.force_scale, ", moment scale ",
           c.moment_scale, "); its rigid part is removed before the solve");
+    result.load_functional = load.dot(result.u);
+    result.load_functional_volume = body.dot(result.u);
     return result;
   }
   {
     ScopedTimer t(result.timings, "solve");
     result.u = solve_constrained(std::move(K), F, constraints, options, &result.solve);
   }
+  result.load_functional = load.dot(result.u);
+  result.load_functional_volume = body.dot(result.u);
   return result;
 }
 
@@ -391,7 +400,8 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
   ElasticitySolution result;
   result.dofs = space.num_dofs;
   const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
-  const Eigen::VectorXd f_ext = external_load(mesh, space, problem, setup);
+  Eigen::VectorXd f_body;
+  const Eigen::VectorXd f_ext = external_load(mesh, space, problem, setup, &f_body);
   const Constraints full = dirichlet_constraints(space, problem);
   result.free_unknowns = static_cast<int>(f_ext.size()) - full.num_fixed();
   if (problem.dirichlet.empty())
@@ -461,6 +471,8 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
   }
   result.timings.add("newton", watch.seconds());
   result.u = u;
+  result.load_functional = f_ext.dot(u);
+  result.load_functional_volume = f_body.dot(u);
   return result;
 }
 

@@ -64,6 +64,12 @@ struct ElasticitySolution {
   int null_space_dim = 0;
   LoadCompatibility compatibility;  ///< when null_space_dim > 0: total force and moment
   std::vector<NewtonStep> newton;   ///< Neo-Hookean only
+  /// The work of the applied load on the solution, an integral QoI (issue 22): l(u_h) = ∫b·u_h
+  /// + ∫t·u_h (tractions), the assembled external load vector (Neo-Hookean: at the last load
+  /// step) times u_h. With homogeneous Dirichlet data and linear elasticity it is the compliance
+  /// a(u_h, u_h); for smooth data it converges like h^2p.
+  double load_functional = 0.0;
+  double load_functional_volume = 0.0;  ///< its part ∫b·u_h (the body force's work)
   Timings timings;
 };
 

@@ -97,6 +97,7 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, system.K.valuePtr(),
                  &system.F);
 
+  system.F_volume = system.F;
   system.rhs_integral = system.F.sum();
   // Neumann data: evaluated at every face point in parallel (the flux may be expensive, e.g. a
   // point location through φ⁻¹), then summed serially in point order.
@@ -192,6 +193,7 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
     ScopedTimer t(result.timings, "assembly");
     system = assemble_poisson(mesh, space, problem);
   }
+  const Eigen::VectorXd load = system.F;  // l(v) before the Nitsche terms join F
   std::vector<DirichletFaceSplit> splits;
   {
     ScopedTimer t(result.timings, "assembly");  // the Nitsche terms
@@ -228,12 +230,16 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
                 c.resultant[0], " (relative ", c.relative, " > ", k_compatibility_tolerance,
                 "); solved with f minus its mean ", c.resultant[0] / modes.gram(0, 0));
     log::info("pure Neumann Poisson: solution up to a constant, reported with mean zero");
+    result.load_functional = load.dot(result.u);
+    result.load_functional_volume = system.F_volume.dot(result.u);
     return result;
   }
   {
     ScopedTimer t(result.timings, "solve");
     result.u = solve_constrained(std::move(system.K), system.F, constraints, solver, &result.solve);
   }
+  result.load_functional = load.dot(result.u);
+  result.load_functional_volume = system.F_volume.dot(result.u);
   return result;
 }
 

@@ -44,12 +44,22 @@ struct PoissonSolution {
   int null_space_dim = 0;
   LoadCompatibility compatibility;                 ///< pure Neumann: resultant = (∫f + ∫g)
   double rhs_integral = 0.0, flux_integral = 0.0;  ///< ∫f and ∫g as assembled (Σ of F's parts)
+  /// The load functional at the solution, an integral QoI (issue 22): l(u_h) = ∫f u_h + ∫g u_h
+  /// (Neumann) + ∫h u∞ u_h (Robin), the assembled load vector before any Dirichlet or Nitsche
+  /// term times u_h, with the data as given (pure Neumann: u_h of mean zero). With homogeneous
+  /// Dirichlet data it is the compliance a(u_h, u_h); for smooth data it converges like h^2p.
+  /// A condition whose filter cuts faces integrates its data by an indicator at the quadrature
+  /// points, which costs the boundary part O(h) accuracy at the cut; the volume part ∫f u_h has
+  /// no such term.
+  double load_functional = 0.0;
+  double load_functional_volume = 0.0;  ///< its part ∫f u_h
 };
 
 /// Assembled stiffness K (with the Robin terms ∫ h u v) and load F (before Dirichlet elimination).
 struct AssembledSystem {
   SparseMatrix K;
   Eigen::VectorXd F;
+  Eigen::VectorXd F_volume;    ///< F's volume part (∫f φ_i)
   double rhs_integral = 0.0;   ///< Σ of F's volume part = ∫f (by quadrature)
   double flux_integral = 0.0;  ///< Σ of F's Neumann part = ∫g
   double robin_area = 0.0;     ///< ∫ 1 over the Robin conditions' points (by quadrature)

@@ -312,3 +312,47 @@ TEST(BoundaryTerms, PoissonRobinWithANonPositiveCoefficientIsAnInputError) {
                            {}});
   EXPECT_THROW(fem::solve_poisson(mesh, space, problem, {}), InputError);
 }
+
+// The load functional (issue 22's integral QoI) l(u_h) = ∫f u_h + ∫g u_h converges like h^2p:
+// u = x sin πy sin πz on the unit cube, at rest on x = 0 and on the y, z sides, flux g = ∂u/∂x
+// = sin πy sin πz on x = 1, f = 2π² u, so l(u) = 2π² ∫x² · ¼ + ¼ = π²/6 + ¼ exactly, of
+// which the volume part ∫f u is π²/6.
+TEST(BoundaryTerms, PoissonLoadFunctionalConvergesAtTwiceTheDegree) {
+  const double pi = std::numbers::pi;
+  const double exact = pi * pi / 6 + 0.25, exact_volume = pi * pi / 6;
+  auto u = [pi](const Eigen::Vector3d& x) {
+    return x[0] * std::sin(pi * x[1]) * std::sin(pi * x[2]);
+  };
+  for (int p = 1; p <= 3; ++p) {
+    std::vector<double> err, err_volume;
+    for (int n : {2, 4, 8}) {
+      const LagrangeMesh mesh = make_cube_tets(n);
+      const fem::FunctionSpace space = fem::build_function_space(mesh, p);
+      std::vector<char> at_rest(space.boundary_faces.size(), 0), flux = at_rest;
+      for (std::size_t f = 0; f < space.boundary_faces.size(); ++f) {
+        const auto [cell, j] = space.boundary_faces[f];
+        double xmin = 2;
+        for (int i = 0; i < 4; ++i)
+          if (i != j) xmin = std::min(xmin, mesh.nodes(mesh.cells(cell, i), 0));
+        (xmin > 1 - 1e-12 ? flux : at_rest)[f] = 1;
+      }
+      fem::PoissonProblem problem;
+      problem.rhs = [&](const Eigen::Vector3d& x) { return 2 * pi * pi * u(x); };
+      problem.dirichlet.push_back({at_rest, u, {}});
+      problem.neumann.push_back({flux,
+                                 [pi](const Eigen::Vector3d& x, const Eigen::Vector3d&) {
+                                   return std::sin(pi * x[1]) * std::sin(pi * x[2]);
+                                 },
+                                 {}});
+      const auto sol = fem::solve_poisson(mesh, space, problem, {});
+      err.push_back(std::abs(sol.load_functional - exact));
+      err_volume.push_back(std::abs(sol.load_functional_volume - exact_volume));
+    }
+    const double r = test::rate(err[1], err[2]), rv = test::rate(err_volume[1], err_volume[2]);
+    std::printf("load functional p=%d  errors %.3e %.3e %.3e (rate %.2f), volume part %.3e %.3e "
+                "%.3e (rate %.2f)\n",
+                p, err[0], err[1], err[2], r, err_volume[0], err_volume[1], err_volume[2], rv);
+    EXPECT_NEAR(r, 2 * p, 0.5) << "p = " << p;
+    EXPECT_NEAR(rv, 2 * p, 0.5) << "p = " << p;
+  }
+}

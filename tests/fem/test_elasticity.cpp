@@ -253,3 +253,26 @@ TEST(LinearElasticity, StraightCellsUseTheReferenceTensorsExactly) {
     EXPECT_LE((a.u - b.u).lpNorm<Eigen::Infinity>(), 1e-11 * a.u.lpNorm<Eigen::Infinity>());
   }
 }
+
+// The load functional (issue 22's integral QoI): with the clamp at rest it is the compliance
+// a(u_h, u_h), which grows with the nested spaces P1 ⊂ P2 ⊂ P3 on one straight mesh towards
+// a(u, u), by shrinking steps; it is linear in u_h (twice the load: four times the work).
+TEST(LinearElasticity, TheLoadFunctionalIsTheComplianceAndGrowsWithTheDegree) {
+  std::vector<double> work;
+  for (int p = 1; p <= 3; ++p) {
+    Cantilever c(1.5, p);
+    const auto sol = fem::solve_linear_elasticity(c.mesh, c.space, c.problem, {});
+    work.push_back(sol.load_functional);
+    EXPECT_EQ(sol.load_functional_volume, 0.0);  // no body force: the traction's work alone
+    std::printf("cantilever p=%d  l(u_h) = %.10e\n", p, sol.load_functional);
+    if (p == 2) {
+      Cantilever d(3.0, p);
+      const auto twice = fem::solve_linear_elasticity(d.mesh, d.space, d.problem, {});
+      EXPECT_NEAR(twice.load_functional, 4 * sol.load_functional, 1e-10 * sol.load_functional);
+    }
+  }
+  EXPECT_GT(work[0], 0);
+  EXPECT_GT(work[1], work[0]);
+  EXPECT_GT(work[2], work[1]);
+  EXPECT_LT(work[2] - work[1], 0.5 * (work[1] - work[0]));
+}
