@@ -139,16 +139,6 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
           {"quality_floor", options.curve_quality_floor},
           {"faces_sheared", stats.faces_sheared},
           {"fiber_misses", stats.fiber_misses},
-          {"patch_fit",
-           stats.patch_fit.enabled
-               ? nlohmann::ordered_json{{"nodes", stats.patch_fit.nodes},
-                                        {"kept", stats.patch_fit.kept},
-                                        {"points", stats.patch_fit.points},
-                                        {"mean_distance_before", stats.patch_fit.mean_before},
-                                        {"mean_distance_after", stats.patch_fit.mean_after},
-                                        {"max_distance_before", stats.patch_fit.max_before},
-                                        {"max_distance_after", stats.patch_fit.max_after}}
-               : nlohmann::ordered_json(nullptr)},
           {"linear_max_distance_rel", stats.linear_max_distance_rel},
           {"distance_points", stats.distance_points},
           {"optimize", optimize_json(stats.optimize)}};

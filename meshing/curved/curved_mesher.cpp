@@ -4,7 +4,6 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -171,134 +170,6 @@ class Builder {
       }
       if (progress && f % 256 == 0) progress("curve: fiber targets", double(f) / nf);
     }
-  }
-
-  // Least-squares patches (CurvedMeshOptions::fit_patches): the non-corner nodes of every
-  // patch moved from their fiber targets to the least-squares fit of the distance points each
-  // face owns, |linear(u, v) + Σ N_i(u, v) d_i − x|² summed over them (weight 1/scale², the
-  // spatially varying ε), plus each node's own fiber target as one more observation (so a face
-  // with few points keeps its interpolating patch). Edge nodes are shared by the two faces, so
-  // the fit is one sparse system for all of them; the corners stay on the input. A node keeps
-  // its fit only where every face holding it stays within max(its interpolating patch's worst
-  // distance, 0.9 ε) at every point it owns; the others go back to their fiber targets until
-  // that holds everywhere.
-  PatchFitStats fit;
-  void fit_targets(double eps) {
-    if (k == 1) return;
-    const int nl = int(tri_lattice.size());
-    std::map<std::array<int, 3>, int> edge_id;
-    std::vector<std::vector<int>> node_id(std::size_t(nf), std::vector<int>(std::size_t(nl), -1));
-    std::vector<Eigen::Vector3d> target;  // per unknown: its fiber target (− linear)
-    for (int f = 0; f < nf; ++f)
-      for (int i = 0; i < nl; ++i) {
-        const auto& a = tri_lattice[std::size_t(i)];
-        const int nonzero = (a[0] > 0) + (a[1] > 0) + (a[2] > 0);
-        if (nonzero == 1) continue;
-        int id;
-        if (nonzero == 2) {
-          const int p = a[0] == 0 ? 1 : 0, q = a[2] == 0 ? 1 : 2;
-          const int vp = rotated(f, p), vq = rotated(f, q);
-          const auto key =
-              vp < vq ? std::array<int, 3>{vp, vq, a[q]} : std::array<int, 3>{vq, vp, a[p]};
-          const auto [it, inserted] = edge_id.emplace(key, int(target.size()));
-          id = it->second;
-          if (inserted) target.push_back(raw[std::size_t(f)][std::size_t(i)]);
-        } else {
-          id = int(target.size());
-          target.push_back(raw[std::size_t(f)][std::size_t(i)]);
-        }
-        node_id[std::size_t(f)][std::size_t(i)] = id;
-      }
-    const int n = int(target.size());
-    if (n == 0) return;
-    // Normal equations, one local block per face.
-    std::vector<Eigen::Triplet<double>> trips;
-    Eigen::MatrixXd rhs(n, 3);
-    for (int j = 0; j < n; ++j) {
-      trips.emplace_back(j, j, 1.0);
-      rhs.row(j) = target[std::size_t(j)].transpose();
-    }
-    std::vector<Eigen::VectorXd> phis;
-    for (int f = 0; f < nf; ++f) {
-      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nl, nl);
-      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(nl, 3);
-      for (const Owned& o : owned[std::size_t(f)]) {
-        const Eigen::VectorXd phi =
-            lagrange_shape_values(CellKind::triangle, k, Eigen::Vector3d(o.u, o.v, 0));
-        const double w = 1.0 / (scale(o.vertex) * scale(o.vertex));
-        const Eigen::Vector3d r = point(o.vertex) - linear_mid(f, o.u, o.v);
-        M.noalias() += w * phi * phi.transpose();
-        B.noalias() += w * phi * r.transpose();
-      }
-      for (int i = 0; i < nl; ++i) {
-        const int a = node_id[std::size_t(f)][std::size_t(i)];
-        if (a < 0) continue;
-        rhs.row(a) += B.row(i);
-        for (int j = 0; j < nl; ++j) {
-          const int b = node_id[std::size_t(f)][std::size_t(j)];
-          if (b >= 0 && M(i, j) != 0) trips.emplace_back(a, b, M(i, j));
-        }
-      }
-    }
-    Eigen::SparseMatrix<double> A(n, n);
-    A.setFromTriplets(trips.begin(), trips.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
-    if (ldlt.info() != Eigen::Success) {
-      log::warn("curve: the least-squares patch fit could not be factorized; patches interpolate");
-      return;
-    }
-    const Eigen::MatrixXd X = ldlt.solve(rhs);
-    std::vector<char> kept(std::size_t(n), 1);
-    auto value = [&](int id) -> Eigen::Vector3d {
-      return kept[std::size_t(id)] ? Eigen::Vector3d(X.row(id).transpose())
-                                   : target[std::size_t(id)];
-    };
-    auto worst = [&](int f, bool fitted, double* sum, int* count) {
-      std::vector<Eigen::Vector3d> d(std::size_t(nl), Eigen::Vector3d::Zero());
-      for (int i = 0; i < nl; ++i)
-        if (const int id = node_id[std::size_t(f)][std::size_t(i)]; id >= 0)
-          d[std::size_t(i)] = fitted ? value(id) : target[std::size_t(id)];
-      double w = 0;
-      for (const Owned& o : owned[std::size_t(f)]) {
-        const double dist =
-            (linear_mid(f, o.u, o.v) + patch_displacement(d, k, o.u, o.v) - point(o.vertex))
-                .norm() /
-            scale(o.vertex);
-        w = std::max(w, dist);
-        if (sum) *sum += dist, ++*count;
-      }
-      return w;
-    };
-    std::vector<double> interp(static_cast<std::size_t>(nf), 0.0);
-    double sum_before = 0;
-    int count = 0;
-    for (int f = 0; f < nf; ++f) {
-      interp[std::size_t(f)] = worst(f, false, &sum_before, &count);
-      fit.max_before = std::max(fit.max_before, interp[std::size_t(f)]);
-    }
-    for (bool changed = true; changed;) {
-      changed = false;
-      for (int f = 0; f < nf; ++f) {
-        if (worst(f, true, nullptr, nullptr) <= std::max(interp[std::size_t(f)], 0.9 * eps))
-          continue;
-        for (int i = 0; i < nl; ++i)
-          if (const int id = node_id[std::size_t(f)][std::size_t(i)]; id >= 0 && kept[std::size_t(id)])
-            kept[std::size_t(id)] = 0, changed = true;
-      }
-    }
-    double sum_after = 0;
-    int count_after = 0;
-    for (int f = 0; f < nf; ++f)
-      fit.max_after = std::max(fit.max_after, worst(f, true, &sum_after, &count_after));
-    for (int f = 0; f < nf; ++f)
-      for (int i = 0; i < nl; ++i)
-        if (const int id = node_id[std::size_t(f)][std::size_t(i)]; id >= 0)
-          raw[std::size_t(f)][std::size_t(i)] = value(id);
-    fit.nodes = n;
-    fit.kept = int(std::count(kept.begin(), kept.end(), char(1)));
-    fit.points = count;
-    fit.mean_before = count ? sum_before / count : 0;
-    fit.mean_after = count_after ? sum_after / count_after : 0;
   }
 
   // Faces owning a point farther than ε from their linear triangle (curved-aware coarsening).
@@ -1326,11 +1197,6 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   b.point_scale = &point_scale;
   b.compute_targets(progress);
   b.locate_input(progress);
-  if (options.fit_patches) {
-    b.fit_targets(eps);
-    b.fit.enabled = true;
-    stats.patch_fit = b.fit;
-  }
   if (relaxed) b.find_needs_full(eps);
   stats.fiber_misses = b.fiber_misses;
   const int nf = b.nf, nv = b.nv;

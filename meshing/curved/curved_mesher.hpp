@@ -38,15 +38,6 @@
 
 namespace curvefem::meshing::curved {
 
-// The least-squares patch fit (CurvedMeshOptions::fit_patches): the non-corner nodes fitted and
-// kept, and the distance from the distance points to their patch (over ε's scale at each point,
-// absolute units) before (interpolating) and after.
-struct PatchFitStats {
-  bool enabled = false;
-  int nodes = 0, kept = 0, points = 0;
-  double mean_before = 0, mean_after = 0, max_before = 0, max_after = 0;
-};
-
 struct CurvedMeshOptions {
   int order = 3;                // geometric order k, 1..4
   double eps_rel = 1e-2;        // distance bound, relative to the bbox edge
@@ -112,13 +103,6 @@ struct CurvedMeshOptions {
   // thickening then left a different mesh and P3 elasticity moved from 0.40% to 0.94% RMS away
   // from a dense P2 reference (3% stiffer); hence off by default.
   bool low_degree_slabs = false;
-  // Patches fitted to the input (issue 22): the non-corner nodes of the curved boundary are the
-  // least-squares fit of the distance points each face owns instead of the fiber crossings (the
-  // interpolating patch), per node only where that keeps every face within its interpolating
-  // patch's worst distance or 0.9 ε. The interpolating patches of a convex part lie inside it
-  // between their nodes: integrals over the domain carry that bias (benchmarks/results/
-  // accuracy.md). The curved-aware coarsening still judges faces by the interpolating patch.
-  bool fit_patches = false;
   // Shape guard of the coarsening (2-D MIPS of the middle triangles, 2 = equilateral; 0: off).
   double max_triangle_mips = 10;
   // SimplifyOptions::shape_slack: where the removed triangles are already worse than
@@ -266,7 +250,6 @@ struct CurvedMeshStats {
   // not certified there (thin slabs under an inward bulge). 0 at K ≤ 2.
   int faces_sheared = 0;
   int distance_points = 0;  // constraint points + samples (besides the input vertices)
-  PatchFitStats patch_fit;   // CurvedMeshOptions::fit_patches
   int fiber_misses = 0;     // curved nodes whose fiber found no input point (kept linear)
   int curving_rounds = 0;
   int slab_tets = 0, interior_tets = 0, nodes = 0;

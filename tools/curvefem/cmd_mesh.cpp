@@ -51,7 +51,7 @@ struct MeshArgs {
   double eps = 1e-2, thickness = 0.02, thickness_per_edge = 1.0, feature_angle = 60;
   std::vector<double> eps_levels;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
-       low_degree_slabs = false, fit_patches = false, no_pan = false, no_feature_chains = false,
+       low_degree_slabs = false, no_pan = false, no_feature_chains = false,
        linear_coarsening = false, no_curved_repair = false, no_two_phase = false;
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
@@ -240,10 +240,6 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--low-degree-slabs", args->low_degree_slabs,
                 "slab nodes carry the patch's quadratic part at degree 2 and only the rest sheared "
                 "(meshing/curved/README.md, step 7; off: the full shear)");
-  sub->add_flag("--fit-patches", args->fit_patches,
-                "the curved boundary's non-corner nodes fitted to the input points each face owns "
-                "(least squares) instead of interpolating the input at the nodes, where that keeps "
-                "every face within eps (meshing/curved/curved_mesher.hpp)");
   sub->add_option("--curve-quality-floor", args->curve_quality_floor,
                   "faces whose slab tets have a sampled scaled Jacobian below Q after the curving "
                   "try a smaller blend (certified, within eps) that lifts them to Q (default 0: "
@@ -288,7 +284,6 @@ void register_mesh(CLI::App& app) {
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.low_degree_slabs = args->low_degree_slabs;
-    options.fit_patches = args->fit_patches;
     options.shell_pan = !args->no_pan;
     options.feature_chains = !args->no_feature_chains;
     options.curved_coarsening = !args->linear_coarsening;
