@@ -97,7 +97,9 @@ class CurvedEditMesh : public TetMesh {
   bool invariants(const OperationRecord& r) override {
     ++stats->attempted;
     // Faces of the cavity boundary: used by one new cell.
-    std::map<Face, int> face_uses;
+    // (Sorted vectors: a cavity has a few dozen faces, and this runs on every attempt.)
+    std::vector<Face> faces;
+    faces.reserve(4 * r.new_cells.size());
     for (Id t : r.new_cells) {
       const Cell& c = cell(t);
       for (int skip = 0; skip < 4; ++skip) {
@@ -105,28 +107,37 @@ class CurvedEditMesh : public TetMesh {
         int n = 0;
         for (int j = 0; j < 4; ++j)
           if (j != skip) f[n++] = c[std::size_t(j)];
-        ++face_uses[sorted_face(f[0], f[1], f[2])];
+        faces.push_back(sorted_face(f[0], f[1], f[2]));
       }
     }
+    std::sort(faces.begin(), faces.end());
     // A node is on the cavity's boundary when its support (the corners of its sub-simplex) lies
     // in a boundary face: that face itself for three corners, one of its edges for two.
-    std::set<Face> boundary_faces;
-    std::set<Edge> boundary_edges;
-    for (const auto& [f, uses] : face_uses)
-      if (uses == 1) {
-        boundary_faces.insert(f);
-        boundary_edges.insert({f[0], f[1]});
-        boundary_edges.insert({f[0], f[2]});
-        boundary_edges.insert({f[1], f[2]});
+    std::vector<Face> boundary_faces;
+    std::vector<Edge> boundary_edges;
+    for (std::size_t i = 0; i < faces.size();) {
+      std::size_t j = i + 1;
+      while (j < faces.size() && faces[j] == faces[i]) ++j;
+      if (j == i + 1) {
+        const Face& f = faces[i];
+        boundary_faces.push_back(f);
+        boundary_edges.push_back({f[0], f[1]});
+        boundary_edges.push_back({f[0], f[2]});
+        boundary_edges.push_back({f[1], f[2]});
       }
-    auto on_cavity_boundary = [&](const std::vector<Id>& support) {
-      switch (support.size()) {
+      i = j;
+    }
+    std::sort(boundary_edges.begin(), boundary_edges.end());
+    auto on_cavity_boundary = [&](const Id* support, int size) {
+      switch (size) {
         case 1:
           return true;
         case 2:
-          return boundary_edges.count(sorted_edge(support[0], support[1])) > 0;
+          return std::binary_search(boundary_edges.begin(), boundary_edges.end(),
+                                    sorted_edge(support[0], support[1]));
         case 3:
-          return boundary_faces.count(sorted_face(support[0], support[1], support[2])) > 0;
+          return std::binary_search(boundary_faces.begin(), boundary_faces.end(),
+                                    sorted_face(support[0], support[1], support[2]));
         default:
           return false;
       }
@@ -151,14 +162,15 @@ class CurvedEditMesh : public TetMesh {
       for (std::size_t n = 0; n < lattice->size(); ++n) {
         const auto& alpha = (*lattice)[n];
         const NodeKey key = make_node_key(c.data(), alpha, 4);
-        std::vector<Id> support;
+        Id support[4];
+        int size = 0;
         for (int j = 0; j < 4; ++j)
-          if (alpha[std::size_t(j)] > 0) support.push_back(c[std::size_t(j)]);
+          if (alpha[std::size_t(j)] > 0) support[size++] = c[std::size_t(j)];
         Eigen::Vector3d x;
-        if (support.size() == 1 && support[0] == split_vertex) {
+        if (size == 1 && support[0] == split_vertex) {
           x = split_x;
           staged.emplace(key, x);
-        } else if (on_cavity_boundary(support)) {
+        } else if (on_cavity_boundary(support, size)) {
           const auto it = node_of.find(key);
           CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
           x = pos[std::size_t(it->second)];

@@ -511,6 +511,38 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
   auto facet_is_boundary = [&](const Id* f, const std::vector<Key>& boundary) {
     return std::binary_search(boundary.begin(), boundary.end(), facet_key(f));
   };
+  // Every simplex of Lk(a) ∩ Lk(b), and so of Lk(ab), has its vertices among the common
+  // neighbours of a and b (and the virtual vertex), so both vertex links are built over those
+  // only: the same comparison on far shorter lists.
+  auto neighbours = [&](Id v) {
+    std::vector<Id> out;
+    for (Id c : vertex_cells(v))
+      for (Id u : cell(c))
+        if (u != v) out.push_back(u);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  };
+  std::vector<Id> common;
+  {
+    const std::vector<Id> na = neighbours(a), nb = neighbours(b);
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+  }
+  const Id edge[2] = {a, b};
+  const std::vector<Id> edge_star = cells_containing(std::span<const Id>(edge, 2));
+  {
+    // The vertices of Lk(ab) are common neighbours; one more common neighbour is a vertex of
+    // Lk(a) ∩ Lk(b) outside Lk(ab), so the condition fails without building the links (the
+    // usual way it fails).
+    std::vector<Id> around;
+    for (Id c : edge_star)
+      for (Id u : cell(c))
+        if (u != a && u != b) around.push_back(u);
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    if (around != common) return false;
+  }
+  auto in_common = [&](Id u) { return std::binary_search(common.begin(), common.end(), u); };
   auto vertex_link = [&](Id v) {
     std::vector<Key> link;
     const std::vector<Id>& star = vertex_cells(v);
@@ -520,8 +552,8 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
       Id rest[N];
       int m = 0;
       for (Id u : cv)
-        if (u != v) rest[m++] = u;
-      add_subsets(link, rest, N - 1);
+        if (u != v && in_common(u)) rest[m++] = u;
+      add_subsets(link, rest, m);
       // Boundary facets of c through v: facet minus v, plus the virtual vertex.
       for (int skip = 0; skip < N; ++skip) {
         if (cv[skip] == v) continue;
@@ -530,7 +562,7 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
         Id g[N - 1];
         int q = 0;
         for (int i = 0; i < N - 1; ++i)
-          if (f[i] != v) g[q++] = f[i];
+          if (f[i] != v && in_common(f[i])) g[q++] = f[i];
         g[q++] = k_infinity;
         add_subsets(link, g, q);
       }
@@ -539,8 +571,6 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
     return link;
   };
   std::vector<Key> la = vertex_link(a), lb = vertex_link(b), lab;
-  const Id edge[2] = {a, b};
-  const std::vector<Id> edge_star = cells_containing(std::span<const Id>(edge, 2));
   const std::vector<Key> edge_boundary = boundary_facets(edge_star, a, b);
   for (Id c : edge_star) {
     const Cell& cv = cell(c);

@@ -349,9 +349,10 @@ TEST(BoundaryTerms, PoissonLoadFunctionalConvergesAtTwiceTheDegree) {
       err_volume.push_back(std::abs(sol.load_functional_volume - exact_volume));
     }
     const double r = test::rate(err[1], err[2]), rv = test::rate(err_volume[1], err_volume[2]);
-    std::printf("load functional p=%d  errors %.3e %.3e %.3e (rate %.2f), volume part %.3e %.3e "
-                "%.3e (rate %.2f)\n",
-                p, err[0], err[1], err[2], r, err_volume[0], err_volume[1], err_volume[2], rv);
+    std::printf(
+        "load functional p=%d  errors %.3e %.3e %.3e (rate %.2f), volume part %.3e %.3e "
+        "%.3e (rate %.2f)\n",
+        p, err[0], err[1], err[2], r, err_volume[0], err_volume[1], err_volume[2], rv);
     EXPECT_NEAR(r, 2 * p, 0.5) << "p = " << p;
     EXPECT_NEAR(rv, 2 * p, 0.5) << "p = " << p;
   }
