@@ -422,6 +422,12 @@ TEST(Run, PureNeumannPoissonIsSolvedUpToAConstant) {
     EXPECT_NEAR(ns["rhs_integral"].get<double>(), -2.0, 1e-12);  // ∫f over the unit cube
     EXPECT_NEAR(ns["flux_integral"].get<double>(), 2.0, 1e-12);
     EXPECT_EQ(j["solver"]["null_space_dim"], 1);
+    // The load functional ∫f u_h + ∫g u_h: u_h = u + c and ∫f + ∫g = 0, so it is l(u) =
+    // ∫|∇u|² (Green's formula with −Δu = f, ∂u/∂n = g) = ∫4x² + z² + (1 − y)² = 2; its volume
+    // part −2∫u_h vanishes with the mean of u_h.
+    const auto& lf = j["physics_details"]["load_functional"];
+    EXPECT_NEAR(lf["value"].get<double>(), 2.0, 1e-9) << solver;
+    EXPECT_NEAR(lf["volume"].get<double>(), 0.0, 1e-9) << solver;
   }
 }
 
