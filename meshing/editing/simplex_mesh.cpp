@@ -514,18 +514,9 @@ bool SimplexMesh<N>::link_condition(Id a, Id b) const {
   // Every simplex of Lk(a) ∩ Lk(b), and so of Lk(ab), has its vertices among the common
   // neighbours of a and b (and the virtual vertex), so both vertex links are built over those
   // only: the same comparison on far shorter lists.
-  auto neighbours = [&](Id v) {
-    std::vector<Id> out;
-    for (Id c : vertex_cells(v))
-      for (Id u : cell(c))
-        if (u != v) out.push_back(u);
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
-  };
   std::vector<Id> common;
   {
-    const std::vector<Id> na = neighbours(a), nb = neighbours(b);
+    const std::vector<Id> na = one_ring(a), nb = one_ring(b);
     std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
   }
   const Id edge[2] = {a, b};
