@@ -608,3 +608,86 @@ TEST(EditingScheduler, ParallelPassesKeepTheUserInvariant) {
       EXPECT_EQ(m.get_face(m.face_tag, f), m.is_boundary_face(f) ? 7 : 0);
   }
 }
+
+namespace {
+// The link condition of the engine, and an independent one over the whole closed complex: the
+// cells plus a virtual vertex coned over the boundary faces, every face of every cell listed;
+// Lk(a) ∩ Lk(b) = {τ : τ ∪ a and τ ∪ b are faces}, Lk(ab) = {τ : τ ∪ ab is a face}.
+struct LinkProbe : ed::TetMesh {
+  using ed::TetMesh::link_condition;
+};
+bool link_condition_by_enumeration(const std::vector<std::array<Id, 4>>& closed, Id a, Id b) {
+  std::set<std::vector<Id>> faces;
+  for (const auto& c : closed)
+    for (int mask = 1; mask < 16; ++mask) {
+      std::vector<Id> f;
+      for (int i = 0; i < 4; ++i)
+        if (mask & (1 << i)) f.push_back(c[std::size_t(i)]);
+      std::sort(f.begin(), f.end());
+      faces.insert(f);
+    }
+  auto with = [&](std::vector<Id> t, std::initializer_list<Id> extra) {
+    t.insert(t.end(), extra);
+    std::sort(t.begin(), t.end());
+    return faces.count(t) > 0;
+  };
+  std::set<std::vector<Id>> both, edge;
+  for (const auto& f : faces) {
+    if (!std::binary_search(f.begin(), f.end(), a) || std::binary_search(f.begin(), f.end(), b))
+      continue;
+    std::vector<Id> t;
+    for (Id v : f)
+      if (v != a) t.push_back(v);
+    if (t.empty()) continue;
+    if (with(t, {b})) both.insert(t);
+    if (with(t, {a, b})) edge.insert(t);
+  }
+  return both == edge;
+}
+}  // namespace
+
+// The link condition (the engine's, built over the common neighbours of the edge) against the
+// enumeration above, on every edge of a cube's tets and of the same mesh after random
+// collapses, boundary vertices and pinched configurations included.
+TEST(EditingTet, LinkConditionAgreesWithTheEnumerationOfTheClosedComplex) {
+  const auto cube = curvefem::make_cube_tets(2);
+  LinkProbe m;
+  std::vector<ed::TetMesh::Cell> cells;
+  for (int t = 0; t < cube.cells.rows(); ++t)
+    cells.push_back(
+        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
+  m.initialize(cube.nodes.rows(), cells);
+  std::mt19937 pick(5);
+  int agree_true = 0, agree_false = 0;
+  for (int round = 0; round < 6; ++round) {
+    const Id infinity = Id(m.vertex_capacity());
+    std::vector<std::array<Id, 4>> closed;
+    for (Id t : m.live_cells()) {
+      const auto& c = m.cell(t);
+      closed.push_back({c[0], c[1], c[2], c[3]});
+    }
+    for (const auto& f : m.get_faces())
+      if (m.is_boundary_face(f)) {
+        const auto v = m.face_vertices(f);
+        closed.push_back({v[0], v[1], v[2], infinity});
+      }
+    const auto edges = m.get_edges();
+    for (const auto& e : edges) {
+      const Id a = e.vid, b = m.other_vertex(e);
+      const bool expected = link_condition_by_enumeration(closed, a, b);
+      ASSERT_EQ(m.link_condition(a, b), expected)
+          << "edge " << a << "-" << b << ", round " << round;
+      ASSERT_EQ(m.link_condition(b, a), expected)
+          << "edge " << b << "-" << a << ", round " << round;
+      ++(expected ? agree_true : agree_false);
+    }
+    // Change the mesh: a few random collapses that the engine accepts.
+    for (int done = 0, tries = 0; done < 3 && tries < 200; ++tries) {
+      const auto& e = edges[pick() % edges.size()];
+      if (!m.is_valid(e)) continue;
+      if (m.collapse_edge(e)) ++done;
+    }
+  }
+  EXPECT_GT(agree_true, 50);
+  EXPECT_GT(agree_false, 50);
+}
