@@ -18,6 +18,15 @@ using ed::Id;
 
 namespace {
 
+// The corner ids of a straight tet mesh's cells, as the editing engine takes them.
+std::vector<ed::TetMesh::Cell> tet_cells(const curvefem::LagrangeMesh& mesh) {
+  std::vector<ed::TetMesh::Cell> cells;
+  for (int t = 0; t < mesh.cells.rows(); ++t)
+    cells.push_back(
+        {Id(mesh.cells(t, 0)), Id(mesh.cells(t, 1)), Id(mesh.cells(t, 2)), Id(mesh.cells(t, 3))});
+  return cells;
+}
+
 // A triangle mesh whose hooks write every attribute kind and that rejects a fraction of
 // operations late (in `after` or in `invariants`), after attributes were written.
 class RandomTriMesh : public ed::TriMesh {
@@ -273,11 +282,7 @@ class RandomTetMesh : public ed::TetMesh {
 TEST(EditingTet, RandomOperationsKeepValidityPositivityAndRollBackExactly) {
   const auto cube = curvefem::make_cube_tets(3);
   RandomTetMesh m;
-  std::vector<ed::TetMesh::Cell> cells;
-  for (int t = 0; t < cube.cells.rows(); ++t)
-    cells.push_back(
-        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
-  m.initialize(cube.nodes.rows(), cells);
+  m.initialize(cube.nodes.rows(), tet_cells(cube));
   for (int v = 0; v < cube.nodes.rows(); ++v) m.position.set(v, cube.nodes.row(v).transpose());
   ASSERT_EQ(m.check_connectivity(), "");
   for (Id t : m.live_cells()) ASSERT_GT(m.volume(t), 0) << "generated cube tets must be positive";
@@ -348,11 +353,7 @@ TEST(EditingTet, RandomOperationsKeepValidityPositivityAndRollBackExactly) {
 TEST(EditingTet, FacesAndEdgesOfTetsListEachOnceInFirstMetOrder) {
   const auto cube = curvefem::make_cube_tets(4);
   ed::TetMesh m;
-  std::vector<ed::TetMesh::Cell> cells;
-  for (int t = 0; t < cube.cells.rows(); ++t)
-    cells.push_back(
-        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
-  m.initialize(cube.nodes.rows(), cells);
+  m.initialize(cube.nodes.rows(), tet_cells(cube));
   std::vector<Id> tets = m.live_cells();
   std::reverse(tets.begin(), tets.end());  // not the storage order
   for (std::size_t n : {std::size_t(2), std::size_t(11), tets.size()}) {
@@ -506,11 +507,7 @@ class PositiveTetMesh : public ed::TetMesh {
 
 void load_cube(PositiveTetMesh& m, int n) {
   const auto cube = curvefem::make_cube_tets(n);
-  std::vector<ed::TetMesh::Cell> cells;
-  for (int t = 0; t < cube.cells.rows(); ++t)
-    cells.push_back(
-        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
-  m.initialize(cube.nodes.rows(), cells);
+  m.initialize(cube.nodes.rows(), tet_cells(cube));
   for (int v = 0; v < cube.nodes.rows(); ++v) {
     m.position.set(v, cube.nodes.row(v).transpose());
     for (int d = 0; d < 3; ++d)
@@ -652,11 +649,7 @@ bool link_condition_by_enumeration(const std::vector<std::array<Id, 4>>& closed,
 TEST(EditingTet, LinkConditionAgreesWithTheEnumerationOfTheClosedComplex) {
   const auto cube = curvefem::make_cube_tets(2);
   LinkProbe m;
-  std::vector<ed::TetMesh::Cell> cells;
-  for (int t = 0; t < cube.cells.rows(); ++t)
-    cells.push_back(
-        {Id(cube.cells(t, 0)), Id(cube.cells(t, 1)), Id(cube.cells(t, 2)), Id(cube.cells(t, 3))});
-  m.initialize(cube.nodes.rows(), cells);
+  m.initialize(cube.nodes.rows(), tet_cells(cube));
   std::mt19937 pick(5);
   int agree_true = 0, agree_false = 0;
   for (int round = 0; round < 6; ++round) {
