@@ -413,11 +413,13 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
       json steps = json::array();
       for (const auto& s : sol.newton)
         steps.push_back({{"load_step", s.load_step},
+                         {"load", s.load},
                          {"iteration", s.iteration},
                          {"residual", s.residual},
                          {"step_length", s.step_length},
                          {"energy", s.energy}});
       out.physics["newton"] = steps;
+      out.physics["load_cuts"] = sol.load_cuts;
     }
     out.u = sol.u;
     out.solve = sol.solve;

@@ -413,16 +413,14 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
   options.near_nullspace_coordinates = space.dof_points;
   Eigen::VectorXd u = Eigen::VectorXd::Zero(f_ext.size());
   Stopwatch watch;
-  for (int step = 1; step <= newton.load_steps; ++step) {
-    const double s = static_cast<double>(step) / newton.load_steps;
+  // One increment: Newton at load fraction s from the current u. Returns "" when converged, else
+  // why not (u is then left wherever the iteration stopped).
+  auto increment = [&](int step, double s) -> std::string {
     const Eigen::VectorXd f = s * f_ext;
     double first_residual = -1.0;
-    bool converged = false;
     for (int it = 0; it < newton.max_iterations; ++it) {
       NeoHookeanState state = assemble_neo_hookean(setup, mesh, space, problem, u, true);
-      if (!state.valid)
-        throw SolverError("Neo-Hookean: inverted deformation (det F <= 0) at load step " +
-                          std::to_string(step) + "; use more load_steps");
+      if (!state.valid) return "an iterate inverts an element (det F <= 0)";
       const Eigen::VectorXd R = state.internal - f;
       const double rnorm = free_norm(R, full);
       const double energy = state.strain_energy - f.dot(u);
@@ -432,15 +430,17 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
         inc.values[i] = full.fixed[i] ? s * full.values[i] - u[i] : 0.0;
       const bool moves_boundary = (inc.values.array().abs() > 0).any();
       if (first_residual < 0) first_residual = std::max(rnorm, 1e-300);
-      result.newton.push_back({step, it, rnorm, 1.0, energy});
-      log::debug("Neo-Hookean step ", step, " iteration ", it, ": residual ", rnorm, ", energy ",
-                 energy);
+      result.newton.push_back({step, it, s, rnorm, 1.0, energy});
+      log::debug("Neo-Hookean step ", step, " (load ", s, ") iteration ", it, ": residual ", rnorm,
+                 ", energy ", energy);
       const double scale = std::max(f.norm(), first_residual);
-      if (!moves_boundary && (rnorm <= newton.tolerance * scale || rnorm < 1e-13)) {
-        converged = true;
-        break;
+      if (!moves_boundary && (rnorm <= newton.tolerance * scale || rnorm < 1e-13)) return "";
+      Eigen::VectorXd du;
+      try {
+        du = solve_constrained(state.K, -R, inc, options, &result.solve);
+      } catch (const SolverError& e) {
+        return std::string("the linear solve failed: ") + e.what();
       }
-      const Eigen::VectorXd du = solve_constrained(state.K, -R, inc, options, &result.solve);
       // Backtracking: stay valid; decrease the energy (Armijo) unless the boundary moved.
       double alpha = 1.0;
       const double slope = R.dot(du);
@@ -460,14 +460,38 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
         for (Eigen::Index i = 0; i < u.size(); ++i)
           if (full.fixed[i]) u[i] = s * full.values[i];
     }
-    if (!converged) {
+    std::ostringstream msg;
+    msg << "no convergence in " << newton.max_iterations << " iterations; residuals:";
+    for (const auto& r : result.newton)
+      if (r.load_step == step && r.load == s) msg << ' ' << r.residual;
+    return msg.str();
+  };
+  // The increments: load_steps equal ones, each halved (and its iterations dropped) when it
+  // fails; after a halved increment converges the next one may double again, up to the nominal.
+  const double nominal = 1.0 / newton.load_steps;
+  double done = 0.0, size = nominal;
+  for (int step = 1; done < 1.0; ++step) {
+    const double s = 1.0 - done <= size * (1 + 1e-12) ? 1.0 : done + size;
+    const Eigen::VectorXd u_before = u;
+    const std::size_t history = result.newton.size();
+    const std::string failure = increment(step, s);
+    if (failure.empty()) {
+      done = s;
+      size = std::min(nominal, 2 * size);
+      continue;
+    }
+    if (result.load_cuts >= newton.max_load_cuts) {
       std::ostringstream msg;
-      msg << "Neo-Hookean Newton did not converge at load step " << step << " in "
-          << newton.max_iterations << " iterations; residuals:";
-      for (const auto& r : result.newton)
-        if (r.load_step == step) msg << ' ' << r.residual;
+      msg << "Neo-Hookean Newton did not converge at load step " << step << " (load " << s
+          << " of the full load, after " << result.load_cuts << " halved increments): " << failure;
       throw SolverError(msg.str());
     }
+    log::info("Neo-Hookean: the increment to load ", s, " failed (", failure, "): halving it");
+    ++result.load_cuts;
+    u = u_before;
+    result.newton.resize(history);
+    size = 0.5 * (s - done);
+    --step;
   }
   result.timings.add("newton", watch.seconds());
   result.u = u;

@@ -49,8 +49,9 @@ struct ElasticityProblem {
 };
 
 struct NewtonStep {
-  int load_step = 0, iteration = 0;
-  double residual = 0.0;  ///< ‖R(u)‖ on free unknowns
+  int load_step = 0, iteration = 0;  ///< load_step: the accepted increment, from 1
+  double load = 1.0;                 ///< the fraction of the full load this iteration solves for
+  double residual = 0.0;             ///< ‖R(u)‖ on free unknowns
   double step_length = 1.0;
   double energy = 0.0;
 };
@@ -63,7 +64,8 @@ struct ElasticitySolution {
   /// Linear elasticity without Dirichlet conditions: 6 (rigid motions removed), else 0.
   int null_space_dim = 0;
   LoadCompatibility compatibility;  ///< when null_space_dim > 0: total force and moment
-  std::vector<NewtonStep> newton;   ///< Neo-Hookean only
+  std::vector<NewtonStep> newton;   ///< Neo-Hookean only (the accepted increments' iterations)
+  int load_cuts = 0;  ///< Neo-Hookean: increments halved (NewtonOptions::max_load_cuts)
   /// The work of the applied load on the solution, an integral QoI (issue 22): l(u_h) = ∫b·u_h
   /// + ∫t·u_h (tractions), the assembled external load vector (Neo-Hookean: at the last load
   /// step) times u_h. With homogeneous Dirichlet data and linear elasticity it is the compliance
@@ -75,6 +77,10 @@ struct ElasticitySolution {
 
 struct NewtonOptions {
   int load_steps = 1;
+  /// An increment whose Newton iteration fails (a tangent that is not positive definite, an
+  /// iterate that inverts an element, or no convergence in max_iterations) is undone and tried
+  /// again at half its size, at most this many times over the whole solve (0: fail at once).
+  int max_load_cuts = 10;
   int max_iterations = 30;
   double tolerance =
       1e-9;  ///< on ‖R‖ relative to the first residual of the step, or absolute 1e-12·scale

@@ -5,6 +5,7 @@
 
 #include "fem/problems/elasticity.hpp"
 #include "fem/problems/error_norms.hpp"
+#include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
 #include "tests/fem/manufactured.hpp"
 
@@ -294,4 +295,34 @@ TEST(LinearElasticity, TheLoadFunctionalIsTheComplianceAndGrowsWithTheDegree) {
               so.load_functional + 2 * (sb.load_functional_volume - so.load_functional) +
                   st.load_functional,
               1e-9 * sb.load_functional);
+}
+
+TEST(NeoHookean, AFailingIncrementIsHalvedUntilItConverges) {
+  // A load that one Newton increment from rest cannot take (the tangent of a far iterate is not
+  // positive definite, or an iterate inverts a cell): without cuts the solve fails, with them it
+  // converges to the solution of many small increments.
+  Cantilever c(12.0, 2);
+  fem::NewtonOptions once;
+  once.max_load_cuts = 0;
+  EXPECT_THROW(fem::solve_neo_hookean(c.mesh, c.space, c.problem, {}, once), SolverError);
+  fem::NewtonOptions cut;
+  const auto sol = fem::solve_neo_hookean(c.mesh, c.space, c.problem, {}, cut);
+  EXPECT_GT(sol.load_cuts, 0);
+  EXPECT_LE(sol.load_cuts, cut.max_load_cuts);
+  fem::NewtonOptions fine;
+  fine.load_steps = 16;
+  fine.max_load_cuts = 0;
+  const auto ref = fem::solve_neo_hookean(c.mesh, c.space, c.problem, {}, fine);
+  std::printf("load cuts %d, %zu iterations; max |u| %.4f (16 steps: %.4f)\n", sol.load_cuts,
+              sol.newton.size(), sol.u.cwiseAbs().maxCoeff(), ref.u.cwiseAbs().maxCoeff());
+  EXPECT_LT((sol.u - ref.u).norm() / ref.u.norm(), 1e-6);
+  // The history holds the accepted increments only, at rising loads ending at the full one.
+  double last = 0;
+  for (const auto& s : sol.newton) {
+    EXPECT_GE(s.load, last);
+    last = s.load;
+  }
+  EXPECT_EQ(last, 1.0);
+  const fem::ForceBalance fb = fem::force_balance(c.mesh, c.space, c.problem, sol.u, true);
+  EXPECT_LT(fb.imbalance(), 1e-8);
 }
