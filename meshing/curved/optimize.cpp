@@ -373,6 +373,138 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     return true;
   };
 
+  // The search for the worst cells (OptimizeOptions::worst_sweeps): one corner moves its star's
+  // nodes by their barycentric weight, as in visit(), to raise the star's minimum sampled scaled
+  // Jacobian. A straight cell stays straight under such a move, so its corners alone give it.
+  auto cell_sj_now = [&](int c) {
+    if (curved_cell[c] || k == 1) return min_scaled_jacobian(k, cell_nodes(mesh, c));
+    Eigen::Matrix<double, 4, 3> X;
+    for (int j = 0; j < 4; ++j) X.row(j) = mesh.nodes.row(corner(c, j));
+    return min_scaled_jacobian(1, X);
+  };
+  // A high-order node off the boundary moves alone (its cells become curved): that reaches a
+  // cell whose corners cannot move without inverting it, such as a slab tet under a curved
+  // boundary face.
+  auto worst_visit = [&](int v, std::atomic<long long>& rejected) {
+    const bool corner_move = is_corner[v];
+    std::vector<std::pair<int, double>> moved;  // node, weight (of k)
+    std::vector<std::pair<double, int>> cells;  // scaled Jacobian before, cell; worst first
+    double length = 0;
+    for (const auto& [c, j] : star[v]) {
+      cells.emplace_back(sj_of(c), c);
+      if (corner_move) {
+        for (int n = 0; n < ref.nn; ++n)
+          if (lattice[n][j] > 0) moved.emplace_back(mesh.cells(c, n), lattice[n][j]);
+        for (int a = 0; a < 4; ++a)
+          if (a != j) length += (mesh.nodes.row(corner(c, a)) - mesh.nodes.row(v)).norm();
+      } else {
+        for (int a = 0; a < 4; ++a)
+          for (int b = a + 1; b < 4; ++b)
+            length += (mesh.nodes.row(corner(c, a)) - mesh.nodes.row(corner(c, b))).norm() / 2;
+      }
+    }
+    if (corner_move) {
+      length /= 3.0 * double(star[v].size());
+    } else {
+      moved.emplace_back(v, k);
+      length /= 3.0 * double(k) * double(star[v].size());
+      // Its cells are curved from the first trial on (corner visits then evaluate them whole).
+      for (const auto& [c, j] : star[v]) curved_cell[c] = 1;
+    }
+    std::sort(cells.begin(), cells.end());
+    std::sort(moved.begin(), moved.end());
+    moved.erase(std::unique(moved.begin(), moved.end(),
+                            [](const auto& a, const auto& b) { return a.first == b.first; }),
+                moved.end());
+    std::vector<Eigen::RowVector3d> saved;
+    for (const auto& [node, a] : moved) saved.push_back(mesh.nodes.row(node));
+    auto place = [&](const Eigen::Vector3d& d) {
+      for (std::size_t i = 0; i < moved.size(); ++i)
+        mesh.nodes.row(moved[i].first) = saved[i] + (moved[i].second / k) * d.transpose();
+    };
+    // The star's minimum at d, or -inf as soon as a cell is at or below `bar`: worst cells are
+    // evaluated first, so most failing trials stop after one or two.
+    std::vector<double> trial_sj(cells.size());
+    auto value = [&](const Eigen::Vector3d& d, double bar) {
+      place(d);
+      double m = k_inf;
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        trial_sj[i] = cell_sj_now(cells[i].second);
+        if (!(trial_sj[i] > bar)) return -k_inf;
+        m = std::min(m, trial_sj[i]);
+      }
+      return m;
+    };
+    static const std::array<Eigen::Vector3d, 14> directions = [] {
+      std::array<Eigen::Vector3d, 14> d;
+      for (int i = 0; i < 3; ++i) {
+        d[std::size_t(2 * i)] = Eigen::Vector3d::Unit(i);
+        d[std::size_t(2 * i + 1)] = -Eigen::Vector3d::Unit(i);
+      }
+      for (int i = 0; i < 8; ++i)
+        d[std::size_t(6 + i)] =
+            Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1) / std::sqrt(3.0);
+      return d;
+    }();
+    const double before = cells.front().first;
+    // (At the start position: the search below moves the nodes.)
+    double mips_sum_before = 0, mips_max_before = 0;
+    for (const auto& [q, c] : cells) {
+      mips_sum_before += mips_of(c);
+      mips_max_before = std::max(mips_max_before, mips_of(c));
+    }
+    double best = before;
+    Eigen::Vector3d delta = Eigen::Vector3d::Zero();
+    int evaluations = 0;
+    for (double h = 0.25 * length; h > 1e-3 * length && evaluations < 200;) {
+      bool improved = false;
+      for (const Eigen::Vector3d& d : directions) {
+        ++evaluations;
+        const double q = value(delta + h * d, best);
+        if (q > best) {
+          best = q;
+          delta += h * d;
+          improved = true;
+          break;
+        }
+      }
+      if (!improved) h *= 0.5;
+    }
+    // A gain of less than 5% is not worth a certificate. The minimum alone would trade the other
+    // cells' shape for it (tr12j_occt K = 3: mean curved MIPS 322 -> 358), so the star's summed
+    // curved MIPS may not grow, nor its worst above max(its value before, mips_ceiling).
+    const double gain = 1.05;
+    const double mips_cap = std::max(mips_max_before, options.mips_ceiling);
+    std::vector<double> mips_after(cells.size());
+    bool accepted = false;
+    for (int attempt = 0; attempt < 4 && !accepted; ++attempt) {
+      if (attempt > 0) delta *= 0.5;
+      if (!(value(delta, gain * before) > gain * before)) break;
+      double sum = 0, max = 0;
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        mips_after[i] = curved_mips(k, cell_nodes(mesh, cells[i].second));
+        sum += mips_after[i];
+        max = std::max(max, mips_after[i]);
+      }
+      accepted = sum <= mips_sum_before && max <= mips_cap;
+      for (std::size_t i = 0; i < cells.size() && accepted; ++i)
+        accepted = certify_tet_jacobian(k, cell_nodes(mesh, cells[i].second)).verdict ==
+                   JacobianVerdict::positive;
+      if (!accepted) ++rejected;
+    }
+    if (!accepted) {
+      place(Eigen::Vector3d::Zero());
+      return false;
+    }
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const int c = cells[i].second;
+      energy[c] = energy_of(ref, cell_nodes(mesh, c), &point_energy[c]);
+      cell_sj[std::size_t(c)] = trial_sj[i];
+      cell_mips[std::size_t(c)] = mips_after[i];
+    }
+    return true;
+  };
+
   // Sweeps over the active items, worst stars first; the next sweep's items are those of the
   // cells a move changed. Items whose stars share no cell touch disjoint nodes and energies, so
   // a colour class is visited in parallel with the same result as serially, for any thread count.
@@ -380,8 +512,9 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     int movable = 0, sweeps = 0;
     long long visits = 0, moves = 0, rejected = 0;
   };
-  auto run = [&](bool corner_move, int max_sweeps, const std::function<bool(int)>& eligible,
-                 const std::string& label) {
+  using Visit = std::function<bool(int, std::atomic<long long>&)>;
+  auto run = [&](const Visit& visit_item, int max_sweeps, const std::function<bool(int)>& eligible,
+                 const std::function<double(int)>& key, const std::string& label) {
     Sweeps out;
     std::vector<int> active;
     for (int v = 0; v < mesh.num_nodes(); ++v)
@@ -390,11 +523,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     for (int sweep = 0; sweep < max_sweeps && !active.empty(); ++sweep) {
       ++out.sweeps;
       std::vector<std::pair<double, int>> order;
-      for (int v : active) {
-        double worst = 0;
-        for (const auto& [c, local] : star[v]) worst = std::max(worst, energy[c]);
-        order.emplace_back(-worst, v);
-      }
+      for (int v : active) order.emplace_back(key(v), v);
       std::sort(order.begin(), order.end());
       std::vector<std::vector<int>> cell_colours(nc), classes;
       for (const auto& [neg, v] : order) {
@@ -412,7 +541,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       std::size_t done = 0;
       for (const auto& cls : classes) {
         tbb::parallel_for(std::size_t(0), cls.size(), [&](std::size_t i) {
-          if (visit(cls[i], corner_move, rejected)) {
+          if (visit_item(cls[i], rejected)) {
             moved_item[cls[i]] = 1;
             ++moves;
           }
@@ -437,8 +566,15 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     return out;
   };
 
-  const Sweeps a = run(
-      true, options.sweeps, [&](int v) { return is_corner[v] && !fixed[v]; }, "vertex");
+  // Worst star first (the order only decides which of two overlapping stars goes first).
+  auto worst_energy_first = [&](int v) {
+    double worst = 0;
+    for (const auto& [c, local] : star[v]) worst = std::max(worst, energy[c]);
+    return -worst;
+  };
+  const Sweeps a =
+      run([&](int v, std::atomic<long long>& r) { return visit(v, true, r); }, options.sweeps,
+          [&](int v) { return is_corner[v] && !fixed[v]; }, worst_energy_first, "vertex");
   stats.movable_vertices = a.movable;
   stats.sweeps = a.sweeps;
   stats.visits = a.visits;
@@ -456,12 +592,39 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       }
       return curved && worst > options.node_energy;
     };
-    const Sweeps b = run(false, options.node_sweeps, node_eligible, "node");
+    const Sweeps b = run([&](int v, std::atomic<long long>& r) { return visit(v, false, r); },
+                         options.node_sweeps, node_eligible, worst_energy_first, "node");
     stats.movable_nodes = b.movable;
     stats.node_sweeps = b.sweeps;
     stats.node_visits = b.visits;
     stats.node_moves = b.moves;
     stats.rejected_by_certificate += b.rejected;
+  }
+  if (options.worst_sweeps > 0) {
+    tbb::parallel_for(0, nc, [&](int c) { sj_of(c); });
+    stats.worst_sj_before = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
+    auto star_min_sj = [&](int v) {
+      double m = k_inf;
+      for (const auto& [c, local] : star[v]) m = std::min(m, sj_of(c));
+      return m;
+    };
+    // Corners, and the high-order nodes of stars holding a curved cell (straight parts stay
+    // straight, as in the node phase).
+    std::vector<char> node_ok(std::size_t(mesh.num_nodes()), 0);
+    for (int v = 0; v < mesh.num_nodes(); ++v)
+      if (!is_corner[v] && k > 1)
+        for (const auto& [c, local] : star[v]) node_ok[std::size_t(v)] |= curved_cell[c];
+    auto worst_eligible = [&](int v) {
+      return (is_corner[v] || node_ok[std::size_t(v)]) && !fixed[v] &&
+             star_min_sj(v) < options.worst_scaled_jacobian;
+    };
+    const Sweeps w = run(worst_visit, options.worst_sweeps, worst_eligible, star_min_sj, "worst");
+    stats.worst_movable = w.movable;
+    stats.worst_sweeps = w.sweeps;
+    stats.worst_visits = w.visits;
+    stats.worst_moves = w.moves;
+    stats.rejected_by_certificate += w.rejected;
+    stats.worst_sj_after = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
   }
   summarize(stats.mean_energy_after, stats.max_energy_after);
   stats.seconds = watch.seconds();

@@ -57,6 +57,17 @@ struct OptimizeOptions {
   // that raises the star's worst scaled Jacobian is exempt (capped too, abc_00000008's worst
   // cell fell 3.3e-4 -> 5.8e-5). benchmarks/results/robustness_quality.md.
   double mips_ceiling = 1000;
+  // Last, a search for the worst cells: every free corner in the star of a cell whose sampled
+  // scaled Jacobian is below worst_scaled_jacobian, and every free high-order node of such a
+  // star that holds a curved cell, moves to RAISE THE STAR'S MINIMUM scaled Jacobian (a compass
+  // search over 14 directions, steps halved from a quarter of its edges or lattice spacing),
+  // under the certificate, without raising the star's summed curved MIPS, nor its worst above
+  // max(its value before, mips_ceiling). The energy above is a sum, and conformal AMIPS grows
+  // only like t^(-2/3) as a cell flattens: a sum-descent left cheese's flattest slab tet
+  // (an interior corner in the plane of a boundary face across a reflex edge) at 1.1e-5 while
+  // one move of that corner lifts its star to 0.05. 0 sweeps: off.
+  int worst_sweeps = 3;
+  double worst_scaled_jacobian = 0.02;
   // Collapses and flips of the stitched curved mesh before the smoothing (curved_edit.hpp; run by
   // the curved mesher, not by optimize_vertices).
   CurvedEditOptions edits;
@@ -67,6 +78,11 @@ struct OptimizeStats {
   int sweeps = 0;
   long long visits = 0, moves = 0, rejected_by_certificate = 0;  // rejected: both phases
   int movable_nodes = 0, node_sweeps = 0;
+  // The search for the worst cells: corners and nodes in their stars, sweeps, visits, moves, and
+  // the lowest sampled scaled Jacobian over those stars before and after (1 when there were none).
+  int worst_movable = 0, worst_sweeps = 0;
+  long long worst_visits = 0, worst_moves = 0;
+  double worst_sj_before = 1, worst_sj_after = 1;
   long long node_visits = 0, node_moves = 0;
   double max_energy_before = 0, max_energy_after = 0;
   double mean_energy_before = 0, mean_energy_after = 0;

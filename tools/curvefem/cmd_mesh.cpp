@@ -64,6 +64,7 @@ struct MeshArgs {
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
+  int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
   double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
   bool optimize_edit_splits = meshing::curved::CurvedEditOptions{}.splits;
@@ -154,6 +155,10 @@ void register_mesh(CLI::App& app) {
   sub->add_option("--optimize-node-sweeps", args->optimize_node_sweeps,
                   "sweeps moving single high-order nodes of distorted curved cells, after the "
                   "vertex smoothing (default 4; 0: off)")
+      ->check(CLI::Range(0, 100));
+  sub->add_option("--optimize-worst-sweeps", args->optimize_worst_sweeps,
+                  "last, sweeps moving the free corners of cells whose sampled scaled Jacobian "
+                  "is below 0.02 to raise their star's minimum (default 3; 0: off)")
       ->check(CLI::Range(0, 100));
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
                   "node phase: move only nodes of stars with a sample whose "
@@ -277,6 +282,7 @@ void register_mesh(CLI::App& app) {
     options.deterministic = !args->nondeterministic;
     options.optimize.sweeps = args->optimize_sweeps;
     options.optimize.node_sweeps = args->optimize_node_sweeps;
+    options.optimize.worst_sweeps = args->optimize_worst_sweeps;
     options.optimize.node_energy = args->optimize_node_energy;
     options.optimize.edits.passes = args->optimize_edit_passes;
     options.optimize.edits.energy = args->optimize_edit_energy;

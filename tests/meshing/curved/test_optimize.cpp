@@ -410,3 +410,88 @@ TEST(CurvedEdit, CurvedSphereMeshStaysValidWithItsBoundary) {
               b.mean_mips);
   EXPECT_GE(b.min_scaled_jacobian, a.min_scaled_jacobian);
 }
+
+TEST(Optimize, TheWorstCellSearchLiftsACornerOffABoundaryFace) {
+  // The centre almost on the face x + y + z = 1: the tet on that face is a sliver.
+  const Eigen::Vector3d near_face(0.3, 0.33, 0.355);
+  for (int k = 1; k <= 4; ++k) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    const double centred = mesh_min_scaled_jacobian(octahedron(Eigen::Vector3d::Zero(), k));
+    LagrangeMesh m = octahedron(near_face, k);
+    ASSERT_TRUE(all_certified(m));
+    const Eigen::MatrixXd before = m.nodes;
+    const double sliver = mesh_min_scaled_jacobian(m);
+    ASSERT_LT(sliver, 0.05);
+    auto mips_sum = [](const LagrangeMesh& mesh) {
+      double sum = 0;
+      for (int c = 0; c < mesh.num_cells(); ++c) {
+        Eigen::MatrixXd X(mesh.cells.cols(), 3);
+        for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
+          X.row(n) = mesh.nodes.row(mesh.cells(c, n));
+        sum += cv::curved_mips(mesh.order, X);
+      }
+      return sum;
+    };
+    const double mips_before = mips_sum(m);
+    cv::OptimizeOptions o;
+    o.sweeps = 0;  // the search alone
+    o.node_sweeps = 0;
+    o.worst_sweeps = 3;
+    o.worst_scaled_jacobian = 0.1;
+    const cv::OptimizeStats s = cv::optimize_vertices(m, o);
+    EXPECT_EQ(s.worst_movable, 1);
+    EXPECT_GT(s.worst_moves, 0);
+    EXPECT_DOUBLE_EQ(s.worst_sj_before, sliver);
+    // The stats' minimum is the mesh's, and it ends near the centred octahedron's (the optimum:
+    // every tet of the star is then congruent).
+    const double after = mesh_min_scaled_jacobian(m);
+    EXPECT_NEAR(s.worst_sj_after, after, 1e-12);
+    EXPECT_GT(after, 0.95 * centred) << "sliver " << sliver << ", centred " << centred;
+    EXPECT_TRUE(all_certified(m));
+    // No move raises its star's summed curved MIPS, so the mesh's cannot rise either.
+    EXPECT_LT(mips_sum(m), mips_before);
+    expect_straight(m);
+    for (int i = 0; i < m.num_nodes(); ++i)
+      if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12)
+        EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
+
+    // Off, or no cell below the threshold: nothing moves.
+    for (const auto& [sweeps, threshold] : {std::pair{0, 0.1}, std::pair{3, 0.5 * sliver}}) {
+      LagrangeMesh idle = octahedron(near_face, k);
+      o.worst_sweeps = sweeps;
+      o.worst_scaled_jacobian = threshold;
+      const cv::OptimizeStats si = cv::optimize_vertices(idle, o);
+      EXPECT_EQ(si.worst_moves, 0);
+      EXPECT_EQ(idle.nodes, before);
+    }
+  }
+}
+
+TEST(Optimize, TheWorstCellSearchNeverRaisesTheMeshsMipsNorLowersItsMinimum) {
+  // Every star below 0.3 is a target here, so the search runs on most of the sphere's mesh; it
+  // is the last step of the mesher, so the meshes before it are the same.
+  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.optimize.worst_sweeps = 0;
+  cv::CurvedMeshStats off_stats;
+  const cv::CurvedMesh off = cv::build_curved_mesh(sphere, o, off_stats);
+  o.optimize.worst_sweeps = 3;
+  o.optimize.worst_scaled_jacobian = 0.3;
+  cv::CurvedMeshStats on_stats;
+  const cv::CurvedMesh on = cv::build_curved_mesh(sphere, o, on_stats);
+  ASSERT_EQ(off.mesh.cells, on.mesh.cells);
+  EXPECT_EQ(off.map.boundary.nodes, on.map.boundary.nodes);
+  EXPECT_EQ(off_stats.optimize.worst_moves, 0);
+  EXPECT_GT(on_stats.optimize.worst_movable, 10);
+  EXPECT_GT(on_stats.optimize.worst_moves, 0);
+  const cv::CurvedValidation a = cv::validate_curved_mesh(off.mesh, off.map, sphere);
+  const cv::CurvedValidation b = cv::validate_curved_mesh(on.mesh, on.map, sphere);
+  EXPECT_TRUE(b.valid(1e-2));
+  std::printf("worst-cell search: %lld moves; min sJ %g -> %g, mean MIPS %g -> %g\n",
+              on_stats.optimize.worst_moves, a.min_scaled_jacobian, b.min_scaled_jacobian,
+              a.mean_mips, b.mean_mips);
+  EXPECT_GE(b.min_scaled_jacobian, a.min_scaled_jacobian);
+  EXPECT_NEAR(on_stats.optimize.worst_sj_after, b.min_scaled_jacobian, 1e-12);
+  EXPECT_LE(b.mean_mips, a.mean_mips * (1 + 1e-12));
+}
