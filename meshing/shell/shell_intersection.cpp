@@ -1018,6 +1018,30 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   return false;
 }
 
+bool InputSurfaceIndex::triangle_meets_face(const std::array<Eigen::Vector3d, 3>& c,
+                                            const std::array<bool, 3>& singular,
+                                            const Eigen::Vector3i& corner_ids, int f) const {
+  const Triangle tri(pt(c[0]), pt(c[1]), pt(c[2]));
+  if (tri.is_degenerate()) return true;
+  if (m_impl->is_moved(f)) {
+    for (int k = 0; k < 3; ++k)
+      if (singular[k])
+        for (int j = 0; j < 3; ++j)
+          if (m_impl->F(f, j) == corner_ids[k]) return true;
+    return exact_triangles_meet(m_impl->exact_face(f), c);
+  }
+  if (!CGAL::do_intersect(tri, m_impl->triangles[std::size_t(f)])) return false;
+  int pinch = -1, shared = -1;
+  for (int k = 0; k < 3; ++k)
+    if (singular[k])
+      for (int j = 0; j < 3; ++j)
+        if (m_impl->F(f, j) == corner_ids[k]) {
+          pinch = k;
+          shared = j;
+        }
+  return pinch < 0 || triangles_meet_beyond_pinch(c, pinch, face_triangle(f), shared);
+}
+
 namespace {
 // True if a plane strictly separates the closed triangle from the closed tet: one of the tet's
 // facet planes with all three triangle corners strictly outside, or the triangle's plane with

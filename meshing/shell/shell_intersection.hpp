@@ -115,6 +115,12 @@ class InputSurfaceIndex {
                            const std::array<bool, 3>& singular,
                            const Eigen::Vector3i& corner_ids) const;
 
+  // triangle_intersects restricted to input face f: does the triangle meet it (with the same
+  // pinch rule)?
+  bool triangle_meets_face(const std::array<Eigen::Vector3d, 3>& triangle,
+                           const std::array<bool, 3>& singular, const Eigen::Vector3i& corner_ids,
+                           int f) const;
+
   // Input faces whose triangle intersects the (closed) tetrahedron (exact), in increasing order.
   std::vector<int> faces_touching_tet(const std::array<Eigen::Vector3d, 4>& tet) const;
   // Input faces intersecting at least one of the closed tetrahedra (exact), in increasing order

@@ -89,6 +89,10 @@ struct SimplifyOptions {
   // on one thread after each collapse pass.
   std::vector<std::array<int, 2>> feature_edges;
   bool collapse_chains = false;
+  // A chain collapse re-checks the prisms near the faces it snaps: those it did not change only
+  // against the snapped faces (their verdicts on the others stand). true: every such prism in
+  // full, as before; the same result, slower (kept to test that).
+  bool chain_full_recheck = false;
   // >= 2 (needs max_distance): the curved-aware bound. An input vertex not marked in
   // strict_input_vertices may lie up to relaxed_distance (>= max_distance) from the linear middle
   // triangle, provided every new prism owning such a vertex passes within curved_distance

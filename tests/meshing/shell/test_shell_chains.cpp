@@ -56,7 +56,7 @@ struct Coarse {
   sh::SimplifyStats stats;
 };
 Coarse coarsen(const SurfaceMesh& m, const std::vector<std::array<int, 2>>& features, bool chains,
-               double eps_rel) {
+               double eps_rel, bool full_recheck = false) {
   const double unit = curvefem::bbox_longest_edge(m.V);
   sh::ShellStats build_stats;
   sh::ShellOptions so;
@@ -70,6 +70,7 @@ Coarse coarsen(const SurfaceMesh& m, const std::vector<std::array<int, 2>>& feat
   for (const auto& e : features) o.frozen_input_vertices[e[0]] = o.frozen_input_vertices[e[1]] = 1;
   o.feature_edges = features;
   o.collapse_chains = chains;
+  o.chain_full_recheck = full_recheck;
   Coarse r;
   r.coarse = sh::simplify_shell(shell, m, o, r.stats);
   return r;
@@ -145,4 +146,48 @@ TEST(ShellChains, CircularRimsSnapOntoChordsWithinTheBound) {
   // The rims are curved: the snapped points leave the input, by up to the bound.
   EXPECT_GT(chains.stats.chain_max_distance, 0.2 * eps * unit);
   EXPECT_LE(chains.stats.chain_max_distance, eps * unit);
+}
+
+TEST(ShellChains, RecheckingOnlyTheSnappedFacesGivesTheFullChecksShell) {
+  // A chain collapse re-checks the unchanged prisms near the faces it snaps against those faces
+  // only; re-checking them in full must decide every collapse the same way.
+  // A jagged rim (radius alternating by 1%) snaps far; a thin plate (0.02 thick, eps 0.01) has
+  // its chains next to the other side's prisms.
+  auto jag = [](SurfaceMesh m, double amplitude) {
+    const double zmax = m.V.col(2).maxCoeff(), zmin = m.V.col(2).minCoeff();
+    for (int v = 0, rim = 0; v < m.num_vertices(); ++v)
+      if ((m.V(v, 2) == zmax || m.V(v, 2) == zmin) && std::hypot(m.V(v, 0), m.V(v, 1)) > 0.99)
+        m.V.row(v).head<2>() *= (rim++ % 2 ? 1 + amplitude : 1 - amplitude);
+    return m;
+  };
+  const SurfaceMesh jagged = jag(curvefem::make_cylinder(48, 8, 4, 2.0), 0.01);
+  for (const auto& [name, mesh] :
+       {std::pair{"cylinder", curvefem::make_cylinder(48, 8, 4, 2.0)},
+        std::pair{"jagged cylinder", jagged},
+        std::pair{"plate", curvefem::make_box(Vector3d(0, 0, 0), Vector3d(1, 1, 0.02), 12)},
+        std::pair{"box", curvefem::make_box(Vector3d(0, 0, 0), Vector3d(1, 2, 1), 6)}}) {
+    SCOPED_TRACE(name);
+    const auto features = sharp_edges(mesh, 60);
+    const Coarse fast = coarsen(mesh, features, true, 0.01);
+    const Coarse full = coarsen(mesh, features, true, 0.01, true);
+    EXPECT_GT(fast.stats.chain_collapses, 20);
+    EXPECT_EQ(fast.stats.chain_collapses, full.stats.chain_collapses);
+    EXPECT_EQ(fast.coarse.F, full.coarse.F);
+    EXPECT_EQ(fast.coarse.mid, full.coarse.mid);
+    EXPECT_EQ(fast.coarse.base, full.coarse.base);
+    EXPECT_EQ(fast.coarse.top, full.coarse.top);
+    ASSERT_EQ(fast.coarse.reference.size(), full.coarse.reference.size());
+    for (std::size_t i = 0; i < fast.coarse.reference.size(); ++i) {
+      EXPECT_EQ(fast.coarse.reference[i].vertex, full.coarse.reference[i].vertex);
+      EXPECT_EQ(fast.coarse.reference[i].s, full.coarse.reference[i].s);
+    }
+    const auto& a = fast.stats.collapse_rejections;
+    const auto& b = full.stats.collapse_rejections;
+    EXPECT_EQ(a.shape, b.shape);
+    EXPECT_EQ(a.distance, b.distance);
+    EXPECT_EQ(a.positivity, b.positivity);
+    EXPECT_EQ(a.intersection, b.intersection);
+    EXPECT_EQ(a.section, b.section);
+    EXPECT_EQ(a.coverage, b.coverage);
+  }
 }
