@@ -995,43 +995,26 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   for (const auto& it : hits) {
     const int f = m_impl->id(it);
     if (m_impl->is_moved(f)) continue;  // below
-    int pinch = -1, shared = -1;  // the triangle's corner at a singular input vertex of face f
-    for (int k = 0; k < 3; ++k)
-      if (singular[k])
-        for (int j = 0; j < 3; ++j)
-          if (m_impl->F(f, j) == corner_ids[k]) {
-            pinch = k;
-            shared = j;
-          }
-    if (pinch < 0 || triangles_meet_beyond_pinch(c, pinch, face_triangle(f), shared)) return true;
+    if (face_contact(c, singular, corner_ids, f, true)) return true;
   }
-  // Moved faces of the reference copy, exactly; a pinch at one of their corners is refused
-  // (conservative: no exact pinch test for snapped corners).
-  const CGAL::Bbox_3 box = tri.bbox();
-  for (int f : m_impl->moved_near(box)) {
-    for (int k = 0; k < 3; ++k)
-      if (singular[k])
-        for (int j = 0; j < 3; ++j)
-          if (m_impl->F(f, j) == corner_ids[k]) return true;
-    if (exact_triangles_meet(m_impl->exact_face(f), c)) return true;
-  }
+  // Moved faces of the reference copy, exactly.
+  for (int f : m_impl->moved_near(tri.bbox()))
+    if (face_contact(c, singular, corner_ids, f, false)) return true;
   return false;
 }
 
 bool InputSurfaceIndex::triangle_meets_face(const std::array<Eigen::Vector3d, 3>& c,
                                             const std::array<bool, 3>& singular,
                                             const Eigen::Vector3i& corner_ids, int f) const {
-  const Triangle tri(pt(c[0]), pt(c[1]), pt(c[2]));
-  if (tri.is_degenerate()) return true;
-  if (m_impl->is_moved(f)) {
-    for (int k = 0; k < 3; ++k)
-      if (singular[k])
-        for (int j = 0; j < 3; ++j)
-          if (m_impl->F(f, j) == corner_ids[k]) return true;
-    return exact_triangles_meet(m_impl->exact_face(f), c);
-  }
-  if (!CGAL::do_intersect(tri, m_impl->triangles[std::size_t(f)])) return false;
-  int pinch = -1, shared = -1;
+  if (Triangle(pt(c[0]), pt(c[1]), pt(c[2])).is_degenerate()) return true;
+  return face_contact(c, singular, corner_ids, f, false);
+}
+
+bool InputSurfaceIndex::face_contact(const std::array<Eigen::Vector3d, 3>& c,
+                                     const std::array<bool, 3>& singular,
+                                     const Eigen::Vector3i& corner_ids, int f,
+                                     bool known_to_meet) const {
+  int pinch = -1, shared = -1;  // c's corner at a singular input vertex of face f
   for (int k = 0; k < 3; ++k)
     if (singular[k])
       for (int j = 0; j < 3; ++j)
@@ -1039,6 +1022,11 @@ bool InputSurfaceIndex::triangle_meets_face(const std::array<Eigen::Vector3d, 3>
           pinch = k;
           shared = j;
         }
+  if (m_impl->is_moved(f))  // conservative: no exact pinch test for snapped corners
+    return pinch >= 0 || exact_triangles_meet(m_impl->exact_face(f), c);
+  if (!known_to_meet && !CGAL::do_intersect(Triangle(pt(c[0]), pt(c[1]), pt(c[2])),
+                                            m_impl->triangles[std::size_t(f)]))
+    return false;
   return pinch < 0 || triangles_meet_beyond_pinch(c, pinch, face_triangle(f), shared);
 }
 

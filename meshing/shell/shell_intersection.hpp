@@ -178,6 +178,11 @@ class InputSurfaceIndex {
   const Eigen::MatrixXi& F() const;
 
  private:
+  // Triangle c against input face f (triangle_intersects' rule): a moved face exactly, a pinch at
+  // one of its corners refused; another face, if it meets c (`known_to_meet`: the caller's tree
+  // query said so), beyond the pinch allowed at a singular corner of c.
+  bool face_contact(const std::array<Eigen::Vector3d, 3>& c, const std::array<bool, 3>& singular,
+                    const Eigen::Vector3i& corner_ids, int f, bool known_to_meet) const;
   struct Impl;
   std::unique_ptr<Impl> m_impl;
 };
