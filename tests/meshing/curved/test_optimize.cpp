@@ -70,10 +70,16 @@ void expect_straight(const LagrangeMesh& m) {
     }
 }
 
+// The nodes of cell c, one row each.
+Eigen::MatrixXd cell_nodes(const LagrangeMesh& m, int c) {
+  Eigen::MatrixXd X(m.cells.cols(), 3);
+  for (Eigen::Index n = 0; n < m.cells.cols(); ++n) X.row(n) = m.nodes.row(m.cells(c, n));
+  return X;
+}
+
 bool all_certified(const LagrangeMesh& m) {
   for (int c = 0; c < m.num_cells(); ++c) {
-    Eigen::MatrixXd X(m.cells.cols(), 3);
-    for (Eigen::Index n = 0; n < m.cells.cols(); ++n) X.row(n) = m.nodes.row(m.cells(c, n));
+    const Eigen::MatrixXd X = cell_nodes(m, c);
     if (cv::certify_tet_jacobian(m.order, X).verdict != cv::JacobianVerdict::positive) return false;
   }
   return true;
@@ -162,9 +168,7 @@ TEST(Optimize, ABentInteriorEdgeNodeIsStraightenedAndStraightMeshesAreNotBent) {
     auto worst_sj = [](const LagrangeMesh& mesh) {
       double w = 1;
       for (int c = 0; c < mesh.num_cells(); ++c) {
-        Eigen::MatrixXd X(mesh.cells.cols(), 3);
-        for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
-          X.row(n) = mesh.nodes.row(mesh.cells(c, n));
+        const Eigen::MatrixXd X = cell_nodes(mesh, c);
         w = std::min(w, cv::min_scaled_jacobian(mesh.order, X));
       }
       return w;
@@ -303,8 +307,7 @@ TEST(CurvedEdit, ANearlyFlatCentreIsCollapsedAwayAtEveryOrder) {
 double mesh_min_scaled_jacobian(const LagrangeMesh& m) {
   double worst = 1;
   for (int c = 0; c < m.num_cells(); ++c) {
-    Eigen::MatrixXd X(m.cells.cols(), 3);
-    for (Eigen::Index n = 0; n < m.cells.cols(); ++n) X.row(n) = m.nodes.row(m.cells(c, n));
+    const Eigen::MatrixXd X = cell_nodes(m, c);
     worst = std::min(worst, cv::min_scaled_jacobian(m.order, X));
   }
   return worst;
@@ -425,9 +428,7 @@ TEST(Optimize, TheWorstCellSearchLiftsACornerOffABoundaryFace) {
     auto mips_sum = [](const LagrangeMesh& mesh) {
       double sum = 0;
       for (int c = 0; c < mesh.num_cells(); ++c) {
-        Eigen::MatrixXd X(mesh.cells.cols(), 3);
-        for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
-          X.row(n) = mesh.nodes.row(mesh.cells(c, n));
+        const Eigen::MatrixXd X = cell_nodes(mesh, c);
         sum += cv::curved_mips(mesh.order, X);
       }
       return sum;
