@@ -1623,6 +1623,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       stats.optimize.worst_moves = w.worst_moves;
       stats.optimize.worst_sj_before = w.worst_sj_before;
       stats.optimize.worst_sj_after = w.worst_sj_after;
+      stats.optimize.worst_seconds = w.worst_seconds;
       stats.optimize.rejected_by_certificate += w.rejected_by_certificate;
       stats.optimize.max_energy_after = w.max_energy_after;
       stats.optimize.mean_energy_after = w.mean_energy_after;

@@ -601,6 +601,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     stats.rejected_by_certificate += b.rejected;
   }
   if (options.worst_sweeps > 0) {
+    Stopwatch worst_watch;
     tbb::parallel_for(0, nc, [&](int c) { sj_of(c); });
     stats.worst_sj_before = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
     auto star_min_sj = [&](int v) {
@@ -625,6 +626,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     stats.worst_moves = w.moves;
     stats.rejected_by_certificate += w.rejected;
     stats.worst_sj_after = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
+    stats.worst_seconds = worst_watch.seconds();
   }
   summarize(stats.mean_energy_after, stats.max_energy_after);
   stats.seconds = watch.seconds();

@@ -83,6 +83,7 @@ struct OptimizeStats {
   int worst_movable = 0, worst_sweeps = 0;
   long long worst_visits = 0, worst_moves = 0;
   double worst_sj_before = 1, worst_sj_after = 1;
+  double worst_seconds = 0;
   long long node_visits = 0, node_moves = 0;
   double max_energy_before = 0, max_energy_after = 0;
   double mean_energy_before = 0, mean_energy_after = 0;

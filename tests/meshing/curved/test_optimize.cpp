@@ -494,5 +494,7 @@ TEST(Optimize, TheWorstCellSearchNeverRaisesTheMeshsMipsNorLowersItsMinimum) {
               a.mean_mips, b.mean_mips);
   EXPECT_GE(b.min_scaled_jacobian, a.min_scaled_jacobian);
   EXPECT_NEAR(on_stats.optimize.worst_sj_after, b.min_scaled_jacobian, 1e-12);
+  EXPECT_GT(on_stats.optimize.worst_seconds, 0);
+  EXPECT_EQ(off_stats.optimize.worst_seconds, 0);
   EXPECT_LE(b.mean_mips, a.mean_mips * (1 + 1e-12));
 }
