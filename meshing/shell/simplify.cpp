@@ -511,11 +511,13 @@ class ShellMesh : public TriMesh {
   // `moved` (sorted) of the reference copy have: I1 and its verdicts on the other faces stand,
   // so only the moved faces are tested (I3, touching, I2) and the track updated for them. A chain
   // collapse re-checks every prism near the faces it snaps; most of them are such prisms
-  // (cheese: 226k of 256k checks, 84% of their time).
-  Reject prism_recheck(Id f, const std::vector<int>& moved, std::vector<int>& touching) const {
+  // (cheese: 226k of 256k checks, 84% of their time). `face_boxes`: the moved faces' boxes, padded
+  // (a snapped face's rounded corners are within an ulp of its exact ones), in their order.
+  Reject prism_recheck(Id f, const std::vector<int>& moved,
+                       const std::vector<Eigen::AlignedBox3d>& face_boxes,
+                       std::vector<int>& touching) const {
     const PrismShape p = prism_shape(f);
-    // Boxes first: the exact tests of snapped faces are costly and most pairs are far apart. A
-    // snapped face's rounded corners are within an ulp of its exact ones: its box is padded.
+    // Boxes first: the exact tests of snapped faces are costly and most pairs are far apart.
     auto box_of = [](const auto& points) {
       Eigen::AlignedBox3d b;
       for (const auto& q : points) b.extend(q);
@@ -524,14 +526,6 @@ class ShellMesh : public TriMesh {
     const Eigen::AlignedBox3d base_box = box_of(p.b), top_box = box_of(p.t);
     std::vector<Eigen::AlignedBox3d> tet_boxes;
     for (const auto& q : p.tets) tet_boxes.push_back(box_of(q));
-    std::vector<Eigen::AlignedBox3d> face_boxes;
-    for (int x : moved) {
-      Eigen::AlignedBox3d b = box_of(input->face_triangle(x));
-      const double pad = 1e-12 * (b.max().cwiseAbs().maxCoeff() + b.min().cwiseAbs().maxCoeff());
-      b.min().array() -= pad;
-      b.max().array() += pad;
-      face_boxes.push_back(b);
-    }
     for (std::size_t i = 0; i < moved.size(); ++i)
       if ((face_boxes[i].intersects(base_box) &&
            input->triangle_meets_face(p.b, p.s, p.ids, moved[i])) ||
@@ -608,16 +602,16 @@ class ShellMesh : public TriMesh {
 
   // I1–I3 for each of `cells` (their tracks updated), and every input face in `old_union` (the
   // tracks of the prisms they replace) still touched by one of them; the first failure noted.
-  // With `moved`, the cells from index `changed` on have not changed and only the moved input
-  // faces are tested for them (prism_recheck).
+  // With `moved` (and their boxes), the cells from index `changed` on have not changed and only
+  // the moved input faces are tested for them (prism_recheck).
   bool prisms_keep_coverage(const std::vector<Id>& cells, std::vector<int> old_union,
-                            std::size_t changed = SIZE_MAX,
-                            const std::vector<int>* moved = nullptr) {
+                            std::size_t changed = SIZE_MAX, const std::vector<int>* moved = nullptr,
+                            const std::vector<Eigen::AlignedBox3d>* moved_boxes = nullptr) {
     std::vector<int> new_union, touching;
     for (std::size_t i = 0; i < cells.size(); ++i) {
       const Id f = cells[i];
-      const Reject why =
-          moved && i >= changed ? prism_recheck(f, *moved, touching) : prism_check(f, touching);
+      const Reject why = moved && i >= changed ? prism_recheck(f, *moved, *moved_boxes, touching)
+                                               : prism_check(f, touching);
       if (note(why) != none) return false;
       track.set(f, touching);
       new_union.insert(new_union.end(), touching.begin(), touching.end());
@@ -751,7 +745,8 @@ class ShellMesh : public TriMesh {
       old_union.insert(old_union.end(), track[f].begin(), track[f].end());
     }
     if (!prisms_keep_coverage(cells, std::move(old_union),
-                              chain_full_recheck ? cells.size() : r.new_cells.size(), &moved))
+                              chain_full_recheck ? cells.size() : r.new_cells.size(), &moved,
+                              &boxes))
       return false;
     if (!curved_ok(cells)) {
       note(curved);
