@@ -134,6 +134,21 @@ struct Reader {
   }
 };
 
+/// An expression value as resolved_case.json writes it: a number becomes its text (17 digits, as
+/// Reader::expression reads it), arrays element by element; anything else is left to the parser.
+json expression_text(const json& v) {
+  if (v.is_number()) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v.get<double>();
+    return s.str();
+  }
+  if (!v.is_array()) return v;
+  json out = json::array();
+  for (const json& e : v) out.push_back(expression_text(e));
+  return out;
+}
+
 Eigen::Vector3d nonzero_vector(const Reader& r, const json& j, const std::string& path) {
   const Eigen::Vector3d d = r.point(j, path);
   if (!(d.norm() > 0)) fail(path, "must be a non-zero vector", r.file);
@@ -236,9 +251,14 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
   const int comps = c.components();
   LoadCase l;
   if (const json* v = r.get(o, "rhs")) l.rhs = r.expressions(*v, pre + "/rhs", comps);
+  // A zero body load (the default) is no body load: nothing to assemble.
+  if (std::all_of(l.rhs.begin(), l.rhs.end(), [](const Expression& e) {
+        const auto value = e.constant();
+        return value && *value == 0.0;
+      }))
+    l.rhs.clear();
   if (const json* v = r.get(o, "exact")) l.exact = r.expressions(*v, pre + "/exact", comps);
   if (const json* v = r.get(o, "exact_gradient")) {
-    if (l.exact.empty()) fail(pre + "/exact_gradient", "needs \"exact\"", r.file);
     if (comps == 1) {
       l.exact_gradient = r.expressions(*v, pre + "/exact_gradient", 3);
     } else {
@@ -285,9 +305,6 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
       bc.type = r.choice_of<BoundaryType>(*type, p + "/type", "boundary_conditions[].type");
       if (bc.type == BoundaryType::robin && comps != 1)
         fail(p + "/type", "robin (convective) conditions are for physics poisson", r.file);
-      for (const char* key : {"h", "u_inf"})
-        if (r.get(b, key) && bc.type != BoundaryType::robin)
-          fail(p + "/" + key, "only for robin conditions", r.file);
       const json* select = r.get(b, "select");
       if (!select) fail(p + "/select", "missing (e.g. {\"all\": true})", r.file);
       bc.select = read_selection(r, *select, p + "/select");
@@ -309,8 +326,6 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
       }
       if (bc.type == BoundaryType::robin) {
         // −κ ∂u/∂n = h (u − u_inf): value holds u_inf.
-        if (r.get(b, "value"))
-          fail(p + "/value", "a robin condition takes h and u_inf, not value", r.file);
         for (const char* key : {"h", "u_inf"})
           if (!r.get(b, key))
             fail(p + "/" + key,
@@ -332,8 +347,6 @@ LoadCase read_load(const Reader& r, const json& o, const std::string& pre, const
                  "values: a Dirichlet node on an edge has no single normal",
                  r.file);
       if (const json* m = r.get(b, "components")) {
-        if (comps == 1 || bc.type != BoundaryType::dirichlet)
-          fail(p + "/components", "only for vector Dirichlet conditions", r.file);
         if (!m->is_array() || m->size() != 3)
           fail(p + "/components", "expected [bool, bool, bool]", r.file);
         for (int k = 0; k < 3; ++k) {
@@ -363,33 +376,46 @@ CaseSpec read_case(const std::filesystem::path& path, const std::string& output_
   return read_case_json(j, path, output_override);
 }
 
-CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& path,
+CaseSpec read_case_json(const nlohmann::json& given, const std::filesystem::path& path,
                         const std::string& output_override) {
   const Reader r{path.string()};
-  r.only_keys(j, "", "");
+  r.only_keys(given, "", "");
   CaseSpec c;
   c.case_file = path;
   const auto base = path.parent_path();
   auto resolve = [&](const std::string& p) {
     return std::filesystem::path(p).is_absolute() ? std::filesystem::path(p) : base / p;
   };
-
+  {
+    const json* geometry = r.get(given, "geometry");
+    if (!geometry) fail("/geometry", "missing (e.g. {\"surface\": \"part.obj\"})", r.file);
+    r.only_keys(*geometry, "/geometry", "geometry");
+    int sources = 0;
+    for (const char* key : {"mesh", "builtin", "surface", "builtin_surface", "mesh_dir"})
+      sources += r.get(*geometry, key) != nullptr;
+    if (sources != 1)
+      fail("/geometry",
+           "give exactly one of \"surface\" (a dense triangle surface), \"builtin_surface\", "
+           "\"mesh\" (a .msh/.vtu tet mesh), \"builtin\" or \"mesh_dir\" (a curved mesh saved "
+           "by curvefem mesh or run)",
+           r.file);
+  }
+  // The case as run (resolved_case.json): the table of case_schema.cpp refuses unknown keys and
+  // keys its rules exclude (only for method "curved", only for poisson, ...) and fills in every
+  // default; everything below reads the resolved case, whose keys are the given ones or the
+  // table's defaults. Paths resolve against the case's folder, numbers given as expressions
+  // become their text.
+  const json j = resolve_case(given, r.file, [&](const CaseKey& k, const json& v) -> json {
+    if (k.type == CaseKeyType::path && v.is_string()) return resolve(v.get<std::string>()).string();
+    if (k.type == CaseKeyType::expression) return expression_text(v);
+    return v;
+  });
   const json* geometry = r.get(j, "geometry");
-  if (!geometry) fail("/geometry", "missing (e.g. {\"surface\": \"part.obj\"})", r.file);
-  r.only_keys(*geometry, "/geometry", "geometry");
   const json* mesh = r.get(*geometry, "mesh");
   const json* builtin = r.get(*geometry, "builtin");
   const json* surface = r.get(*geometry, "surface");
   const json* builtin_surface = r.get(*geometry, "builtin_surface");
   const json* mesh_dir = r.get(*geometry, "mesh_dir");
-  if ((mesh != nullptr) + (builtin != nullptr) + (surface != nullptr) +
-          (builtin_surface != nullptr) + (mesh_dir != nullptr) !=
-      1)
-    fail("/geometry",
-         "give exactly one of \"surface\" (a dense triangle surface), \"builtin_surface\", "
-         "\"mesh\" (a .msh/.vtu tet mesh), \"builtin\" or \"mesh_dir\" (a curved mesh saved "
-         "by curvefem mesh or run)",
-         r.file);
   if (mesh_dir) {
     c.mesh_dir = resolve(r.string(*mesh_dir, "/geometry/mesh_dir"));
     for (const char* name : {"mesh.msh", "boundary_map.json"})
@@ -398,16 +424,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
              "no " + std::string(name) + " in " + c.mesh_dir.string() +
                  " (expected the output directory of curvefem mesh, or of a curved curvefem run)",
              r.file);
-    if (r.get(*geometry, "features"))
-      fail("/geometry/features", "the mesh of geometry.mesh_dir is reused as saved", r.file);
   }
   if (mesh) c.mesh = resolve(r.string(*mesh, "/geometry/mesh"));
   if (const json* v = r.get(*geometry, "data_surface")) {
-    if (!mesh && !builtin)
-      fail("/geometry/data_surface",
-           "only with a given tet mesh (geometry.mesh or builtin): on a dense surface the data "
-           "are already read on it",
-           r.file);
     c.data_surface = resolve(r.string(*v, "/geometry/data_surface"));
     if (!std::filesystem::is_regular_file(c.data_surface))
       fail("/geometry/data_surface", "file not found: " + c.data_surface.string(), r.file);
@@ -419,13 +438,9 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     c.builtin =
         r.choice_of<BuiltinVolume>(*shape, "/geometry/builtin/shape", "geometry.builtin.shape");
     if (const json* v = r.get(*builtin, "size")) {
-      if (c.builtin != BuiltinVolume::ball)
-        fail("/geometry/builtin/size", "only for the ball", r.file);
       c.builtin_size = r.number(*v, "/geometry/builtin/size", "geometry.builtin.size");
     }
     if (const json* v = r.get(*builtin, "divisions")) {
-      if (c.builtin != BuiltinVolume::cube)
-        fail("/geometry/builtin/divisions", "only for the cube", r.file);
       c.builtin_divisions =
           r.integer(*v, "/geometry/builtin/divisions", "geometry.builtin.divisions");
     }
@@ -445,14 +460,6 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (!shape) fail(p + "/shape", "missing (sphere, torus or box)", r.file);
     c.builtin_surface =
         r.choice_of<BuiltinSurface>(*shape, p + "/shape", "geometry.builtin_surface.shape");
-    const std::string shape_name = to_string(c.builtin_surface);
-    const std::map<std::string, std::set<std::string>> keys = {{"sphere", {"level", "radius"}},
-                                                               {"torus", {"R", "r", "nu", "nv"}},
-                                                               {"box", {"lo", "hi", "divisions"}}};
-    CF_VERIFY(keys.count(shape_name), "builtin_surface shape without parameters");
-    for (const auto& [key, value] : b.items())
-      if (key != "shape" && !keys.at(shape_name).count(key))
-        fail(p + "/" + key, "not a parameter of the " + shape_name, r.file);
     const std::string k = "geometry.builtin_surface.";
     if (const json* v = r.get(b, "level"))
       c.sphere_level = r.integer(*v, p + "/level", k + "level");
@@ -471,8 +478,6 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
   if (const json* f = r.get(*geometry, "features")) {
     const std::string p = "/geometry/features";
-    if (!surface && !builtin_surface)
-      fail(p, "only with a dense surface (geometry.surface or geometry.builtin_surface)", r.file);
     if (f->is_string()) {
       const std::string name = f->get<std::string>();
       const auto& allowed = case_key("geometry.features").allowed;
@@ -490,24 +495,16 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
         c.feature_angle = r.number(*v, p + "/angle", "geometry.features.angle");
       } else {
         c.features = FeatureMode::file;
-        c.feature_file = resolve(r.string(*r.get(*f, "file"), p + "/file"));
+        c.feature_file = r.string(*r.get(*f, "file"), p + "/file");
         if (!std::filesystem::is_regular_file(c.feature_file))
           fail(p + "/file", "file not found: " + c.feature_file.string(), r.file);
       }
     }
   }
   const bool dense_input = surface || builtin_surface || mesh_dir;
-  c.method = dense_input ? MeshingMethod::curved : MeshingMethod::given;
 
   if (const json* m = r.get(j, "meshing")) {
     r.only_keys(*m, "/meshing", "meshing");
-    if (mesh_dir)
-      for (const auto& [key, value] : m->items())
-        if (key != "method" && key != "validate")
-          fail("/meshing/" + key,
-               "the mesh of geometry.mesh_dir is reused as saved (only method \"curved\" and "
-               "validate may be given)",
-               r.file);
     if (const json* v = r.get(*m, "method"))
       c.method = r.choice_of<MeshingMethod>(*v, "/meshing/method", "meshing.method");
     if (mesh_dir && c.method != MeshingMethod::curved)
@@ -520,11 +517,6 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
            "\"" + to_string(c.method) +
                "\" takes a dense surface (geometry.surface or geometry.builtin_surface)",
            r.file);
-    for (const char* key :
-         {"order", "eps", "eps_field", "eps_by_tag", "thickness", "thickness_per_edge",
-          "eps_samples", "feature_chains", "curved_coarsening", "validate", "deterministic"})
-      if (r.get(*m, key) && c.method != MeshingMethod::curved)
-        fail(std::string("/meshing/") + key, "only for method \"curved\"", r.file);
     if (const json* v = r.get(*m, "order"))
       c.order = r.integer(*v, "/meshing/order", "meshing.order");
     if (const json* v = r.get(*m, "eps")) {
@@ -590,15 +582,11 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     if (const json* v = r.get(*m, "exterior")) {
       if (!v->is_boolean()) fail("/meshing/exterior", "expected true/false", r.file);
       c.exterior = v->get<bool>();
-      if (c.exterior && !dense_input)
-        fail("/meshing/exterior", "takes a dense surface (method curved or dense)", r.file);
     }
     if (const json* v = r.get(*m, "solve_on")) {
-      if (!c.exterior) fail("/meshing/solve_on", "only with \"exterior\": true", r.file);
       c.solve_on = r.choice_of<SolveOn>(*v, "/meshing/solve_on", "meshing.solve_on");
     }
     if (const json* v = r.get(*m, "padding")) {
-      if (!c.exterior) fail("/meshing/padding", "only with \"exterior\": true", r.file);
       c.padding = r.number(*v, "/meshing/padding", "meshing.padding");
     }
   }
@@ -607,40 +595,22 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
     r.only_keys(*p, "/physics", "physics");
     if (const json* v = r.get(*p, "type"))
       c.physics = r.choice_of<Physics>(*v, "/physics/type", "physics.type");
-    const bool elastic = c.physics != Physics::poisson;
-    if (const json* v = r.get(*p, "kappa")) {
-      if (elastic) fail("/physics/kappa", "only for poisson", r.file);
-      c.kappa = r.expression(*v, "/physics/kappa");
-    }
-    if (const json* v = r.get(*p, "kappa_inside")) {
-      if (elastic) fail("/physics/kappa_inside", "only for poisson", r.file);
-      if (c.solve_on != SolveOn::both)
-        fail("/physics/kappa_inside", "only with meshing.solve_on \"both\"", r.file);
+    if (const json* v = r.get(*p, "kappa")) c.kappa = r.expression(*v, "/physics/kappa");
+    if (const json* v = r.get(*p, "kappa_inside"))
       c.kappa_inside = r.expression(*v, "/physics/kappa_inside");
-    }
-    for (const char* key : {"E", "nu"})
-      if (r.get(*p, key) && !elastic)
-        fail(std::string("/physics/") + key, "only for elasticity", r.file);
     if (const json* v = r.get(*p, "E")) c.E = r.number(*v, "/physics/E", "physics.E");
     if (const json* v = r.get(*p, "nu")) c.nu = r.number(*v, "/physics/nu", "physics.nu");
     for (const char* key : {"E_inside", "nu_inside"}) {
       const json* v = r.get(*p, key);
       if (!v) continue;
       const std::string path = std::string("/physics/") + key;
-      if (!elastic) fail(path, "only for elasticity", r.file);
-      if (c.solve_on != SolveOn::both) fail(path, "only with meshing.solve_on \"both\"", r.file);
       (key[0] == 'E' ? c.E_inside : c.nu_inside) =
           r.number(*v, path, std::string("physics.") + key);
     }
-    if (const json* v = r.get(*p, "load_steps")) {
-      if (c.physics != Physics::neo_hookean)
-        fail("/physics/load_steps", "only for neo_hookean", r.file);
+    if (const json* v = r.get(*p, "load_steps"))
       c.load_steps = r.integer(*v, "/physics/load_steps", "physics.load_steps");
-    }
   }
-  if (c.kappa.empty() && c.physics == Physics::poisson) c.kappa = Expression("1", "/physics/kappa");
 
-  bool partial_dirichlet_given = false;
   if (const json* d = r.get(j, "discretization")) {
     r.only_keys(*d, "/discretization", "discretization");
     if (const json* v = r.get(*d, "target_error")) {
@@ -658,7 +628,6 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
           r.choice_of<SolveGeometry>(*v, "/discretization/geometry", "discretization.geometry");
     }
     if (const json* v = r.get(*d, "partial_dirichlet")) {
-      partial_dirichlet_given = true;
       c.partial_dirichlet = r.choice_of<PartialDirichlet>(*v, "/discretization/partial_dirichlet",
                                                           "discretization.partial_dirichlet");
       if (c.partial_dirichlet == PartialDirichlet::nitsche && c.physics == Physics::neo_hookean)
@@ -673,19 +642,7 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
         c.quadrature = r.integer(*v, "/discretization/quadrature", "discretization.quadrature");
     }
   }
-  // Neo-Hookean without the key reads on the input ("shifted" given is refused above).
-  if (c.physics == Physics::neo_hookean && c.boundary_values_at == BoundaryValuesAt::shifted)
-    c.boundary_values_at = BoundaryValuesAt::input;
-  if (!partial_dirichlet_given)  // measured trade-off: cases/README.md
-    c.partial_dirichlet =
-        c.physics == Physics::poisson ? PartialDirichlet::nitsche : PartialDirichlet::nodal;
   if (const json* lc = r.get(j, "load_cases")) {
-    for (const char* key : {"rhs", "boundary_conditions", "exact", "exact_gradient"})
-      if (r.get(j, key))
-        fail(std::string("/") + key,
-             "give it in each of load_cases (a case with load_cases has no top-level " +
-                 std::string(key) + ")",
-             r.file);
     if (!lc->is_array() || lc->empty())
       fail("/load_cases", "expected a non-empty array of {name, boundary_conditions, ...}", r.file);
     std::set<std::string> names;
@@ -743,144 +700,21 @@ CaseSpec read_case_json(const nlohmann::json& j, const std::filesystem::path& pa
   }
   c.output_dir = output_override.empty() ? resolve(out) : std::filesystem::path(output_override);
 
-  // Resolved case: every key with its value as run.
-  auto exprs = [](const std::vector<Expression>& e) {
-    if (e.size() == 1) return json(e[0].text());
-    json a = json::array();
-    for (const auto& x : e) a.push_back(x.text());
-    return a;
+  // The resolved case as run: the output folder (-o replaces output.dir), ε levels in the order
+  // they are solved (coarse to fine) and the selections in their read form (a normal selection's
+  // angle filled in).
+  json res = j;
+  res["output"]["dir"] = c.output_dir.string();
+  if (!c.eps_levels.empty()) res["meshing"]["eps"] = c.eps_levels;
+  auto selections = [&](json& bcs, const std::vector<BoundaryConditionSpec>& specs) {
+    for (std::size_t i = 0; i < specs.size(); ++i)
+      bcs.at(i)["select"] = selection_json(specs[i].select);
   };
-  json res;
-  auto vec = [](const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); };
-  if (!c.mesh.empty())
-    res["geometry"] = {{"mesh", c.mesh.string()}};
-  else if (c.builtin == BuiltinVolume::ball)
-    res["geometry"] = {
-        {"builtin", {{"shape", "ball"}, {"size", c.builtin_size}, {"order", c.builtin_order}}}};
-  else if (c.builtin == BuiltinVolume::cube)
-    res["geometry"] = {
-        {"builtin",
-         {{"shape", "cube"}, {"divisions", c.builtin_divisions}, {"order", c.builtin_order}}}};
-  else if (!c.surface.empty())
-    res["geometry"] = {{"surface", c.surface.string()}};
-  else if (!c.mesh_dir.empty())
-    res["geometry"] = {{"mesh_dir", c.mesh_dir.string()}};
-  else if (c.builtin_surface == BuiltinSurface::sphere)
-    res["geometry"] = {{"builtin_surface",
-                        {{"shape", "sphere"}, {"level", c.sphere_level}, {"radius", c.radius}}}};
-  else if (c.builtin_surface == BuiltinSurface::torus)
-    res["geometry"] = {{"builtin_surface",
-                        {{"shape", "torus"},
-                         {"R", c.torus_R},
-                         {"r", c.torus_r},
-                         {"nu", c.torus_nu},
-                         {"nv", c.torus_nv}}}};
+  if (c.load_cases.empty())
+    selections(res["boundary_conditions"], c.boundary_conditions);
   else
-    res["geometry"] = {{"builtin_surface",
-                        {{"shape", "box"},
-                         {"lo", vec(c.box_lo)},
-                         {"hi", vec(c.box_hi)},
-                         {"divisions", c.box_divisions}}}};
-  if (c.dense_surface() && c.mesh_dir.empty()) {
-    if (c.features == FeatureMode::angle)
-      res["geometry"]["features"] = {{"angle", c.feature_angle}};
-    else if (c.features == FeatureMode::file)
-      res["geometry"]["features"] = {{"file", c.feature_file.string()}};
-    else
-      res["geometry"]["features"] = c.features;
-  }
-  if (!c.data_surface.empty()) res["geometry"]["data_surface"] = c.data_surface.string();
-  res["meshing"] = {{"method", c.method}};
-  if (!c.mesh_dir.empty()) {
-    res["meshing"]["reused"] = true;
-    res["meshing"]["validate"] = c.validate;
-  } else if (c.method == MeshingMethod::curved) {
-    res["meshing"]["order"] = c.order;
-    if (c.eps_levels.empty())
-      res["meshing"]["eps"] = c.eps;
-    else
-      res["meshing"]["eps"] = c.eps_levels;
-    if (!c.eps_field.empty()) res["meshing"]["eps_field"] = c.eps_field;
-    if (!c.eps_by_tag.empty()) res["meshing"]["eps_by_tag"] = c.eps_by_tag;
-    res["meshing"]["thickness"] = c.thickness;
-    res["meshing"]["thickness_per_edge"] = c.thickness_per_edge;
-    res["meshing"]["eps_samples"] = c.eps_samples;
-    res["meshing"]["feature_chains"] = c.feature_chains;
-    res["meshing"]["curved_coarsening"] = c.curved_coarsening;
-    res["meshing"]["validate"] = c.validate;
-    res["meshing"]["deterministic"] = c.deterministic;
-  }
-  if (c.dense_surface()) {
-    res["meshing"]["exterior"] = c.exterior;
-    if (c.exterior) res["meshing"]["padding"] = c.padding;
-    if (c.exterior) res["meshing"]["solve_on"] = c.solve_on;
-  }
-  res["physics"] = {{"type", c.physics}};
-  if (c.physics == Physics::poisson) {
-    res["physics"]["kappa"] = c.kappa.text();
-    if (c.solve_on == SolveOn::both)
-      res["physics"]["kappa_inside"] = (c.kappa_inside.empty() ? c.kappa : c.kappa_inside).text();
-  } else {
-    res["physics"]["E"] = c.E, res["physics"]["nu"] = c.nu;
-    if (c.solve_on == SolveOn::both) {
-      res["physics"]["E_inside"] = c.E_inside.value_or(c.E);
-      res["physics"]["nu_inside"] = c.nu_inside.value_or(c.nu);
-    }
-  }
-  if (c.physics == Physics::neo_hookean) res["physics"]["load_steps"] = c.load_steps;
-  res["discretization"] = {{"degree", c.degree},
-                           {"quadrature", c.quadrature < 0 ? json("default") : json(c.quadrature)},
-                           {"partial_dirichlet", c.partial_dirichlet},
-                           {"geometry", c.geometry},
-                           {"boundary_values_at", c.boundary_values_at}};
-  if (c.target_error > 0) res["discretization"]["target_error"] = c.target_error;
-  const int comps = c.components();
-  auto write_load = [&](json& out, const std::vector<Expression>& rhs,
-                        const std::vector<BoundaryConditionSpec>& bcs,
-                        const std::vector<Expression>& exact,
-                        const std::vector<Expression>& exact_gradient) {
-    out["rhs"] = rhs.empty() ? json(comps == 1 ? json("0") : json({"0", "0", "0"})) : exprs(rhs);
-    out["boundary_conditions"] = json::array();
-    for (const auto& bc : bcs) {
-      json b = {{"type", bc.type}};
-      if (bc.type == BoundaryType::robin) {
-        b["h"] = exprs(bc.h);
-        b["u_inf"] = exprs(bc.value);
-      } else {
-        b["value"] = exprs(bc.value);
-      }
-      b["select"] = selection_json(bc.select);
-      if (comps == 3 && bc.type == BoundaryType::dirichlet) b["components"] = bc.components;
-      out["boundary_conditions"].push_back(b);
-    }
-    if (!exact.empty()) out["exact"] = exprs(exact);
-    if (!exact_gradient.empty()) {
-      if (comps == 1) {
-        out["exact_gradient"] = exprs(exact_gradient);
-      } else {
-        out["exact_gradient"] = json::array();
-        for (int i = 0; i < 3; ++i)
-          out["exact_gradient"].push_back(exprs(std::vector<Expression>(
-              exact_gradient.begin() + 3 * i, exact_gradient.begin() + 3 * i + 3)));
-      }
-    }
-  };
-  if (c.load_cases.empty()) {
-    write_load(res, c.rhs, c.boundary_conditions, c.exact, c.exact_gradient);
-  } else {
-    res["load_cases"] = json::array();
-    for (const LoadCase& l : c.load_cases) {
-      json o = {{"name", l.name}};
-      write_load(o, l.rhs, l.boundary_conditions, l.exact, l.exact_gradient);
-      res["load_cases"].push_back(o);
-    }
-  }
-  res["solver"] = {{"type", c.solver},
-                   {"rtol", c.solver_rtol},
-                   {"max_iterations", c.solver_max_iterations},
-                   {"near_nullspace", c.solver_near_nullspace},
-                   {"preconditioner", c.solver_preconditioner}};
-  res["output"] = {{"dir", c.output_dir.string()}, {"surface_values", c.surface_values}};
+    for (std::size_t i = 0; i < c.load_cases.size(); ++i)
+      selections(res["load_cases"][i]["boundary_conditions"], c.load_cases[i].boundary_conditions);
   c.resolved = res;
   return c;
 }

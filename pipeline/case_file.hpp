@@ -2,10 +2,10 @@
 // cases/README.md's table, generated from it): every object's allowed keys, and the enums and
 // numeric ranges of most keys, come from that table. Parsing is strict: an unknown key, a wrong
 // type or a bad expression is an InputError naming the JSON path (e.g.
-// "/boundary_conditions/1/select/box: expected [[x0,y0,z0],[x1,y1,z1]]"). Defaults are injected
-// (CaseSpec's initializers, equal to the table's: tests/tools/test_case_schema_unit.cpp) and the
-// resolved case (every key, with defaults) is available for resolved_case.json. Relative paths
-// resolve against the case file's folder.
+// "/boundary_conditions/1/select/box: expected [[x0,y0,z0],[x1,y1,z1]]"). The case is first
+// resolved by the table (case_schema.hpp, resolve_case: unknown keys and keys whose rules fail are
+// refused, defaults filled in); the parser then reads that resolved case, which is written as
+// resolved_case.json. Relative paths resolve against the case file's folder.
 #pragma once
 
 #include <Eigen/Core>

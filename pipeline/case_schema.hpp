@@ -16,6 +16,7 @@
 // optional or depending on other keys) has none and a `default_text` saying what happens.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -51,6 +52,25 @@ struct CaseKeyRange {
   bool contains(double v) const;
 };
 
+/// A rule between two keys: the key it belongs to applies only while another key of the table,
+/// resolved (given, or its default), equals one of `values`, or — with `values` empty — is given
+/// (`given` true) or absent (`given` false). A path below the same `[]` as the key refers to the
+/// same array element. A key whose rules do not all hold is refused when given (with the first
+/// failing rule's `error`) and is absent from resolved_case.json.
+struct CaseKeyWhen {
+  std::string_view path;                 ///< the other key ("meshing.method")
+  std::vector<std::string_view> values;  ///< JSON texts ("\"curved\""); empty: presence
+  bool given = true;                     ///< with `values` empty: must be given / absent
+  std::string_view error;                ///< "only for method \"curved\""
+};
+
+/// A default that depends on other keys: the first entry of a key's `defaults` whose rules all
+/// hold (an entry without rules always does) gives the key's value.
+struct CaseKeyDefault {
+  std::vector<CaseKeyWhen> when;
+  std::string_view value;  ///< JSON text
+};
+
 struct CaseKey {
   std::string_view path;  ///< "meshing.eps"
   CaseKeyType type = CaseKeyType::any;
@@ -58,6 +78,9 @@ struct CaseKey {
   std::vector<std::string_view> allowed;  ///< string values allowed (empty: any)
   std::optional<CaseKeyRange> range;      ///< numeric bounds (numbers, integers, list elements)
   std::string_view range_note;            ///< appended to the range error ("(0: off)")
+  std::vector<CaseKeyWhen> when;          ///< the key applies only where all of these hold
+  std::vector<CaseKeyDefault> defaults;  ///< defaults depending on other keys (before default_json)
+  std::string_view default_from;         ///< else: the resolved value of this other key
 };
 
 /// One row of the documented table: one key, or several documented together
@@ -87,6 +110,19 @@ std::string case_schema_markdown();
 /// allowed, minimum, maximum, minimum_exclusive, maximum_exclusive, type_text, doc}; one object
 /// per key (the rows' documentation repeated for keys documented together).
 nlohmann::json case_schema_json();
+
+/// The case `given` (a case file's JSON) resolved by the table: every section and every key that
+/// applies (its rules hold), with its given value (passed through `normalize`, which may rewrite
+/// paths or expressions) or its default (`defaults`, `default_json`, `default_from`, in that
+/// order); keys without a value stay absent. Objects of keys with children in the table
+/// (builtin_surface, features as an object) and the elements of `[]` arrays are resolved key by
+/// key; selections are copied (the parser reads them). Throws InputError naming the JSON path (and
+/// `file`) for an unknown key, a non-object where keys are expected, a bad value of a key other
+/// rules depend on, or a key given where one of its rules does not hold. Checks no other value:
+/// the parser reads the resolved case.
+nlohmann::json resolve_case(
+    const nlohmann::json& given, const std::string& file,
+    const std::function<nlohmann::json(const CaseKey&, const nlohmann::json&)>& normalize = {});
 
 inline constexpr std::string_view k_schema_begin = "<!-- schema:begin -->";
 inline constexpr std::string_view k_schema_end = "<!-- schema:end -->";

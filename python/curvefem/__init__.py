@@ -73,6 +73,11 @@ def schema(section=None):
       optional, or depending on other keys: "default_text" says which);
     - "allowed": the string values allowed ([] when any);
     - "minimum", "maximum" (None: unbounded), "minimum_exclusive", "maximum_exclusive";
+    - "when": the rules under which the key applies, all of them: {"path": other key, "values":
+      [...]} (that key, resolved, is one of them) or {"path": ..., "given": bool}; a key given
+      where one fails is refused, and resolved() leaves it out;
+    - "defaults": defaults depending on other keys, [{"when": [...], "value": ...}], the first
+      whose rules hold; "default_from": else the value of this other key (or None);
     - "doc": the meaning (Markdown).
 
     `section` ("meshing", "boundary_conditions[]", ...): only the keys below it."""

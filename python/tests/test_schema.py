@@ -91,3 +91,26 @@ def test_case_keyword_arguments_are_checked_against_the_schema_at_every_depth():
             curvefem.case(**kwargs)
         assert where in str(info.value), str(info.value)
         assert "did you mean %r" % suggestion in str(info.value), str(info.value)
+
+
+def test_the_rules_between_keys_are_data_and_the_reader_follows_them():
+    keys = {k["path"]: k for k in curvefem.schema()}
+    assert keys["meshing.order"]["when"] == [
+        {"path": "geometry.mesh_dir", "given": False},
+        {"path": "meshing.method", "values": ["curved"]}]
+    assert keys["physics.kappa_inside"]["default_from"] == "physics.kappa"
+    # A curved key on a given mesh: refused, naming the key and the rule.
+    with pytest.raises(curvefem.InputError) as info:
+        curvefem.read_case(dict(CUBE, meshing={"order": 2}))
+    assert '/meshing/order: only for method "curved"' in str(info.value)
+    # Where every rule holds the key is read; where one fails resolved() leaves it out.
+    sphere = {"geometry": {"builtin_surface": {"shape": "sphere"}}}
+    assert curvefem.resolved(sphere)["meshing"]["order"] == keys["meshing.order"]["default"]
+    assert "order" not in curvefem.resolved(CUBE)["meshing"]
+    both = dict(sphere, meshing={"exterior": True, "solve_on": "both"},
+                physics={"kappa": "3"})
+    assert curvefem.resolved(both)["physics"]["kappa_inside"] == "3"
+    # A default that depends on another key: the first entry whose rules hold.
+    elastic = dict(CUBE, physics={"type": "linear_elasticity"})
+    assert curvefem.resolved(elastic)["discretization"]["partial_dirichlet"] == "nodal"
+    assert curvefem.resolved(CUBE)["discretization"]["partial_dirichlet"] == "nitsche"

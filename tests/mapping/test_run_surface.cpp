@@ -307,7 +307,7 @@ TEST(RunSurface, BrokenCasesExitTwoNameTheJsonPathAndLeaveNothing) {
          "boundary_conditions": [{"type": "dirichlet", "select": {"or": [{"all": true}, {"normal": {"direction": [0,0,0]}}]}, "value": 0}])",
        "/boundary_conditions/0/select/or/1/normal/direction: must be a non-zero vector"},
       {R"("geometry": {"builtin_surface": {"shape": "sphere", "level": 1, "R": 2}}, )" + dirichlet,
-       "/geometry/builtin_surface/R: not a parameter of the sphere"},
+       "/geometry/builtin_surface/R: only for the torus"},
       {R"("geometry": {"surface": "sphere.obj"}, "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x+"}])",
        "/boundary_conditions/0/value: bad expression"},
       {R"("geometry": {"surface": "sphere.obj"}, "meshing": {"method": "dense"},

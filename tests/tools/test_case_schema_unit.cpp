@@ -332,3 +332,162 @@ TEST(CaseSchema, TheEnumsSpellTheAllowedValues) {
   EXPECT_EQ(nlohmann::json(Physics::linear_elasticity), nlohmann::json("linear_elasticity"));
   EXPECT_EQ(nlohmann::json("cg").get<SolverType>(), SolverType::cg);
 }
+
+// The rules between keys (CaseKey::when) are well formed: they name keys of the table, compare
+// with values those keys can hold, and a key compared by value comes before the keys whose rules
+// compare it (the resolver reads it resolved); defaults that depend on other keys are documented.
+TEST(CaseSchema, TheRulesNameKeysAndValuesOfTheTable) {
+  std::map<std::string, std::size_t> order;
+  std::size_t n = 0;
+  for (const CaseKeyRow& row : case_schema())
+    for (const CaseKey& k : row.keys) order[std::string(k.path)] = n++;
+  int rules = 0;
+  auto check = [&](const CaseKey& k, const CaseKeyWhen& w, bool needs_error) {
+    SCOPED_TRACE(std::string(k.path) + " <- " + std::string(w.path));
+    ASSERT_TRUE(order.count(std::string(w.path))) << "not a key of the table";
+    EXPECT_NE(w.path, k.path);
+    if (needs_error) {
+      EXPECT_FALSE(w.error.empty());
+    }
+    if (w.values.empty()) return;
+    EXPECT_LT(order[std::string(w.path)], order[std::string(k.path)]);
+    const CaseKey& target = case_key(w.path);
+    for (const auto text : w.values) {
+      json v;
+      ASSERT_NO_THROW(v = json::parse(text)) << text;
+      if (!target.allowed.empty()) {
+        ASSERT_TRUE(v.is_string()) << text;
+        EXPECT_NE(std::find(target.allowed.begin(), target.allowed.end(), v.get<std::string>()),
+                  target.allowed.end())
+            << text;
+      }
+      if (target.type == CaseKeyType::boolean) {
+        EXPECT_TRUE(v.is_boolean()) << text;
+      }
+    }
+    ++rules;
+  };
+  for (const CaseKeyRow& row : case_schema())
+    for (const CaseKey& k : row.keys) {
+      for (const CaseKeyWhen& w : k.when) check(k, w, true);
+      for (const CaseKeyDefault& d : k.defaults) {
+        json parsed;
+        ASSERT_NO_THROW(parsed = json::parse(d.value)) << k.path;
+        for (const CaseKeyWhen& w : d.when) check(k, w, false);
+      }
+      if (!k.defaults.empty() || !k.default_from.empty()) {
+        EXPECT_FALSE(row.default_text.empty()) << k.path << ": document the default";
+        EXPECT_TRUE(k.default_json.empty()) << k.path;
+      }
+      if (!k.default_from.empty()) {
+        EXPECT_TRUE(order.count(std::string(k.default_from)));
+      }
+    }
+  EXPECT_GE(rules, 40);
+}
+
+// Every rule of every geometry, meshing and physics key, against the cases a user can write:
+// the key is given in each of them; where its rules hold on the case (judged here on the resolved
+// case, by a lookup of this file, not the resolver's), it is read and resolved as given; where one
+// fails, the case is refused naming the key's JSON path and the first failing rule. Each such key
+// is seen both ways.
+TEST(CaseSchema, AKeyIsReadWhereItsRulesHoldAndRefusedWhereOneFails) {
+  const auto dir = test::scratch_dir("case_schema_rules");
+  std::ofstream(dir / "s.obj") << "# a surface the parser only checks exists\n";
+  std::filesystem::create_directories(dir / "saved");
+  std::ofstream(dir / "saved" / "mesh.msh") << "";
+  std::ofstream(dir / "saved" / "boundary_map.json") << "{}";
+  auto with = [](json j, const std::string& pointer, const json& v) {
+    j[json::json_pointer(pointer)] = v;
+    return j;
+  };
+  const json sphere = {{"geometry", {{"builtin_surface", {{"shape", "sphere"}}}}}};
+  const json cube = {{"geometry", {{"builtin", {{"shape", "cube"}}}}}};
+  std::vector<json> bases = {
+      sphere,
+      with(sphere, "/physics/type", "linear_elasticity"),
+      with(sphere, "/physics/type", "neo_hookean"),
+      sphere_case("poisson"),
+      sphere_case("linear_elasticity"),
+      sphere_case("neo_hookean"),
+      with(with(sphere, "/meshing/exterior", true), "/meshing/method", "dense"),
+      with(sphere, "/meshing/method", "dense"),
+      {{"geometry", {{"builtin_surface", {{"shape", "torus"}}}}}},
+      {{"geometry", {{"builtin_surface", {{"shape", "box"}}}}}},
+      cube,
+      with(cube, "/physics/type", "linear_elasticity"),
+      {{"geometry", {{"builtin", {{"shape", "ball"}}}}}},
+      {{"geometry", {{"surface", "s.obj"}}}},
+      {{"geometry", {{"mesh", "m.msh"}}}},
+      {{"geometry", {{"mesh_dir", "saved"}}}},
+  };
+  // A valid value for keys without a fixed default.
+  const std::map<std::string, json> samples = {{"geometry.data_surface", "s.obj"},
+                                               {"meshing.eps_field", "0.01"},
+                                               {"meshing.eps_by_tag", {{"1", 0.01}}},
+                                               {"physics.kappa_inside", "2"},
+                                               {"physics.E_inside", 2.0},
+                                               {"physics.nu_inside", 0.2},
+                                               // true: false would exclude the cases' own solve_on.
+                                               {"meshing.exterior", true}};
+  int keys = 0;
+  for (const CaseKeyRow& row : case_schema())
+    for (const CaseKey& k : row.keys) {
+      const std::string section = std::string(k.path.substr(0, k.path.find('.')));
+      if (k.when.empty() || (section != "geometry" && section != "meshing" && section != "physics"))
+        continue;
+      SCOPED_TRACE(std::string(k.path));
+      json value;
+      if (samples.count(std::string(k.path)))
+        value = samples.at(std::string(k.path));
+      else if (!k.default_json.empty())
+        value = json::parse(k.default_json);
+      ASSERT_FALSE(value.is_null()) << "give the test a value for the key";
+      std::string pointer;
+      for (const auto& part : split(k.path)) pointer += "/" + part;
+      const std::string parent(k.path.substr(0, k.path.rfind('.')));
+      int read = 0, refused = 0;
+      for (const json& base : bases) {
+        // Keys of a shape's object only where that object is.
+        if (split(k.path).size() > 2 && !lookup(base, parent)) continue;
+        CaseSpec c;
+        ASSERT_NO_THROW(c = read_case_json(base, dir / "case.json")) << base.dump();
+        const CaseKeyWhen* failing = nullptr;
+        for (const CaseKeyWhen& w : k.when) {
+          const json* v = lookup(c.resolved, w.path);
+          bool holds = w.values.empty() ? (v != nullptr) == w.given : false;
+          for (const auto text : w.values) holds = holds || (v && *v == json::parse(text));
+          if (!holds) {
+            failing = &w;
+            break;
+          }
+        }
+        const json j = with(base, pointer, value);
+        std::string message;
+        CaseSpec r;
+        try {
+          r = read_case_json(j, dir / "case.json");
+        } catch (const InputError& e) {
+          message = e.what();
+        }
+        if (!failing) {
+          EXPECT_EQ(message, "") << j.dump();
+          const json* got = lookup(r.resolved, k.path);
+          EXPECT_TRUE(got != nullptr) << j.dump();
+          if (got && k.type != CaseKeyType::path && k.type != CaseKeyType::expression) {
+            EXPECT_EQ(*got, value) << j.dump();
+          }
+          ++read;
+        } else {
+          EXPECT_NE(message.find(pointer + ": " + std::string(failing->error)), std::string::npos)
+              << j.dump() << "\n"
+              << message;
+          ++refused;
+        }
+      }
+      EXPECT_GT(read, 0) << "no case where the key applies";
+      EXPECT_GT(refused, 0) << "no case where it does not";
+      ++keys;
+    }
+  EXPECT_GE(keys, 30);
+}
