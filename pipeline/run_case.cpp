@@ -184,6 +184,8 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   if (cache) {
     outcome.report["factorizations"] = cache->factorizations();
     outcome.report["factorization_reuses"] = cache->reuses();
+    outcome.report["stiffness_assemblies"] = cache->assemblies();
+    outcome.report["stiffness_reuses"] = cache->assembly_reuses();
   }
   outcome.report["threads"] = settings.threads;
   outcome.report["ranks"] = fem::distributed::size();

@@ -166,17 +166,11 @@ void gather(const FunctionSpace& space, const Eigen::VectorXd& u, int cell, Eige
     for (int i = 0; i < 3; ++i) U(a, i) = u[3 * space.cell_dofs(cell, a) + i];
 }
 
-}  // namespace
-
-ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const FunctionSpace& space,
-                                           const ElasticityProblem& problem,
-                                           const LinearSolverOptions& solver) {
-  ElasticitySolution result;
-  result.dofs = space.num_dofs;
-  Stopwatch watch;
-  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
+/// K of linear elasticity (no Dirichlet data, no Nitsche terms) into `K` (setup's pattern).
+void assemble_stiffness(const LagrangeMesh& mesh, const FunctionSpace& space,
+                        const ElasticityProblem& problem, const Setup& setup, SparseMatrix& K) {
   const int n = setup.n;
-  SparseMatrix K = setup.pattern.zero_matrix();
+  K = setup.pattern.zero_matrix();
   const int nq = setup.geometry.num_points();
   // Ke(3a+i, 3b+j) = Σ_q w (λ G_ai G_bj + μ G_aj G_bi + δ_ij μ Σ_k G_ak G_bk), G = ∇φ at q.
   // With M = Σ_q w g_q g_qᵀ for the stacked gradients g_q (row i·n + a = G_ai), one matrix
@@ -242,6 +236,70 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   };
   assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, K.valuePtr(),
                  nullptr);
+}
+
+/// The stiffness of one solve, with what it depends on, kept in the solver's FactorizationCache
+/// (assembly_cache_slot) for the next solve on the same mesh, space, quadrature and material: the
+/// re-solves of shifted boundary values and the load cases of a run. The cell_material function
+/// cannot be compared: a cache is shared only by solves of one problem's coefficients (as the
+/// pipeline does; the tests' caches are per problem), and a mesh is not changed while a cache
+/// holds its stiffness.
+struct KeptStiffness {
+  const LagrangeMesh* mesh;
+  const FunctionSpace* space;
+  int cells, dofs, degree, quadrature;
+  ElasticMaterial material;
+  bool per_cell;
+  std::shared_ptr<const Setup> setup;
+  SparseMatrix K;
+  KeptStiffness(const LagrangeMesh& m, const FunctionSpace& s, const ElasticityProblem& problem,
+                int q)
+      : mesh(&m),
+        space(&s),
+        cells(m.num_cells()),
+        dofs(s.num_dofs),
+        degree(s.degree),
+        quadrature(q),
+        material(problem.material),
+        per_cell(static_cast<bool>(problem.cell_material)),
+        setup(std::make_shared<const Setup>(m, s, q)) {}
+  bool matches(const LagrangeMesh& m, const FunctionSpace& s, const ElasticityProblem& problem,
+               int q) const {
+    return mesh == &m && space == &s && cells == m.num_cells() && dofs == s.num_dofs &&
+           degree == s.degree && quadrature == q && material.E == problem.material.E &&
+           material.nu == problem.material.nu &&
+           per_cell == static_cast<bool>(problem.cell_material);
+  }
+};
+
+}  // namespace
+
+ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                           const ElasticityProblem& problem,
+                                           const LinearSolverOptions& solver) {
+  ElasticitySolution result;
+  result.dofs = space.num_dofs;
+  Stopwatch watch;
+  const int quadrature = stiffness_degree(mesh, space, problem);
+  // The stiffness kept by an earlier solve sharing the solver's cache, if it is this one's.
+  std::shared_ptr<KeptStiffness> kept;
+  if (solver.factorization_cache) {
+    kept =
+        std::static_pointer_cast<KeptStiffness>(assembly_cache_slot(*solver.factorization_cache));
+    if (kept && !kept->matches(mesh, space, problem, quadrature)) kept.reset();
+  }
+  if (kept) {
+    count_assembly(*solver.factorization_cache, true);
+  } else {
+    kept = std::make_shared<KeptStiffness>(mesh, space, problem, quadrature);
+    assemble_stiffness(mesh, space, problem, *kept->setup, kept->K);
+    if (solver.factorization_cache) {
+      assembly_cache_slot(*solver.factorization_cache) = kept;
+      count_assembly(*solver.factorization_cache, false);
+    }
+  }
+  const Setup& setup = *kept->setup;
+  SparseMatrix K = kept->K;
   Eigen::VectorXd body;
   Eigen::VectorXd F = external_load(mesh, space, problem, setup, &body);
   const Eigen::VectorXd load = F;  // l(v) before the Nitsche terms join F

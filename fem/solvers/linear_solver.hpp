@@ -32,16 +32,20 @@ namespace curvefem::fem {
 /// A CHOLMOD factorization — or, for CG, the PETSc KSP with its GAMG hierarchy — kept between
 /// solves (load cases of one run): the next matrix handed to the same engine with the cache is
 /// checked against the kept one bit for bit (sizes, pattern and values); the factor / set-up is
-/// reused when they are identical and recomputed (and kept) otherwise. Not thread-safe: one cache
-/// per sequence of solves.
+/// reused when they are identical and recomputed (and kept) otherwise. A problem may also keep
+/// its assembled operator here (linear elasticity: the stiffness before Dirichlet data, see
+/// fem/problems/elasticity.hpp), so that the solves sharing the cache assemble it once. Not
+/// thread-safe: one cache per sequence of solves.
 class FactorizationCache {
  public:
   FactorizationCache();
   ~FactorizationCache();
   FactorizationCache(const FactorizationCache&) = delete;
   FactorizationCache& operator=(const FactorizationCache&) = delete;
-  int factorizations() const;  ///< how many times a matrix was factorized
-  int reuses() const;          ///< how many solves reused the kept factor
+  int factorizations() const;   ///< how many times a matrix was factorized
+  int reuses() const;           ///< how many solves reused the kept factor
+  int assemblies() const;       ///< how many times a problem assembled the operator it keeps here
+  int assembly_reuses() const;  ///< how many solves took the kept operator instead
   struct Impl;
   Impl& impl() { return *m_impl; }
 
@@ -132,5 +136,8 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
 bool identical_matrices(const SparseMatrix& a, const SparseMatrix& b);
 std::shared_ptr<void>& petsc_cache_slot(FactorizationCache& cache);
 void count_cache_use(FactorizationCache& cache, bool reused);
+/// The problem's slot (type-erased: the problem's own state) and its counters.
+std::shared_ptr<void>& assembly_cache_slot(FactorizationCache& cache);
+void count_assembly(FactorizationCache& cache, bool reused);
 
 }  // namespace curvefem::fem

@@ -18,17 +18,27 @@ struct FactorizationCache::Impl {
   // CG + GAMG: the KSP set up for an earlier matrix (linear_solver_petsc.cpp), kept with what it
   // was set up for; type-erased so this file needs no PETSc header.
   std::shared_ptr<void> ksp;
+  std::shared_ptr<void> assembled;  // a problem's operator (assembly_cache_slot)
+  int assemblies = 0, assembly_reuses = 0;
 };
 
 std::shared_ptr<void>& petsc_cache_slot(FactorizationCache& cache) { return cache.impl().ksp; }
 void count_cache_use(FactorizationCache& cache, bool reused) {
   ++(reused ? cache.impl().reuses : cache.impl().factorizations);
 }
+std::shared_ptr<void>& assembly_cache_slot(FactorizationCache& cache) {
+  return cache.impl().assembled;
+}
+void count_assembly(FactorizationCache& cache, bool reused) {
+  ++(reused ? cache.impl().assembly_reuses : cache.impl().assemblies);
+}
 
 FactorizationCache::FactorizationCache() : m_impl(std::make_unique<Impl>()) {}
 FactorizationCache::~FactorizationCache() = default;
 int FactorizationCache::factorizations() const { return m_impl->factorizations; }
 int FactorizationCache::reuses() const { return m_impl->reuses; }
+int FactorizationCache::assemblies() const { return m_impl->assemblies; }
+int FactorizationCache::assembly_reuses() const { return m_impl->assembly_reuses; }
 
 bool identical_matrices(const SparseMatrix& a, const SparseMatrix& b) {
   if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros()) return false;

@@ -326,3 +326,38 @@ TEST(NeoHookean, AFailingIncrementIsHalvedUntilItConverges) {
   const fem::ForceBalance fb = fem::force_balance(c.mesh, c.space, c.problem, sol.u, true);
   EXPECT_LT(fb.imbalance(), 1e-8);
 }
+
+// Solves sharing a FactorizationCache (load cases, the shifted values' re-solves) assemble the
+// stiffness once: the second solve takes the kept one and gives the fresh solve's answer bit for
+// bit; another material, or another space, assembles again.
+TEST(LinearElasticity, SolvesSharingACacheAssembleTheStiffnessOnce) {
+  const LagrangeMesh mesh = make_cube_tets(2);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  const fem::ElasticMaterial m{2.0, 0.3};
+  const test::ExponentialDisplacement ex{m.lambda(), m.mu()};
+  fem::LinearSolverOptions fresh;
+  fresh.type = fem::SolverType::direct;
+  fem::LinearSolverOptions cached = fresh;
+  cached.factorization_cache = std::make_shared<fem::FactorizationCache>();
+  fem::ElasticityProblem a = clamped_problem(space, ex, m);
+  fem::ElasticityProblem b = a;  // another load on the same operator
+  b.body_force = [](const Eigen::Vector3d& x) { return Eigen::Vector3d(x[2], 1.0, -x[0]); };
+  const auto ua = fem::solve_linear_elasticity(mesh, space, a, cached);
+  const auto ub = fem::solve_linear_elasticity(mesh, space, b, cached);
+  EXPECT_EQ(cached.factorization_cache->assemblies(), 1);
+  EXPECT_EQ(cached.factorization_cache->assembly_reuses(), 1);
+  EXPECT_EQ(ub.u, fem::solve_linear_elasticity(mesh, space, b, fresh).u);
+  EXPECT_EQ(ua.u, fem::solve_linear_elasticity(mesh, space, a, fresh).u);
+  // Another material: assembled again (and its answer is the fresh one's).
+  const fem::ElasticityProblem c = clamped_problem(space, ex, {3.0, 0.25});
+  EXPECT_EQ(fem::solve_linear_elasticity(mesh, space, c, cached).u,
+            fem::solve_linear_elasticity(mesh, space, c, fresh).u);
+  EXPECT_EQ(cached.factorization_cache->assemblies(), 2);
+  // Another space on the same mesh: assembled again.
+  const fem::FunctionSpace p3 = fem::build_function_space(mesh, 3);
+  const fem::ElasticityProblem d = clamped_problem(p3, ex, {3.0, 0.25});
+  EXPECT_EQ(fem::solve_linear_elasticity(mesh, p3, d, cached).u,
+            fem::solve_linear_elasticity(mesh, p3, d, fresh).u);
+  EXPECT_EQ(cached.factorization_cache->assemblies(), 3);
+  EXPECT_EQ(cached.factorization_cache->assembly_reuses(), 1);
+}
