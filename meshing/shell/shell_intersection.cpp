@@ -496,7 +496,8 @@ bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::a
         if (q.p == c) return true;
   return meets_tet<true>(tri, tet);
 }
-int exact_triangle_tet_certain(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& tet) {
+bool exact_triangle_certainly_apart(const std::array<ExactPoint, 3>& tri,
+                                    const std::array<V3, 4>& tet) {
   using I = CGAL::Interval_nt<false>;
   using P = std::array<I, 3>;
   CGAL::Protect_FPU_rounding<true> guard;
@@ -513,30 +514,25 @@ int exact_triangle_tet_certain(const std::array<ExactPoint, 3>& tri, const std::
            u[2] * (v[0] * w[1] - v[1] * w[0]);
   };
   auto sign = [](const I& x) { return x.inf() > 0 ? 1 : (x.sup() < 0 ? -1 : 0); };
-  std::array<bool, 3> inside_all{true, true, true};  // corner strictly inside every facet so far
   for (const auto& f : k_tet_facets) {
     const P& a = c[std::size_t(f[0])];
     const P u = minus(c[std::size_t(f[1])], a), v = minus(c[std::size_t(f[2])], a);
     const int inside = sign(det(u, v, minus(c[std::size_t(f[3])], a)));
-    if (inside == 0) {
-      inside_all = {false, false, false};
-      continue;
-    }
+    if (inside == 0) continue;
     bool beyond = true;
-    for (std::size_t i = 0; i < 3; ++i) {
-      const int s = sign(det(u, v, minus(q[i], a)));
-      beyond = beyond && s == -inside;
-      inside_all[i] = inside_all[i] && s == inside;
-    }
-    if (beyond) return -1;
+    for (const P& x : q)
+      if (sign(det(u, v, minus(x, a))) != -inside) {
+        beyond = false;
+        break;
+      }
+    if (beyond) return true;
   }
-  if (inside_all[0] || inside_all[1] || inside_all[2]) return 1;
   const P u = minus(q[1], q[0]), v = minus(q[2], q[0]);
   const int first = sign(det(u, v, minus(c[0], q[0])));
-  if (first == 0) return 0;
+  if (first == 0) return false;
   for (std::size_t j = 1; j < 4; ++j)
-    if (sign(det(u, v, minus(c[j], q[0]))) != first) return 0;
-  return -1;
+    if (sign(det(u, v, minus(c[j], q[0]))) != first) return false;
+  return true;
 }
 
 bool exact_triangles_meet(const std::array<ExactPoint, 3>& a, const std::array<V3, 3>& b) {
@@ -1136,14 +1132,12 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
   for (int f : m_impl->moved_near(all)) {
     const CGAL::Bbox_3 fb = m_impl->face_box(f);
     const auto tri = m_impl->exact_face(f);
-    for (std::size_t i = 0; i < T.size(); ++i) {
-      if (!CGAL::do_overlap(fb, tb[i])) continue;
-      const int certain = exact_triangle_tet_certain(tri, tets[i]);
-      if (certain > 0 || (certain == 0 && exact_triangle_meets_tet(tri, tets[i]))) {
+    for (std::size_t i = 0; i < T.size(); ++i)
+      if (CGAL::do_overlap(fb, tb[i]) && !exact_triangle_certainly_apart(tri, tets[i]) &&
+          exact_triangle_meets_tet(tri, tets[i])) {
         out.push_back(f);
         break;
       }
-    }
   }
   for (int f : candidates) {
     if (m_impl->is_moved(f)) continue;  // above
@@ -1206,8 +1200,7 @@ std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) c
 bool InputSurfaceIndex::face_touches_tet(int f, const std::array<Eigen::Vector3d, 4>& t) const {
   if (m_impl->is_moved(f)) {
     const auto tri = m_impl->exact_face(f);
-    const int certain = exact_triangle_tet_certain(tri, t);
-    return certain > 0 || (certain == 0 && exact_triangle_meets_tet(tri, t));
+    return !exact_triangle_certainly_apart(tri, t) && exact_triangle_meets_tet(tri, t);
   }
   const K::Tetrahedron_3 tet(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
   const Triangle& tri = m_impl->triangles[std::size_t(f)];
@@ -1215,10 +1208,9 @@ bool InputSurfaceIndex::face_touches_tet(int f, const std::array<Eigen::Vector3d
 }
 
 bool InputSurfaceIndex::face_section_contact(int f, const std::array<Eigen::Vector3d, 4>& t) const {
-  if (m_impl->is_moved(f)) {  // apart: no contact; a corner in the open tet: contact
+  if (m_impl->is_moved(f)) {  // closed sets apart: no contact with the open tet or facets
     const auto tri = m_impl->exact_face(f);
-    const int certain = exact_triangle_tet_certain(tri, t);
-    return certain > 0 || (certain == 0 && exact_section_contact(tri, t));
+    return !exact_triangle_certainly_apart(tri, t) && exact_section_contact(tri, t);
   }
   return triangle_section_contact(face_triangle(f), t);
 }

@@ -92,15 +92,14 @@ int exact_normal_dot_sign(const std::array<ExactPoint, 3>& tri, const Eigen::Vec
                           const Eigen::Vector3d& to);
 // Are the three points collinear (exact)?
 bool exact_collinear(const std::array<ExactPoint, 3>& tri);
-// A sound filter before the exact tests above, in interval arithmetic on enclosures of the
-// snapped corners: -1 when the closed triangle and the closed tet are certainly disjoint (a tet
-// facet plane with the whole triangle strictly beyond it, or the triangle's plane with the whole
-// tet strictly on one side); 1 when a corner is certainly inside the open tet (so the triangle
-// meets the tet, and has section contact with it); 0 when neither is certain (the exact tests
-// decide). Most candidates of a box query are one of the two, and this costs a few interval
+// A sound filter before the exact tests above: true only if the closed triangle and the closed
+// tet are disjoint, seen as a facet plane of the tet with the whole triangle strictly beyond it
+// or the triangle's plane with the whole tet strictly on one side, in interval arithmetic on
+// enclosures of the snapped corners. False when that is not certain (the exact tests decide).
+// Most candidates of a box query are apart by a facet plane, and this costs a few interval
 // determinants where the exact tests expand every snapped corner into double determinants.
-int exact_triangle_tet_certain(const std::array<ExactPoint, 3>& tri,
-                               const std::array<Eigen::Vector3d, 4>& tet);
+bool exact_triangle_certainly_apart(const std::array<ExactPoint, 3>& tri,
+                                    const std::array<Eigen::Vector3d, 4>& tet);
 
 class InputSurfaceIndex {
  public:
