@@ -496,45 +496,6 @@ bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::a
         if (q.p == c) return true;
   return meets_tet<true>(tri, tet);
 }
-bool exact_triangle_certainly_apart(const std::array<ExactPoint, 3>& tri,
-                                    const std::array<V3, 4>& tet) {
-  using I = CGAL::Interval_nt<false>;
-  using P = std::array<I, 3>;
-  CGAL::Protect_FPU_rounding<true> guard;
-  std::array<P, 3> q;
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k)
-      q[std::size_t(i)][std::size_t(k)] = coord<I>(tri[std::size_t(i)], k);
-  std::array<P, 4> c;
-  for (int j = 0; j < 4; ++j)
-    for (int k = 0; k < 3; ++k) c[std::size_t(j)][std::size_t(k)] = I(tet[std::size_t(j)][k]);
-  auto minus = [](const P& x, const P& y) { return P{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
-  auto det = [](const P& u, const P& v, const P& w) {
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-           u[2] * (v[0] * w[1] - v[1] * w[0]);
-  };
-  auto sign = [](const I& x) { return x.inf() > 0 ? 1 : (x.sup() < 0 ? -1 : 0); };
-  for (const auto& f : k_tet_facets) {
-    const P& a = c[std::size_t(f[0])];
-    const P u = minus(c[std::size_t(f[1])], a), v = minus(c[std::size_t(f[2])], a);
-    const int inside = sign(det(u, v, minus(c[std::size_t(f[3])], a)));
-    if (inside == 0) continue;
-    bool beyond = true;
-    for (const P& x : q)
-      if (sign(det(u, v, minus(x, a))) != -inside) {
-        beyond = false;
-        break;
-      }
-    if (beyond) return true;
-  }
-  const P u = minus(q[1], q[0]), v = minus(q[2], q[0]);
-  const int first = sign(det(u, v, minus(c[0], q[0])));
-  if (first == 0) return false;
-  for (std::size_t j = 1; j < 4; ++j)
-    if (sign(det(u, v, minus(c[j], q[0]))) != first) return false;
-  return true;
-}
-
 bool exact_triangles_meet(const std::array<ExactPoint, 3>& a, const std::array<V3, 3>& b) {
   return triangles_meet_closed(a, b);
 }
@@ -1133,8 +1094,7 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
     const CGAL::Bbox_3 fb = m_impl->face_box(f);
     const auto tri = m_impl->exact_face(f);
     for (std::size_t i = 0; i < T.size(); ++i)
-      if (CGAL::do_overlap(fb, tb[i]) && !exact_triangle_certainly_apart(tri, tets[i]) &&
-          exact_triangle_meets_tet(tri, tets[i])) {
+      if (CGAL::do_overlap(fb, tb[i]) && exact_triangle_meets_tet(tri, tets[i])) {
         out.push_back(f);
         break;
       }
@@ -1198,20 +1158,14 @@ std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) c
 }
 
 bool InputSurfaceIndex::face_touches_tet(int f, const std::array<Eigen::Vector3d, 4>& t) const {
-  if (m_impl->is_moved(f)) {
-    const auto tri = m_impl->exact_face(f);
-    return !exact_triangle_certainly_apart(tri, t) && exact_triangle_meets_tet(tri, t);
-  }
+  if (m_impl->is_moved(f)) return exact_triangle_meets_tet(m_impl->exact_face(f), t);
   const K::Tetrahedron_3 tet(pt(t[0]), pt(t[1]), pt(t[2]), pt(t[3]));
   const Triangle& tri = m_impl->triangles[std::size_t(f)];
   return !strictly_separated(tri, tet) && CGAL::do_intersect(tri, tet);
 }
 
 bool InputSurfaceIndex::face_section_contact(int f, const std::array<Eigen::Vector3d, 4>& t) const {
-  if (m_impl->is_moved(f)) {  // closed sets apart: no contact with the open tet or facets
-    const auto tri = m_impl->exact_face(f);
-    return !exact_triangle_certainly_apart(tri, t) && exact_section_contact(tri, t);
-  }
+  if (m_impl->is_moved(f)) return exact_section_contact(m_impl->exact_face(f), t);
   return triangle_section_contact(face_triangle(f), t);
 }
 

@@ -92,14 +92,6 @@ int exact_normal_dot_sign(const std::array<ExactPoint, 3>& tri, const Eigen::Vec
                           const Eigen::Vector3d& to);
 // Are the three points collinear (exact)?
 bool exact_collinear(const std::array<ExactPoint, 3>& tri);
-// A sound filter before the exact tests above: true only if the closed triangle and the closed
-// tet are disjoint, seen as a facet plane of the tet with the whole triangle strictly beyond it
-// or the triangle's plane with the whole tet strictly on one side, in interval arithmetic on
-// enclosures of the snapped corners. False when that is not certain (the exact tests decide).
-// Most candidates of a box query are apart by a facet plane, and this costs a few interval
-// determinants where the exact tests expand every snapped corner into double determinants.
-bool exact_triangle_certainly_apart(const std::array<ExactPoint, 3>& tri,
-                                    const std::array<Eigen::Vector3d, 4>& tet);
 
 class InputSurfaceIndex {
  public:
