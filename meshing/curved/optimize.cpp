@@ -486,7 +486,12 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         sum += mips_after[i];
         max = std::max(max, mips_after[i]);
       }
-      accepted = sum <= mips_sum_before && max <= mips_cap;
+      int flat_before = 0, flat_after = 0;
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        flat_before += cells[i].first < options.worst_flat;
+        flat_after += trial_sj[i] < options.worst_flat;
+      }
+      accepted = sum <= mips_sum_before && max <= mips_cap && flat_after <= flat_before;
       for (std::size_t i = 0; i < cells.size() && accepted; ++i)
         accepted = certify_tet_jacobian(k, cell_nodes(mesh, cells[i].second)).verdict ==
                    JacobianVerdict::positive;
