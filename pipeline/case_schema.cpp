@@ -556,17 +556,6 @@ namespace {
 
 using json = nlohmann::json;
 
-std::vector<std::string> components(std::string_view path) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (true) {
-    const auto dot = path.find('.', start);
-    out.emplace_back(path.substr(start, dot == std::string_view::npos ? dot : dot - start));
-    if (dot == std::string_view::npos) return out;
-    start = dot + 1;
-  }
-}
-
 /// One object of a case being resolved: its schema path, the given object (or null) and the
 /// resolved object so far.
 struct Frame {
@@ -701,7 +690,7 @@ class Resolver {
     const std::string_view rest = f->section.empty() ? path : path.substr(f->section.size() + 1);
     const json* out = f->out;
     const json* given = f->given;
-    for (std::string part : components(rest)) {
+    for (std::string part : case_path_components(rest)) {
       if (part.size() > 2 && part.substr(part.size() - 2) == "[]") part.resize(part.size() - 2);
       CF_VERIFY(part.find("[]") == std::string::npos,
                 "a case key rule looks into an array it is not in: " + std::string(path));
@@ -771,6 +760,17 @@ class Resolver {
 };
 
 }  // namespace
+
+std::vector<std::string> case_path_components(std::string_view path) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto dot = path.find('.', start);
+    out.emplace_back(path.substr(start, dot == std::string_view::npos ? dot : dot - start));
+    if (dot == std::string_view::npos) return out;
+    start = dot + 1;
+  }
+}
 
 nlohmann::json resolve_case(
     const nlohmann::json& given, const std::string& file,

@@ -111,6 +111,9 @@ std::string case_schema_markdown();
 /// per key (the rows' documentation repeated for keys documented together).
 nlohmann::json case_schema_json();
 
+/// "boundary_conditions[].select.box" → {"boundary_conditions[]", "select", "box"}.
+std::vector<std::string> case_path_components(std::string_view path);
+
 /// The case `given` (a case file's JSON) resolved by the table: every section and every key that
 /// applies (its rules hold), with its given value (passed through `normalize`, which may rewrite
 /// paths or expressions) or its default (`defaults`, `default_json`, `default_from`, in that

@@ -21,16 +21,7 @@ using json = nlohmann::json;
 
 namespace {
 
-std::vector<std::string> split(std::string_view path) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (true) {
-    const auto dot = path.find('.', start);
-    out.emplace_back(path.substr(start, dot == std::string_view::npos ? dot : dot - start));
-    if (dot == std::string_view::npos) return out;
-    start = dot + 1;
-  }
-}
+std::vector<std::string> split(std::string_view path) { return case_path_components(path); }
 
 /// The value at schema path `path` in `j` (first element of every `[]` array before the last
 /// component; the array itself for a last `[]` component), or nullptr.
