@@ -370,8 +370,9 @@ TEST(CaseSchema, TheRulesNameKeysAndValuesOfTheTable) {
         EXPECT_FALSE(row.default_text.empty()) << k.path << ": document the default";
         EXPECT_TRUE(k.default_json.empty()) << k.path;
       }
-      if (!k.default_from.empty()) {
-        EXPECT_TRUE(order.count(std::string(k.default_from)));
+      if (!k.default_from.empty()) {  // read resolved: it comes first
+        ASSERT_TRUE(order.count(std::string(k.default_from))) << k.path;
+        EXPECT_LT(order[std::string(k.default_from)], order[std::string(k.path)]) << k.path;
       }
     }
   EXPECT_GE(rules, 40);
