@@ -405,8 +405,11 @@ CaseSpec read_case_json(const nlohmann::json& given, const std::filesystem::path
   // default; everything below reads the resolved case, whose keys are the given ones or the
   // table's defaults. Paths resolve against the case's folder, numbers given as expressions
   // become their text.
+  // Paths become absolute: the parser resolves what it reads again (a no-op then), and
+  // resolved_case.json runs from any folder.
   const json j = resolve_case(given, r.file, [&](const CaseKey& k, const json& v) -> json {
-    if (k.type == CaseKeyType::path && v.is_string()) return resolve(v.get<std::string>()).string();
+    if (k.type == CaseKeyType::path && v.is_string())
+      return std::filesystem::absolute(resolve(v.get<std::string>())).string();
     if (k.type == CaseKeyType::expression) return expression_text(v);
     return v;
   });

@@ -483,3 +483,25 @@ TEST(CaseSchema, AKeyIsReadWhereItsRulesHoldAndRefusedWhereOneFails) {
     }
   EXPECT_GE(keys, 30);
 }
+
+// A case file named by a relative path: its relative paths resolve against its folder once
+// (the resolved case holds them absolute, and the parser reads those), as `curvefem run
+// cases/x.json` from the repository root does.
+TEST(CaseSchema, RelativePathsOfACaseNamedRelativelyResolveOnce) {
+  const auto dir = test::scratch_dir("case_schema_relative");
+  std::filesystem::create_directories(dir / "data");
+  std::ofstream(dir / "data" / "s.obj") << "# the parser only checks it exists\n";
+  const auto relative = std::filesystem::relative(dir / "case.json");
+  ASSERT_TRUE(relative.is_relative());
+  const json j = {{"geometry", {{"surface", "data/s.obj"}}}, {"output", {{"dir", "out"}}}};
+  CaseSpec c;
+  ASSERT_NO_THROW(c = read_case_json(j, relative)) << error_of(j);
+  EXPECT_TRUE(std::filesystem::is_regular_file(c.surface)) << c.surface;
+  EXPECT_TRUE(c.surface.is_absolute()) << c.surface;
+  EXPECT_EQ(std::filesystem::weakly_canonical(c.surface),
+            std::filesystem::weakly_canonical(dir / "data" / "s.obj"));
+  EXPECT_EQ(std::filesystem::weakly_canonical(c.resolved["geometry"]["surface"].get<std::string>()),
+            std::filesystem::weakly_canonical(dir / "data" / "s.obj"));
+  EXPECT_EQ(std::filesystem::weakly_canonical(c.output_dir),
+            std::filesystem::weakly_canonical(dir / "out"));
+}
