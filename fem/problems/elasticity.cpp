@@ -244,7 +244,7 @@ void assemble_stiffness(const LagrangeMesh& mesh, const FunctionSpace& space,
 /// cannot be compared: a cache is shared only by solves of one problem's coefficients (as the
 /// pipeline does; the tests' caches are per problem), and a mesh is not changed while a cache
 /// holds its stiffness.
-struct KeptStiffness {
+struct KeptStiffness : KeptOperator {
   const LagrangeMesh* mesh;
   const FunctionSpace* space;
   int cells, dofs, degree, quadrature;
@@ -285,7 +285,7 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   std::shared_ptr<KeptStiffness> kept;
   if (solver.factorization_cache) {
     kept =
-        std::static_pointer_cast<KeptStiffness>(assembly_cache_slot(*solver.factorization_cache));
+        std::dynamic_pointer_cast<KeptStiffness>(assembly_cache_slot(*solver.factorization_cache));
     if (kept && !kept->matches(mesh, space, problem, quadrature)) kept.reset();
   }
   if (kept) {

@@ -22,22 +22,63 @@ double kappa_at(const PoissonProblem& problem, int cell, const Eigen::Vector3d& 
                             : problem.kappa_value;
 }
 
-}  // namespace
+int stiffness_quadrature(const LagrangeMesh& mesh, const FunctionSpace& space,
+                         const PoissonProblem& problem) {
+  return problem.quadrature_degree >= 0 ? problem.quadrature_degree
+                                        : tetrahedron_degree_at_same_cost(default_quadrature_degree(
+                                              space.degree, mesh.order, QuadratureUse::stiffness));
+}
 
-AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
-                                 const PoissonProblem& problem) {
+/// The cell part of K (before the Robin terms), kept in the solver's FactorizationCache for the
+/// next solve on the same mesh, space, quadrature and κ (the shifted values' re-solves, the load
+/// cases of a run). The κ functions cannot be compared: a cache is shared only by solves of one
+/// problem's coefficients, on a mesh not changed meanwhile (as for elasticity's KeptStiffness).
+struct KeptPoissonStiffness : KeptOperator {
+  const LagrangeMesh* mesh = nullptr;
+  const FunctionSpace* space = nullptr;
+  int cells = 0, dofs = 0, degree = 0, quadrature = 0;
+  double kappa_value = 0;
+  bool kappa_field = false, cell_kappa = false;
+  std::shared_ptr<const SparsePattern> pattern;
+  SparseMatrix K;
+  KeptPoissonStiffness(const LagrangeMesh& m, const FunctionSpace& s, const PoissonProblem& p,
+                       int q)
+      : mesh(&m),
+        space(&s),
+        cells(m.num_cells()),
+        dofs(s.num_dofs),
+        degree(s.degree),
+        quadrature(q),
+        kappa_value(p.kappa_value),
+        kappa_field(static_cast<bool>(p.kappa)),
+        cell_kappa(static_cast<bool>(p.cell_kappa)) {}
+  bool matches(const LagrangeMesh& m, const FunctionSpace& s, const PoissonProblem& p,
+               int q) const {
+    return mesh == &m && space == &s && cells == m.num_cells() && dofs == s.num_dofs &&
+           degree == s.degree && quadrature == q && kappa_value == p.kappa_value &&
+           kappa_field == static_cast<bool>(p.kappa) &&
+           cell_kappa == static_cast<bool>(p.cell_kappa);
+  }
+};
+
+/// assemble_poisson, taking the cell part of K from `kept_in` (then only F is assembled over the
+/// cells) or leaving a copy of it, with its pattern, in `kept_out`.
+AssembledSystem assemble_poisson_kept(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                      const PoissonProblem& problem,
+                                      const KeptPoissonStiffness* kept_in,
+                                      KeptPoissonStiffness* kept_out) {
   const int p = space.degree;
-  const int degree = problem.quadrature_degree >= 0
-                         ? problem.quadrature_degree
-                         : tetrahedron_degree_at_same_cost(
-                               default_quadrature_degree(p, mesh.order, QuadratureUse::stiffness));
+  const int degree = stiffness_quadrature(mesh, space, problem);
   const QuadratureRule& rule = tetrahedron_quadrature(degree);
   const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);
   const int n = static_cast<int>(space.cell_dofs.cols());
-  const SparsePattern pattern(space.cell_dofs, space.num_dofs, 1);
+  const bool with_matrix = kept_in == nullptr;
+  const std::shared_ptr<const SparsePattern> pattern =
+      kept_in ? kept_in->pattern
+              : std::make_shared<const SparsePattern>(space.cell_dofs, space.num_dofs, 1);
   AssembledSystem system;
-  system.K = pattern.zero_matrix();
+  system.K = kept_in ? kept_in->K : pattern->zero_matrix();
   system.F = Eigen::VectorXd::Zero(space.num_dofs);
 
   const int nq = geometry.num_points();
@@ -74,6 +115,7 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
         Fe.noalias() +=
             (g.det_w[q] * problem.rhs(g.x.row(q).transpose())) * basis.values.row(q).transpose();
     }
+    if (!with_matrix) return;
     if (tensor) {
       const Eigen::Matrix3d& Ji = g.jacobian_inv[0];
       const Eigen::Matrix3d C = Ji * Ji.transpose();
@@ -94,8 +136,12 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
     }
     Ke.noalias() = Gw * G.transpose();  // Σ_q κ det J w ∇φ ∇φᵀ as one matrix product
   };
-  assemble_cells(mesh.num_cells(), n, kernel, pattern, space.cell_dofs, 1, system.K.valuePtr(),
-                 &system.F);
+  assemble_cells(mesh.num_cells(), n, kernel, *pattern, space.cell_dofs, 1,
+                 with_matrix ? system.K.valuePtr() : nullptr, &system.F);
+  if (kept_out) {
+    kept_out->pattern = pattern;
+    kept_out->K = system.K;
+  }
 
   system.F_volume = system.F;
   system.rhs_integral = system.F.sum();
@@ -149,6 +195,13 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
   return system;
 }
 
+}  // namespace
+
+AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,
+                                 const PoissonProblem& problem) {
+  return assemble_poisson_kept(mesh, space, problem, nullptr, nullptr);
+}
+
 namespace {
 
 /// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F.
@@ -191,7 +244,25 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
   AssembledSystem system;
   {
     ScopedTimer t(result.timings, "assembly");
-    system = assemble_poisson(mesh, space, problem);
+    // The cell stiffness kept by an earlier solve sharing the solver's cache, if it is this one's.
+    const int quadrature = stiffness_quadrature(mesh, space, problem);
+    std::shared_ptr<KeptPoissonStiffness> kept;
+    if (solver.factorization_cache) {
+      kept = std::dynamic_pointer_cast<KeptPoissonStiffness>(
+          assembly_cache_slot(*solver.factorization_cache));
+      if (kept && !kept->matches(mesh, space, problem, quadrature)) kept.reset();
+    }
+    if (kept) {
+      count_assembly(*solver.factorization_cache, true);
+      system = assemble_poisson_kept(mesh, space, problem, kept.get(), nullptr);
+    } else if (solver.factorization_cache) {
+      kept = std::make_shared<KeptPoissonStiffness>(mesh, space, problem, quadrature);
+      system = assemble_poisson_kept(mesh, space, problem, nullptr, kept.get());
+      assembly_cache_slot(*solver.factorization_cache) = kept;
+      count_assembly(*solver.factorization_cache, false);
+    } else {
+      system = assemble_poisson(mesh, space, problem);
+    }
   }
   const Eigen::VectorXd load = system.F;  // l(v) before the Nitsche terms join F
   std::vector<DirichletFaceSplit> splits;

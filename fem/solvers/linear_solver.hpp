@@ -33,8 +33,8 @@ namespace curvefem::fem {
 /// solves (load cases of one run): the next matrix handed to the same engine with the cache is
 /// checked against the kept one bit for bit (sizes, pattern and values); the factor / set-up is
 /// reused when they are identical and recomputed (and kept) otherwise. A problem may also keep
-/// its assembled operator here (linear elasticity: the stiffness before Dirichlet data, see
-/// fem/problems/elasticity.hpp), so that the solves sharing the cache assemble it once. Not
+/// its assembled operator here (linear elasticity and Poisson: the stiffness before boundary
+/// terms), so that the solves sharing the cache assemble it once. Not
 /// thread-safe: one cache per sequence of solves.
 class FactorizationCache {
  public:
@@ -136,8 +136,13 @@ Eigen::VectorXd solve_petsc_cg(const SparseMatrix& A, const Eigen::VectorXd& b,
 bool identical_matrices(const SparseMatrix& a, const SparseMatrix& b);
 std::shared_ptr<void>& petsc_cache_slot(FactorizationCache& cache);
 void count_cache_use(FactorizationCache& cache, bool reused);
-/// The problem's slot (type-erased: the problem's own state) and its counters.
-std::shared_ptr<void>& assembly_cache_slot(FactorizationCache& cache);
+/// What a problem keeps in a FactorizationCache: its assembled operator, in a type of its own
+/// derived from this (read back with dynamic_pointer_cast, so another problem's is never
+/// mistaken for it). The slot and its counters:
+struct KeptOperator {
+  virtual ~KeptOperator() = default;
+};
+std::shared_ptr<KeptOperator>& assembly_cache_slot(FactorizationCache& cache);
 void count_assembly(FactorizationCache& cache, bool reused);
 
 }  // namespace curvefem::fem

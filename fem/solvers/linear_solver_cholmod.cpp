@@ -18,7 +18,7 @@ struct FactorizationCache::Impl {
   // CG + GAMG: the KSP set up for an earlier matrix (linear_solver_petsc.cpp), kept with what it
   // was set up for; type-erased so this file needs no PETSc header.
   std::shared_ptr<void> ksp;
-  std::shared_ptr<void> assembled;  // a problem's operator (assembly_cache_slot)
+  std::shared_ptr<KeptOperator> assembled;  // a problem's operator (assembly_cache_slot)
   int assemblies = 0, assembly_reuses = 0;
 };
 
@@ -26,7 +26,7 @@ std::shared_ptr<void>& petsc_cache_slot(FactorizationCache& cache) { return cach
 void count_cache_use(FactorizationCache& cache, bool reused) {
   ++(reused ? cache.impl().reuses : cache.impl().factorizations);
 }
-std::shared_ptr<void>& assembly_cache_slot(FactorizationCache& cache) {
+std::shared_ptr<KeptOperator>& assembly_cache_slot(FactorizationCache& cache) {
   return cache.impl().assembled;
 }
 void count_assembly(FactorizationCache& cache, bool reused) {

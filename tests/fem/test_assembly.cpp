@@ -123,3 +123,38 @@ TEST(Solvers, FactorizationCacheReusesTheFactorOfAnIdenticalMatrix) {
   EXPECT_FALSE(d.solve.reused_factorization);  // the failed one was not kept, nor the one before
   EXPECT_EQ(d.u, a.u);
 }
+
+// Poisson solves sharing a FactorizationCache take the kept cell stiffness and assemble only
+// their loads: bit-identical to fresh solves, Robin terms (added after the cells) included once;
+// another κ assembles again.
+TEST(Solvers, PoissonSolvesSharingACacheAssembleTheStiffnessOnce) {
+  const LagrangeMesh mesh = wobbly_cube(3, 2);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  auto problem = [&](double load, double kappa) {
+    fem::PoissonProblem p;
+    p.kappa_value = kappa;
+    p.rhs = [load](const Eigen::Vector3d& x) { return load * (1 + x[0]); };
+    std::vector<char> dirichlet(space.boundary_faces.size(), 1), robin(dirichlet.size(), 0);
+    for (std::size_t f = 0; f < dirichlet.size(); f += 3) std::swap(dirichlet[f], robin[f]);
+    p.dirichlet.push_back(
+        {dirichlet, [load](const Eigen::Vector3d& x) { return load * x[1]; }, {}});
+    p.robin.push_back({robin,
+                       [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return 2.0; },
+                       [](const Eigen::Vector3d& x, const Eigen::Vector3d&) { return x[2]; },
+                       {}});
+    return p;
+  };
+  fem::LinearSolverOptions fresh;
+  fresh.type = fem::SolverType::direct;
+  fem::LinearSolverOptions cached = fresh;
+  cached.factorization_cache = std::make_shared<fem::FactorizationCache>();
+  const auto a = fem::solve_poisson(mesh, space, problem(1.0, 1.5), cached);
+  const auto b = fem::solve_poisson(mesh, space, problem(2.5, 1.5), cached);
+  EXPECT_EQ(cached.factorization_cache->assemblies(), 1);
+  EXPECT_EQ(cached.factorization_cache->assembly_reuses(), 1);
+  EXPECT_EQ(a.u, fem::solve_poisson(mesh, space, problem(1.0, 1.5), fresh).u);
+  EXPECT_EQ(b.u, fem::solve_poisson(mesh, space, problem(2.5, 1.5), fresh).u);
+  const auto c = fem::solve_poisson(mesh, space, problem(1.0, 3.0), cached);  // another κ
+  EXPECT_EQ(c.u, fem::solve_poisson(mesh, space, problem(1.0, 3.0), fresh).u);
+  EXPECT_EQ(cached.factorization_cache->assemblies(), 2);
+}
