@@ -11,6 +11,7 @@
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
 #include "fem/problems/constraints.hpp"
+#include "fem/problems/kept_operator.hpp"
 #include "fem/problems/nitsche.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
 #include "meshing/core/error.hpp"
@@ -245,28 +246,20 @@ void assemble_stiffness(const LagrangeMesh& mesh, const FunctionSpace& space,
 /// pipeline does; the tests' caches are per problem), and a mesh is not changed while a cache
 /// holds its stiffness.
 struct KeptStiffness : KeptOperator {
-  const LagrangeMesh* mesh;
-  const FunctionSpace* space;
-  int cells, dofs, degree, quadrature;
+  KeptDiscretization on;
   ElasticMaterial material;
   bool per_cell;
   std::shared_ptr<const Setup> setup;
   SparseMatrix K;
   KeptStiffness(const LagrangeMesh& m, const FunctionSpace& s, const ElasticityProblem& problem,
                 int q)
-      : mesh(&m),
-        space(&s),
-        cells(m.num_cells()),
-        dofs(s.num_dofs),
-        degree(s.degree),
-        quadrature(q),
+      : on(m, s, q),
         material(problem.material),
         per_cell(static_cast<bool>(problem.cell_material)),
         setup(std::make_shared<const Setup>(m, s, q)) {}
   bool matches(const LagrangeMesh& m, const FunctionSpace& s, const ElasticityProblem& problem,
                int q) const {
-    return mesh == &m && space == &s && cells == m.num_cells() && dofs == s.num_dofs &&
-           degree == s.degree && quadrature == q && material.E == problem.material.E &&
+    return on.same(m, s, q) && material.E == problem.material.E &&
            material.nu == problem.material.nu &&
            per_cell == static_cast<bool>(problem.cell_material);
   }

@@ -6,6 +6,7 @@
 #include "fem/assembly/face_integration.hpp"
 #include "fem/assembly/parallel_assembly.hpp"
 #include "fem/problems/constraints.hpp"
+#include "fem/problems/kept_operator.hpp"
 #include "fem/problems/nitsche.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
 #include "meshing/core/error.hpp"
@@ -34,28 +35,20 @@ int stiffness_quadrature(const LagrangeMesh& mesh, const FunctionSpace& space,
 /// cases of a run). The κ functions cannot be compared: a cache is shared only by solves of one
 /// problem's coefficients, on a mesh not changed meanwhile (as for elasticity's KeptStiffness).
 struct KeptPoissonStiffness : KeptOperator {
-  const LagrangeMesh* mesh = nullptr;
-  const FunctionSpace* space = nullptr;
-  int cells = 0, dofs = 0, degree = 0, quadrature = 0;
-  double kappa_value = 0;
-  bool kappa_field = false, cell_kappa = false;
+  KeptDiscretization on;
+  double kappa_value;
+  bool kappa_field, cell_kappa;
   std::shared_ptr<const SparsePattern> pattern;
   SparseMatrix K;
   KeptPoissonStiffness(const LagrangeMesh& m, const FunctionSpace& s, const PoissonProblem& p,
                        int q)
-      : mesh(&m),
-        space(&s),
-        cells(m.num_cells()),
-        dofs(s.num_dofs),
-        degree(s.degree),
-        quadrature(q),
+      : on(m, s, q),
         kappa_value(p.kappa_value),
         kappa_field(static_cast<bool>(p.kappa)),
         cell_kappa(static_cast<bool>(p.cell_kappa)) {}
   bool matches(const LagrangeMesh& m, const FunctionSpace& s, const PoissonProblem& p,
                int q) const {
-    return mesh == &m && space == &s && cells == m.num_cells() && dofs == s.num_dofs &&
-           degree == s.degree && quadrature == q && kappa_value == p.kappa_value &&
+    return on.same(m, s, q) && kappa_value == p.kappa_value &&
            kappa_field == static_cast<bool>(p.kappa) &&
            cell_kappa == static_cast<bool>(p.cell_kappa);
   }
