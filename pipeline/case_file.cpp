@@ -19,6 +19,21 @@ using json = nlohmann::json;
   throw InputError((path.empty() ? std::string("/") : path) + ": " + what, {.file = file});
 }
 
+/// An expression value as resolved_case.json writes it: a number becomes its text (17 digits, as
+/// Reader::expression reads it), arrays element by element; anything else is left to the parser.
+json expression_text(const json& v) {
+  if (v.is_number()) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v.get<double>();
+    return s.str();
+  }
+  if (!v.is_array()) return v;
+  json out = json::array();
+  for (const json& e : v) out.push_back(expression_text(e));
+  return out;
+}
+
 struct Reader {
   std::string file;
 
@@ -55,12 +70,7 @@ struct Reader {
   }
   /// An expression: a string or a number; `normal`: whether nx, ny, nz may appear.
   Expression expression(const json& j, const std::string& path, bool normal = false) const {
-    if (j.is_number()) {
-      std::ostringstream s;
-      s.precision(17);
-      s << j.get<double>();
-      return Expression(s.str(), path);
-    }
+    if (j.is_number()) return Expression(expression_text(j).get<std::string>(), path);
     if (!j.is_string()) fail(path, "expected an expression (string or number)", file);
     try {
       return Expression(j.get<std::string>(), path, normal);
@@ -133,21 +143,6 @@ struct Reader {
     return p;
   }
 };
-
-/// An expression value as resolved_case.json writes it: a number becomes its text (17 digits, as
-/// Reader::expression reads it), arrays element by element; anything else is left to the parser.
-json expression_text(const json& v) {
-  if (v.is_number()) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v.get<double>();
-    return s.str();
-  }
-  if (!v.is_array()) return v;
-  json out = json::array();
-  for (const json& e : v) out.push_back(expression_text(e));
-  return out;
-}
 
 Eigen::Vector3d nonzero_vector(const Reader& r, const json& j, const std::string& path) {
   const Eigen::Vector3d d = r.point(j, path);

@@ -292,7 +292,8 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
     }
   }
   const Setup& setup = *kept->setup;
-  SparseMatrix K = kept->K;
+  // A copy where the cache keeps it for the next solve; otherwise the assembled matrix itself.
+  SparseMatrix K = solver.factorization_cache ? kept->K : std::move(kept->K);
   Eigen::VectorXd body;
   Eigen::VectorXd F = external_load(mesh, space, problem, setup, &body);
   const Eigen::VectorXd load = F;  // l(v) before the Nitsche terms join F
