@@ -1,11 +1,14 @@
 // `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--remesh-section L]
-// [--threads N]`: builds the prismatic shell of a closed surface (meshing/shell), verifies it with
-// independent code and writes shell.vtu (prisms as VTK_WEDGE, cell data `half`: 0 base→mid,
-// 1 mid→top, `input_face`), middle.obj and report.json. Without --no-simplify the shell is
-// coarsened by collapses that keep it positive, a section of the input and separated from it
-// (meshing/shell/simplify.hpp). With --remesh-section the middle surface is also remeshed
-// isotropically as a section of the shell (meshing/shell/section_remesh.hpp) into remeshed.obj,
-// and the roundtrip input → remeshed → input of a smooth field through P is reported.
+// [--displacement-map L] [--threads N]`: builds the prismatic shell of a closed surface
+// (meshing/shell), verifies it with independent code and writes shell.vtu (prisms as VTK_WEDGE,
+// cell data `half`: 0 base→mid, 1 mid→top, `input_face`), middle.obj and report.json. Without
+// --no-simplify the shell is coarsened by collapses that keep it positive, a section of the input
+// and separated from it (meshing/shell/simplify.hpp). With --remesh-section the middle surface is
+// also remeshed isotropically as a section of the shell (meshing/shell/section_remesh.hpp) into
+// remeshed.obj, and the roundtrip input → remeshed → input of a smooth field through P is reported.
+// With
+// --displacement-map a displacement map is baked through P (meshing/shell/displacement_map.hpp)
+// and the surface it rebuilds is checked against the input and against normal projection.
 // Where the input's own shell is not a section, the input is first refined by topological
 // beveling (meshing/shell/bevel.hpp; same geometry) and the shell built, simplified and verified
 // on the refined surface; `input_face` in shell.vtu still names faces of the input.
@@ -16,12 +19,17 @@
 #include <sstream>
 #include <string>
 
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/check/surface_distance.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/shell/bevel.hpp"
+#include "meshing/shell/displacement_map.hpp"
 #include "meshing/shell/projection.hpp"
+#include "meshing/shell/section.hpp"
 #include "meshing/shell/section_remesh.hpp"
 #include "meshing/shell/section_transfer.hpp"
 #include "meshing/shell/shell.hpp"
@@ -41,6 +49,7 @@ struct ShellArgs {
   bool no_simplify = false;
   double remesh_section = 0;  // target edge relative to the longest bbox edge; 0: no remeshing
   double zoom = 0.1;
+  int displacement_level = 0;  // --displacement-map L; 0: none
   GlobalOptions global;
 };
 
@@ -126,6 +135,86 @@ nlohmann::ordered_json run_section_remesh(const sh::Shell& shell, const SurfaceM
   return j;
 }
 
+// --displacement-map L: bakes the heights through P (meshing/shell/displacement_map.hpp), writes
+// displacement_map.txt, cage.obj (base, middle and top vertices in this order, the middle faces)
+// and displaced.obj (the rebuilt surface), and checks the rebuilt surface with code independent
+// of P: distance of its vertices to the input and a sampled Hausdorff distance (CGAL AABB),
+// self-intersections (exact), and is_section (exact). The same subdivision displaced along the
+// interpolated normals of the middle surface is measured beside it.
+nlohmann::ordered_json run_displacement_map(const sh::Shell& shell, const SurfaceMesh& input,
+                                            int level, const StagedOutputDir& out) {
+  const double unit = bbox_longest_edge(input.V);
+  Stopwatch clock;
+  const sh::ShellProjection onto_input(shell, input);
+  const sh::DisplacementMap map = sh::bake_displacement_map(onto_input, level);
+  const double bake_s = clock.seconds();
+  sh::write_displacement_map(out.path("displacement_map.txt").string(), map);
+  // What a user stores and reads back: the map from its file, the cage from cage.obj's numbers.
+  const sh::DisplacementMap stored =
+      sh::read_displacement_map(out.path("displacement_map.txt").string());
+  const sh::Reconstruction rebuilt = sh::reconstruct(shell, stored);
+  io::write_surface(out.path("displaced.obj"), rebuilt.mesh, io::SurfaceFormat::obj);
+  const double rebuild_s = clock.seconds() - bake_s;
+  auto measure = [&](const SurfaceMesh& m) {
+    const Eigen::VectorXd on = check::distances_to_surface(m.V, input.V, input.F);
+    const check::HausdorffEstimate h = check::sampled_hausdorff(m.V, m.F, input.V, input.F);
+    const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
+    const int pairs = int(check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
+    int degenerate_faces = 0;
+    for (char d : degenerate) degenerate_faces += d;
+    const sh::SectionCheck section = sh::check_section(onto_input, m);
+    return nlohmann::ordered_json{{"is_section", section.is_section()},
+                                  {"section_check",
+                                   {{"manifold", section.manifold},
+                                    {"vertices_outside", section.vertices_outside},
+                                    {"faces_crossing_cage", section.faces_crossing_cage},
+                                    {"faces_not_transversal", section.faces_not_transversal},
+                                    {"degree_failures", section.degree_failures}}},
+                                  {"self_intersecting_pairs", pairs},
+                                  {"degenerate_faces", degenerate_faces},
+                                  {"max_vertex_distance_rel", on.maxCoeff() / unit},
+                                  {"hausdorff_rel", h.symmetric() / unit},
+                                  {"to_input_max_rel", h.a_to_b / unit},
+                                  {"from_input_max_rel", h.b_to_a / unit},
+                                  {"to_input_mean_rel", h.mean_a_to_b / unit}};
+  };
+  nlohmann::ordered_json j = {{"level", level},
+                              {"coarse_faces", int(shell.F.rows())},
+                              {"samples", int(map.h.size())},
+                              {"failures", map.failures},
+                              {"rebuilt_vertices", rebuilt.mesh.num_vertices()},
+                              {"rebuilt_faces", rebuilt.mesh.num_faces()}};
+  j["rebuilt"] = measure(rebuilt.mesh);
+  const sh::FiberCheck fibers = sh::check_on_fibers(onto_input, stored, rebuilt);
+  j["rebuilt"]["vertices_not_located"] = fibers.not_located;
+  j["rebuilt"]["fiber_offset_max_rel"] = fibers.max_offset / unit;
+  const double check_s = clock.seconds() - bake_s - rebuild_s;
+  int missed = 0;
+  double reach = 0;
+  for (Eigen::Index v = 0; v < shell.mid.rows(); ++v)
+    reach = std::max({reach, (shell.top.row(v) - shell.mid.row(v)).norm(),
+                      (shell.base.row(v) - shell.mid.row(v)).norm()});
+  const sh::Reconstruction normals =
+      sh::reconstruct_along_normals(shell, input, level, 2 * reach, &missed);
+  j["along_normals"] = measure(normals.mesh);
+  j["along_normals"]["reach_rel"] = 2 * reach / unit;
+  j["along_normals"]["missed"] = missed;
+  j["time_s"] = {
+      {"bake", bake_s}, {"rebuild", rebuild_s}, {"checks", check_s}, {"total", clock.seconds()}};
+  return j;
+}
+
+// cage.obj: the shell's base, middle and top vertices (in that order, #V each) and the middle
+// surface's faces: with displacement_map.txt all the rebuilt surface needs.
+void write_cage(const std::filesystem::path& path, const sh::Shell& shell) {
+  SurfaceMesh cage;
+  const Eigen::Index n = shell.mid.rows();
+  cage.V.resize(3 * n, 3);
+  cage.V << shell.base, shell.mid, shell.top;
+  cage.F = shell.F.array() + int(n);
+  io::write_surface(path, cage, io::SurfaceFormat::obj);
+}
+
 }  // namespace
 
 void register_shell(CLI::App& app) {
@@ -147,6 +236,10 @@ void register_shell(CLI::App& app) {
                   "simplification may grow each half-pillar up to this length, relative to the "
                   "longest bbox edge (0: never grow)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--displacement-map", args->displacement_level,
+                  "bake a displacement map of this level (samples per coarse face edge) through "
+                  "P: writes displacement_map.txt, cage.obj and the rebuilt displaced.obj")
+      ->check(CLI::Range(1, 64));
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
@@ -169,14 +262,19 @@ void register_shell(CLI::App& app) {
       stats.stage_seconds.emplace_back("simplify", simplify.seconds);
     }
     const sh::ShellVerification check = sh::verify_shell(shell, surface);
+    StagedOutputDir out(args->output);
     SurfaceMesh remeshed;
     nlohmann::ordered_json section_remesh = nullptr;
     if (args->remesh_section > 0)
       section_remesh =
           run_section_remesh(shell, surface, args->remesh_section, args->global.threads, remeshed);
+    nlohmann::ordered_json displacement = nullptr;
+    if (args->displacement_level > 0) {
+      displacement = run_displacement_map(shell, surface, args->displacement_level, out);
+      write_cage(out.path("cage.obj"), shell);
+    }
     sh::restore_input_ids(shell, beveled.surface);
 
-    StagedOutputDir out(args->output);
     write_wedges(out.path("shell.vtu"), shell);
     SurfaceMesh middle;
     middle.V = shell.mid;
@@ -236,6 +334,7 @@ void register_shell(CLI::App& app) {
         {"time_s", stages},
         {"peak_rss_mb", peak_rss_mb()}};
     if (args->remesh_section > 0) report["section_remesh"] = section_remesh;
+    if (args->displacement_level > 0) report["displacement_map"] = displacement;
     report["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
@@ -257,8 +356,31 @@ void register_shell(CLI::App& app) {
                std::to_string(section_remesh["field_roundtrip_max_error"].get<double>());
       std::printf("section remesh: %s\n", line.c_str());
     }
+    bool displacement_ok = true;
+    if (args->displacement_level > 0) {
+      const auto& d = displacement;
+      displacement_ok = d["failures"].get<int>() == 0 &&
+                        d["rebuilt"]["vertices_not_located"].get<int>() == 0 &&
+                        d["rebuilt"]["fiber_offset_max_rel"].get<double>() <= 1e-9 &&
+                        d["rebuilt"]["max_vertex_distance_rel"].get<double>() <= 1e-12;
+      std::printf(
+          "displacement map: level %d, %d samples, %d missed, every rebuilt vertex on its fiber "
+          "and on the input: %s; rebuilt %d faces, %d self-intersecting pairs, Hausdorff %.3g of "
+          "bbox (along normals: %d pairs, %.3g)\n",
+          args->displacement_level, d["samples"].get<int>(), d["failures"].get<int>(),
+          displacement_ok ? "yes" : "NO", d["rebuilt_faces"].get<int>(),
+          d["rebuilt"]["self_intersecting_pairs"].get<int>(),
+          d["rebuilt"]["hausdorff_rel"].get<double>(),
+          d["along_normals"]["self_intersecting_pairs"].get<int>(),
+          d["along_normals"]["hausdorff_rel"].get<double>());
+      if (d["rebuilt"]["self_intersecting_pairs"].get<int>() > 0)
+        log::warn("displacement map: the rebuilt surface has ",
+                  d["rebuilt"]["self_intersecting_pairs"].get<int>(),
+                  " self-intersecting face pairs: chords between samples across a fold of the "
+                  "input; the samples themselves map one to one");
+    }
     std::fflush(stdout);
-    return check.positive() && check.separated() && remesh_ok ? 0 : 3;
+    return check.positive() && check.separated() && remesh_ok && displacement_ok ? 0 : 3;
   });
 }
 
