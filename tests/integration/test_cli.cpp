@@ -316,6 +316,37 @@ TEST(Cli, ShellDisplacementMapRebuildsTheInputFromTheCageAndTheMap) {
   EXPECT_LT((rebuilt.mesh.V - displaced.V).cwiseAbs().maxCoeff(), 1e-15);
 }
 
+TEST(Cli, ShellNestedCagesAreWrittenCheckedAndReported) {
+  const auto dir = test::scratch_dir("cli_shell_cages");
+  std::string out;
+  ASSERT_EQ(test::run_command(
+                cli() + " generate split_ring_01 -q -o " + (dir / "ring.obj").string(), &out),
+            0)
+      << out;
+  ASSERT_EQ(test::run_command(cli() + " shell -q " + (dir / "ring.obj").string() + " -o " +
+                                  (dir / "out").string() + " --cages 2 --threads 1",
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "out" / "report.json");
+  const auto& c = r["nested_cages"];
+  EXPECT_EQ(c["layers"], 2);
+  EXPECT_EQ(c["intersecting_pairs_between_layers"], 0);
+  EXPECT_EQ(c["between_layers"].size(), 3u);  // (input, 1), (input, 2), (1, 2)
+  ASSERT_EQ(c["per_layer"].size(), 2u);
+  for (const auto& l : c["per_layer"]) {
+    EXPECT_EQ(l["shell_verified"], true);
+    EXPECT_EQ(l["self_intersecting_pairs"], 0);
+    EXPECT_NEAR(l["winding_number_of_layer_inside"].get<double>(), 1.0, 1e-9);
+    EXPECT_GT(l["min_gap_to_layer_inside_rel"].get<double>(), 0.0);
+    EXPECT_EQ(l["map_failures"], 0);
+    EXPECT_LT(l["map_roundtrip_max_rel"].get<double>(), 1e-12);
+    const SurfaceMesh cage = io::read_surface(dir / "out" / l["file"].get<std::string>());
+    EXPECT_EQ(cage.num_faces(), l["faces"].get<int>());
+  }
+  EXPECT_GT(c["per_layer"][0]["self_intersecting_pairs_before_shrinking"].get<int>(), 0);
+}
+
 TEST(Cli, ShellReportsBeveling) {
   const auto dir = test::scratch_dir("cli_shell_bevel");
   // The crater of tests/meshing/shell/test_shell_bevel.cpp: its own shell is no section.

@@ -1,5 +1,5 @@
 // `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--remesh-section L]
-// [--displacement-map L] [--threads N]`: builds the prismatic shell of a closed surface
+// [--displacement-map L] [--cages K] [--threads N]`: builds the prismatic shell of a closed surface
 // (meshing/shell), verifies it with independent code and writes shell.vtu (prisms as VTK_WEDGE,
 // cell data `half`: 0 base→mid, 1 mid→top, `input_face`), middle.obj and report.json. Without
 // --no-simplify the shell is coarsened by collapses that keep it positive, a section of the input
@@ -8,7 +8,9 @@
 // remeshed.obj, and the roundtrip input → remeshed → input of a smooth field through P is reported.
 // With
 // --displacement-map a displacement map is baked through P (meshing/shell/displacement_map.hpp)
-// and the surface it rebuilds is checked against the input and against normal projection.
+// and the surface it rebuilds is checked against the input and against normal projection; with
+// --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp) and checked
+// (tools/curvefem/shell_applications.hpp).
 // Where the input's own shell is not a section, the input is first refined by topological
 // beveling (meshing/shell/bevel.hpp; same geometry) and the shell built, simplified and verified
 // on the refined surface; `input_face` in shell.vtu still names faces of the input.
@@ -19,15 +21,12 @@
 #include <sstream>
 #include <string>
 
-#include "meshing/check/self_intersections.hpp"
-#include "meshing/check/surface_distance.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/shell/bevel.hpp"
-#include "meshing/shell/displacement_map.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/section.hpp"
 #include "meshing/shell/section_remesh.hpp"
@@ -37,6 +36,7 @@
 #include "meshing/shell/verify.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
+#include "tools/curvefem/shell_applications.hpp"
 
 namespace curvefem::cli {
 namespace {
@@ -50,6 +50,7 @@ struct ShellArgs {
   double remesh_section = 0;  // target edge relative to the longest bbox edge; 0: no remeshing
   double zoom = 0.1;
   int displacement_level = 0;  // --displacement-map L; 0: none
+  int cages = 0;               // --cages K; 0: none
   GlobalOptions global;
 };
 
@@ -135,86 +136,6 @@ nlohmann::ordered_json run_section_remesh(const sh::Shell& shell, const SurfaceM
   return j;
 }
 
-// --displacement-map L: bakes the heights through P (meshing/shell/displacement_map.hpp), writes
-// displacement_map.txt, cage.obj (base, middle and top vertices in this order, the middle faces)
-// and displaced.obj (the rebuilt surface), and checks the rebuilt surface with code independent
-// of P: distance of its vertices to the input and a sampled Hausdorff distance (CGAL AABB),
-// self-intersections (exact), and is_section (exact). The same subdivision displaced along the
-// interpolated normals of the middle surface is measured beside it.
-nlohmann::ordered_json run_displacement_map(const sh::Shell& shell, const SurfaceMesh& input,
-                                            int level, const StagedOutputDir& out) {
-  const double unit = bbox_longest_edge(input.V);
-  Stopwatch clock;
-  const sh::ShellProjection onto_input(shell, input);
-  const sh::DisplacementMap map = sh::bake_displacement_map(onto_input, level);
-  const double bake_s = clock.seconds();
-  sh::write_displacement_map(out.path("displacement_map.txt").string(), map);
-  // What a user stores and reads back: the map from its file, the cage from cage.obj's numbers.
-  const sh::DisplacementMap stored =
-      sh::read_displacement_map(out.path("displacement_map.txt").string());
-  const sh::Reconstruction rebuilt = sh::reconstruct(shell, stored);
-  io::write_surface(out.path("displaced.obj"), rebuilt.mesh, io::SurfaceFormat::obj);
-  const double rebuild_s = clock.seconds() - bake_s;
-  auto measure = [&](const SurfaceMesh& m) {
-    const Eigen::VectorXd on = check::distances_to_surface(m.V, input.V, input.F);
-    const check::HausdorffEstimate h = check::sampled_hausdorff(m.V, m.F, input.V, input.F);
-    const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
-    const int pairs = int(check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
-    int degenerate_faces = 0;
-    for (char d : degenerate) degenerate_faces += d;
-    const sh::SectionCheck section = sh::check_section(onto_input, m);
-    return nlohmann::ordered_json{{"is_section", section.is_section()},
-                                  {"section_check",
-                                   {{"manifold", section.manifold},
-                                    {"vertices_outside", section.vertices_outside},
-                                    {"faces_crossing_cage", section.faces_crossing_cage},
-                                    {"faces_not_transversal", section.faces_not_transversal},
-                                    {"degree_failures", section.degree_failures}}},
-                                  {"self_intersecting_pairs", pairs},
-                                  {"degenerate_faces", degenerate_faces},
-                                  {"max_vertex_distance_rel", on.maxCoeff() / unit},
-                                  {"hausdorff_rel", h.symmetric() / unit},
-                                  {"to_input_max_rel", h.a_to_b / unit},
-                                  {"from_input_max_rel", h.b_to_a / unit},
-                                  {"to_input_mean_rel", h.mean_a_to_b / unit}};
-  };
-  nlohmann::ordered_json j = {{"level", level},
-                              {"coarse_faces", int(shell.F.rows())},
-                              {"samples", int(map.h.size())},
-                              {"failures", map.failures},
-                              {"rebuilt_vertices", rebuilt.mesh.num_vertices()},
-                              {"rebuilt_faces", rebuilt.mesh.num_faces()}};
-  j["rebuilt"] = measure(rebuilt.mesh);
-  const sh::FiberCheck fibers = sh::check_on_fibers(onto_input, stored, rebuilt);
-  j["rebuilt"]["vertices_not_located"] = fibers.not_located;
-  j["rebuilt"]["fiber_offset_max_rel"] = fibers.max_offset / unit;
-  const double check_s = clock.seconds() - bake_s - rebuild_s;
-  int missed = 0;
-  double reach = 0;
-  for (Eigen::Index v = 0; v < shell.mid.rows(); ++v)
-    reach = std::max({reach, (shell.top.row(v) - shell.mid.row(v)).norm(),
-                      (shell.base.row(v) - shell.mid.row(v)).norm()});
-  const sh::Reconstruction normals =
-      sh::reconstruct_along_normals(shell, input, level, 2 * reach, &missed);
-  j["along_normals"] = measure(normals.mesh);
-  j["along_normals"]["reach_rel"] = 2 * reach / unit;
-  j["along_normals"]["missed"] = missed;
-  j["time_s"] = {
-      {"bake", bake_s}, {"rebuild", rebuild_s}, {"checks", check_s}, {"total", clock.seconds()}};
-  return j;
-}
-
-// cage.obj: the shell's base, middle and top vertices (in that order, #V each) and the middle
-// surface's faces: with displacement_map.txt all the rebuilt surface needs.
-void write_cage(const std::filesystem::path& path, const sh::Shell& shell) {
-  SurfaceMesh cage;
-  const Eigen::Index n = shell.mid.rows();
-  cage.V.resize(3 * n, 3);
-  cage.V << shell.base, shell.mid, shell.top;
-  cage.F = shell.F.array() + int(n);
-  io::write_surface(path, cage, io::SurfaceFormat::obj);
-}
-
 }  // namespace
 
 void register_shell(CLI::App& app) {
@@ -240,6 +161,10 @@ void register_shell(CLI::App& app) {
                   "bake a displacement map of this level (samples per coarse face edge) through "
                   "P: writes displacement_map.txt, cage.obj and the rebuilt displaced.obj")
       ->check(CLI::Range(1, 64));
+  sub->add_option("--cages", args->cages,
+                  "also build this many nested cages around the input (each the top surface of a "
+                  "shell around the one inside it): cage_1.obj ...")
+      ->check(CLI::Range(1, 16));
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
@@ -271,9 +196,18 @@ void register_shell(CLI::App& app) {
     nlohmann::ordered_json displacement = nullptr;
     if (args->displacement_level > 0) {
       displacement = run_displacement_map(shell, surface, args->displacement_level, out);
-      write_cage(out.path("cage.obj"), shell);
     }
     sh::restore_input_ids(shell, beveled.surface);
+    nlohmann::ordered_json cages = nullptr;
+    if (args->cages > 0) {
+      sh::NestedCageOptions co;
+      co.layers = args->cages;
+      co.shell = options;
+      co.simplify = !args->no_simplify;
+      co.zoom_rel = args->zoom;
+      co.threads = options.threads > 0 ? options.threads : 2;
+      cages = run_nested_cages(input, co, out);
+    }
 
     write_wedges(out.path("shell.vtu"), shell);
     SurfaceMesh middle;
@@ -335,6 +269,7 @@ void register_shell(CLI::App& app) {
         {"peak_rss_mb", peak_rss_mb()}};
     if (args->remesh_section > 0) report["section_remesh"] = section_remesh;
     if (args->displacement_level > 0) report["displacement_map"] = displacement;
+    if (args->cages > 0) report["nested_cages"] = cages;
     report["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
@@ -359,10 +294,7 @@ void register_shell(CLI::App& app) {
     bool displacement_ok = true;
     if (args->displacement_level > 0) {
       const auto& d = displacement;
-      displacement_ok = d["failures"].get<int>() == 0 &&
-                        d["rebuilt"]["vertices_not_located"].get<int>() == 0 &&
-                        d["rebuilt"]["fiber_offset_max_rel"].get<double>() <= 1e-9 &&
-                        d["rebuilt"]["max_vertex_distance_rel"].get<double>() <= 1e-12;
+      displacement_ok = displacement_map_ok(d);
       std::printf(
           "displacement map: level %d, %d samples, %d missed, every rebuilt vertex on its fiber "
           "and on the input: %s; rebuilt %d faces, %d self-intersecting pairs, Hausdorff %.3g of "
@@ -379,8 +311,20 @@ void register_shell(CLI::App& app) {
                   " self-intersecting face pairs: chords between samples across a fold of the "
                   "input; the samples themselves map one to one");
     }
+    const bool cages_ok = args->cages <= 0 || nested_cages_ok(cages);
+    if (args->cages > 0) {
+      std::string sizes;
+      for (const auto& l : cages["per_layer"])
+        sizes += (sizes.empty() ? "" : ", ") + std::to_string(l["faces"].get<int>());
+      std::printf(
+          "nested cages: %d layers (%s faces), %d intersecting pairs between layers, "
+          "each embedded, nested and mapped to the input: %s\n",
+          args->cages, sizes.c_str(), cages["intersecting_pairs_between_layers"].get<int>(),
+          cages_ok ? "yes" : "NO");
+    }
     std::fflush(stdout);
-    return check.positive() && check.separated() && remesh_ok && displacement_ok ? 0 : 3;
+    return check.positive() && check.separated() && remesh_ok && displacement_ok && cages_ok ? 0
+                                                                                             : 3;
   });
 }
 

@@ -1,0 +1,98 @@
+// Nested cages (thesis §4.5, Fig. 4.29): the shell is built around the input, its top surface is
+// the first cage, a shell is built around that cage, and so on: increasingly coarse closed
+// surfaces, each strictly outside the one before, with P of each shell mapping a cage
+// bijectively onto the layer inside it (thesis §4.2.8: every point of the top surface lies on
+// exactly one fiber, and every fiber crosses the shell's input exactly once).
+//
+// A simplified shell's top surface may intersect itself where two parts of the surface face each
+// other (legs, handles). As in the thesis, the top pillars of the faces involved are shortened
+// (kept fraction `shrink` per round, toward the middle surface) until the top surface has no
+// self-intersecting pair, and every round is verified: the shell must stay positive, separated
+// from its input and a section (verify_shell). The thesis refines the middle surface where a
+// shrink would break the shell; that refinement is not implemented. Instead the layer is tried
+// again with a less coarsened shell: simplified without thickness growth, then not simplified
+// (its middle surface is the layer inside, which shrinking cannot cross). Only when even that
+// fails does the construction stop, with a MeshingError naming the layer and the pairs left.
+// At a singular vertex of a layer (zero-length pillar) the next cage touches that layer: the
+// thesis fills the shell there (§4.5, pinching alternative); that is not done, and the touching
+// is reported (CageLayer::singular_vertices and the checks of `curvefem shell --cages`).
+//
+// Maps. cage_to_input carries points of cage k + 1, given as a face and barycentric coordinates
+// (a point of the top surface is on the boundary of the shell, where locating a rounded position
+// would be a coin toss), down through the shells k, …, 0: the fiber of (face, u, v) to the
+// layer inside, whose point is again a face and barycentric coordinates of the cage below (of the
+// input at the end). input_to_cage carries input positions up: each lies inside the next shell,
+// is located exactly, and the top end of its fiber (h = 1) is on the next cage. Both compose P
+// and P⁻¹; up(down(x)) = x up to rounding checks that the composition is one to one where it is
+// sampled.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "meshing/core/progress.hpp"
+#include "meshing/core/surface_mesh.hpp"
+#include "meshing/shell/projection.hpp"
+#include "meshing/shell/shell.hpp"
+#include "meshing/shell/simplify.hpp"
+#include "meshing/shell/verify.hpp"
+
+namespace curvefem::meshing::shell {
+
+struct NestedCageOptions {
+  int layers = 3;
+  ShellOptions shell;  ///< each layer's shell (max_thickness_rel relative to that layer's bbox)
+  bool simplify = true;
+  double zoom_rel = 0.1;  ///< SimplifyOptions::zoom, relative to each layer's longest bbox edge
+  int threads = 1;
+  double shrink = 0.8;  ///< fraction of a top half-pillar kept per shrink round
+  int max_shrink_rounds = 40;
+};
+
+struct CageLayer {
+  SurfaceMesh cage;     ///< the top surface of `shell` (its vertices, the shell's faces)
+  SurfaceMesh surface;  ///< what the shell was built on: the layer inside (beveled if needed)
+  /// surface's faces in the layer inside (bevel.hpp's BeveledSurface: identity when not beveled)
+  std::vector<int> surface_face_parent;
+  std::vector<Eigen::Matrix3d> surface_corner_bary;
+  Shell shell;
+  /// Which shell was kept: "simplified", "simplified without growth" (SimplifyOptions::zoom 0) or
+  /// "not simplified", the first whose top surface could be freed of self-intersections.
+  std::string attempt;
+  int singular_vertices = 0;  ///< zero-length pillars: the cage touches the layer inside there
+  int self_intersecting_pairs_before = 0;  ///< the top surface's pairs before shrinking
+  int shrink_rounds = 0;
+  int shrunk_pillars = 0;          ///< top half-pillars shortened at least once
+  ShellVerification verification;  ///< the final shell against `surface`
+  double seconds = 0;
+};
+
+struct NestedCages {
+  SurfaceMesh input;
+  std::vector<CageLayer> layers;  ///< layers[k].cage is cage k + 1; layers[0] is around the input
+  /// One projection per layer (ShellProjection(layers[k].shell, layers[k].surface)).
+  std::vector<std::unique_ptr<ShellProjection>> projections;
+};
+
+/// MeshingError when a layer's top surface cannot be made free of self-intersections by
+/// shrinking (the layer's number and the pairs left), InputError for a bad input.
+NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions& options,
+                               const ProgressFn& progress = {});
+
+/// A point of a triangle mesh: a face and barycentric coordinates in its vertex order.
+struct MeshPoint {
+  int face = -1;
+  Eigen::Vector3d bary{0, 0, 0};
+};
+
+/// Points of cage k + 1 (layers[k].cage) to the input: #P × 3 positions, NaN rows where a step
+/// could not map (counted in *failures).
+Eigen::MatrixXd cage_to_input(const NestedCages& cages, int k, const std::vector<MeshPoint>& points,
+                              int* failures = nullptr);
+/// Points of the input (#P × 3) up to cage k + 1.
+Eigen::MatrixXd input_to_cage(const NestedCages& cages, int k, const Eigen::MatrixXd& points,
+                              int* failures = nullptr);
+
+}  // namespace curvefem::meshing::shell

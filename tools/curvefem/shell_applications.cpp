@@ -1,0 +1,240 @@
+// The shell's applications behind `curvefem shell` options (shell_applications.hpp).
+#include "tools/curvefem/shell_applications.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/check/surface_distance.hpp"
+#include "meshing/core/timer.hpp"
+#include "meshing/io/surface_io.hpp"
+#include "meshing/shell/displacement_map.hpp"
+#include "meshing/shell/projection.hpp"
+#include "meshing/shell/section.hpp"
+
+namespace curvefem::cli {
+namespace {
+
+namespace sh = meshing::shell;
+
+// cage.obj: the shell's base, middle and top vertices (in that order, #V each) and the middle
+// surface's faces: with displacement_map.txt all the rebuilt surface needs.
+void write_cage(const std::filesystem::path& path, const sh::Shell& shell) {
+  SurfaceMesh cage;
+  const Eigen::Index n = shell.mid.rows();
+  cage.V.resize(3 * n, 3);
+  cage.V << shell.base, shell.mid, shell.top;
+  cage.F = shell.F.array() + int(n);
+  io::write_surface(path, cage, io::SurfaceFormat::obj);
+}
+
+}  // namespace
+
+// --displacement-map L: bakes the heights through P (meshing/shell/displacement_map.hpp), writes
+// displacement_map.txt, cage.obj (base, middle and top vertices in this order, the middle faces)
+// and displaced.obj (the rebuilt surface), and checks the rebuilt surface with code independent
+// of P: distance of its vertices to the input and a sampled Hausdorff distance (CGAL AABB),
+// self-intersections (exact), and is_section (exact). The same subdivision displaced along the
+// interpolated normals of the middle surface is measured beside it.
+nlohmann::ordered_json run_displacement_map(const sh::Shell& shell, const SurfaceMesh& input,
+                                            int level, const StagedOutputDir& out) {
+  const double unit = bbox_longest_edge(input.V);
+  Stopwatch clock;
+  const sh::ShellProjection onto_input(shell, input);
+  const sh::DisplacementMap map = sh::bake_displacement_map(onto_input, level);
+  const double bake_s = clock.seconds();
+  sh::write_displacement_map(out.path("displacement_map.txt").string(), map);
+  // What a user stores and reads back: the map from its file, the cage from cage.obj's numbers.
+  const sh::DisplacementMap stored =
+      sh::read_displacement_map(out.path("displacement_map.txt").string());
+  const sh::Reconstruction rebuilt = sh::reconstruct(shell, stored);
+  io::write_surface(out.path("displaced.obj"), rebuilt.mesh, io::SurfaceFormat::obj);
+  write_cage(out.path("cage.obj"), shell);
+  const double rebuild_s = clock.seconds() - bake_s;
+  auto measure = [&](const SurfaceMesh& m) {
+    const Eigen::VectorXd on = check::distances_to_surface(m.V, input.V, input.F);
+    const check::HausdorffEstimate h = check::sampled_hausdorff(m.V, m.F, input.V, input.F);
+    const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
+    const int pairs = int(check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
+    int degenerate_faces = 0;
+    for (char d : degenerate) degenerate_faces += d;
+    const sh::SectionCheck section = sh::check_section(onto_input, m);
+    return nlohmann::ordered_json{{"is_section", section.is_section()},
+                                  {"section_check",
+                                   {{"manifold", section.manifold},
+                                    {"vertices_outside", section.vertices_outside},
+                                    {"faces_crossing_cage", section.faces_crossing_cage},
+                                    {"faces_not_transversal", section.faces_not_transversal},
+                                    {"degree_failures", section.degree_failures}}},
+                                  {"self_intersecting_pairs", pairs},
+                                  {"degenerate_faces", degenerate_faces},
+                                  {"max_vertex_distance_rel", on.maxCoeff() / unit},
+                                  {"hausdorff_rel", h.symmetric() / unit},
+                                  {"to_input_max_rel", h.a_to_b / unit},
+                                  {"from_input_max_rel", h.b_to_a / unit},
+                                  {"to_input_mean_rel", h.mean_a_to_b / unit}};
+  };
+  nlohmann::ordered_json j = {{"level", level},
+                              {"coarse_faces", int(shell.F.rows())},
+                              {"samples", int(map.h.size())},
+                              {"failures", map.failures},
+                              {"rebuilt_vertices", rebuilt.mesh.num_vertices()},
+                              {"rebuilt_faces", rebuilt.mesh.num_faces()}};
+  j["rebuilt"] = measure(rebuilt.mesh);
+  const sh::FiberCheck fibers = sh::check_on_fibers(onto_input, stored, rebuilt);
+  j["rebuilt"]["vertices_not_located"] = fibers.not_located;
+  j["rebuilt"]["fiber_offset_max_rel"] = fibers.max_offset / unit;
+  const double check_s = clock.seconds() - bake_s - rebuild_s;
+  int missed = 0;
+  double reach = 0;
+  for (Eigen::Index v = 0; v < shell.mid.rows(); ++v)
+    reach = std::max({reach, (shell.top.row(v) - shell.mid.row(v)).norm(),
+                      (shell.base.row(v) - shell.mid.row(v)).norm()});
+  const sh::Reconstruction normals =
+      sh::reconstruct_along_normals(shell, input, level, 2 * reach, &missed);
+  j["along_normals"] = measure(normals.mesh);
+  j["along_normals"]["reach_rel"] = 2 * reach / unit;
+  j["along_normals"]["missed"] = missed;
+  j["time_s"] = {
+      {"bake", bake_s}, {"rebuild", rebuild_s}, {"checks", check_s}, {"total", clock.seconds()}};
+  return j;
+}
+
+bool displacement_map_ok(const nlohmann::ordered_json& d) {
+  return d["failures"].get<int>() == 0 && d["rebuilt"]["vertices_not_located"].get<int>() == 0 &&
+         d["rebuilt"]["fiber_offset_max_rel"].get<double>() <= 1e-9 &&
+         d["rebuilt"]["max_vertex_distance_rel"].get<double>() <= 1e-12;
+}
+
+namespace {
+
+/// Intersecting face pairs between two surfaces (exact, CGAL; the two share no vertex, so
+/// touching counts): the union's self-intersecting pairs with one face from each.
+int pairs_between(const SurfaceMesh& a, const SurfaceMesh& b) {
+  Eigen::MatrixXd V(a.V.rows() + b.V.rows(), 3);
+  V << a.V, b.V;
+  Eigen::MatrixXi F(a.F.rows() + b.F.rows(), 3);
+  F << a.F, (b.F.array() + int(a.V.rows())).matrix();
+  const auto degenerate = check::exactly_degenerate_faces(V, F);
+  const auto r =
+      check::find_self_intersections(V, F, degenerate, false, check::SelfIntersectionEngine::soup);
+  int n = 0;
+  for (const auto& [f, g] : r.pairs) n += (f < a.F.rows()) != (g < a.F.rows());
+  return n;
+}
+
+int self_pairs(const SurfaceMesh& m) {
+  const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
+  return int(check::find_self_intersections(m.V, m.F, degenerate, true,
+                                            check::SelfIntersectionEngine::mesh)
+                 .pairs.size());
+}
+
+/// The generalized winding number of closed surface m at x (sum of the faces' solid angles,
+/// Van Oosterom–Strackee, / 4π): 1 inside, 0 outside, for x away from m.
+double winding_number(const SurfaceMesh& m, const Eigen::Vector3d& x) {
+  double sum = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    const Eigen::Vector3d a = Eigen::Vector3d(m.V.row(m.F(f, 0))) - x,
+                          b = Eigen::Vector3d(m.V.row(m.F(f, 1))) - x,
+                          c = Eigen::Vector3d(m.V.row(m.F(f, 2))) - x;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double num = a.dot(b.cross(c));
+    const double den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    sum += 2 * std::atan2(num, den);
+  }
+  return sum / (4 * std::numbers::pi);
+}
+
+}  // namespace
+
+nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
+                                        const sh::NestedCageOptions& options,
+                                        const StagedOutputDir& out) {
+  Stopwatch clock;
+  const sh::NestedCages cages = sh::build_nested_cages(input, options);
+  const double build_s = clock.seconds();
+  const double unit = bbox_longest_edge(input.V);
+  std::vector<const SurfaceMesh*> layers{&input};
+  for (const auto& layer : cages.layers) layers.push_back(&layer.cage);
+  nlohmann::ordered_json j = {{"layers", int(cages.layers.size())}};
+  nlohmann::ordered_json per_layer = nlohmann::ordered_json::array();
+  for (std::size_t k = 0; k < cages.layers.size(); ++k) {
+    const sh::CageLayer& layer = cages.layers[k];
+    const std::string name = "cage_" + std::to_string(k + 1) + ".obj";
+    io::write_surface(out.path(name), layer.cage, io::SurfaceFormat::obj);
+    // The map down to the input at every face's centroid and first corner, and back up.
+    std::vector<sh::MeshPoint> points;
+    for (int f = 0; f < layer.cage.num_faces(); ++f) {
+      points.push_back({f, Eigen::Vector3d::Constant(1.0 / 3)});
+      points.push_back({f, Eigen::Vector3d(1, 0, 0)});
+    }
+    Eigen::MatrixXd start(Eigen::Index(points.size()), 3);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 3; ++c)
+        x += points[i].bary[c] * Eigen::Vector3d(layer.cage.V.row(layer.cage.F(points[i].face, c)));
+      start.row(Eigen::Index(i)) = x.transpose();
+    }
+    int down_failures = 0, up_failures = 0;
+    const Eigen::MatrixXd down = sh::cage_to_input(cages, int(k), points, &down_failures);
+    double on_input = 0, roundtrip = 0;
+    if (down_failures == 0) {
+      on_input = check::distances_to_surface(down, input.V, input.F).maxCoeff() / unit;
+      const Eigen::MatrixXd up = sh::input_to_cage(cages, int(k), down, &up_failures);
+      if (up_failures == 0) roundtrip = (up - start).rowwise().norm().maxCoeff() / unit;
+    }
+    const Eigen::VectorXd gap = check::distances_to_surface(
+        check::surface_samples(layer.cage.V, layer.cage.F, 3), layers[k]->V, layers[k]->F);
+    per_layer.push_back(
+        {{"file", name},
+         {"faces", layer.cage.num_faces()},
+         {"vertices", layer.cage.num_vertices()},
+         {"shell", layer.attempt},
+         {"singular_vertices", layer.singular_vertices},
+         {"self_intersecting_pairs_before_shrinking", layer.self_intersecting_pairs_before},
+         {"shrink_rounds", layer.shrink_rounds},
+         {"shrunk_pillars", layer.shrunk_pillars},
+         {"shell_verified", layer.verification.valid()},
+         {"self_intersecting_pairs", self_pairs(layer.cage)},
+         {"winding_number_of_layer_inside", winding_number(layer.cage, layers[k]->V.row(0))},
+         {"min_gap_to_layer_inside_rel", gap.minCoeff() / unit},
+         {"max_gap_to_layer_inside_rel", gap.maxCoeff() / unit},
+         {"map_samples", int(points.size())},
+         {"map_failures", down_failures + up_failures},
+         {"map_to_input_max_distance_rel", on_input},
+         {"map_roundtrip_max_rel", roundtrip},
+         {"seconds", layer.seconds}});
+  }
+  j["per_layer"] = per_layer;
+  // Every two layers, the input included: no intersecting pair.
+  nlohmann::ordered_json between = nlohmann::ordered_json::array();
+  int total = 0;
+  for (std::size_t a = 0; a < layers.size(); ++a)
+    for (std::size_t b = a + 1; b < layers.size(); ++b) {
+      const int n = pairs_between(*layers[a], *layers[b]);
+      total += n;
+      between.push_back({{"layers", {int(a), int(b)}}, {"intersecting_pairs", n}});
+    }
+  j["between_layers"] = between;
+  j["intersecting_pairs_between_layers"] = total;
+  j["time_s"] = {{"build", build_s}, {"checks", clock.seconds() - build_s}};
+  return j;
+}
+
+bool nested_cages_ok(const nlohmann::ordered_json& j) {
+  if (j["intersecting_pairs_between_layers"].get<int>() != 0) return false;
+  for (const auto& l : j["per_layer"])
+    if (!l["shell_verified"].get<bool>() || l["self_intersecting_pairs"].get<int>() != 0 ||
+        std::abs(l["winding_number_of_layer_inside"].get<double>() - 1) > 1e-6 ||
+        l["map_failures"].get<int>() != 0 ||
+        l["map_to_input_max_distance_rel"].get<double>() > 1e-12 ||
+        l["map_roundtrip_max_rel"].get<double>() > 1e-9)
+      return false;
+  return true;
+}
+
+}  // namespace curvefem::cli
