@@ -41,6 +41,7 @@ void AtomicFile::commit() {
 
 StagedOutputDir::StagedOutputDir(std::filesystem::path dir) : m_dir(std::move(dir)) {
   std::error_code ec;
+  m_created_dir = !std::filesystem::exists(m_dir, ec);
   std::filesystem::create_directories(m_dir, ec);
   if (ec || !std::filesystem::is_directory(m_dir))
     throw IoError("cannot create output directory: " + ec.message(), {.file = m_dir.string()});
@@ -54,9 +55,12 @@ StagedOutputDir::StagedOutputDir(std::filesystem::path dir) : m_dir(std::move(di
 StagedOutputDir::~StagedOutputDir() {
   std::error_code ec;
   std::filesystem::remove_all(m_staging, ec);
+  if (!m_committed && m_created_dir && std::filesystem::is_empty(m_dir, ec) && !ec)
+    std::filesystem::remove(m_dir, ec);
 }
 
 void StagedOutputDir::commit() {
+  m_committed = true;
   std::error_code ec;
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(m_staging, ec))

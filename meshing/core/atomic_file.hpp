@@ -29,7 +29,8 @@ class AtomicFile {
 
 /// Output directory of a subcommand, all-or-nothing: files are written into a hidden staging
 /// folder inside `dir` and moved into `dir` by commit() (report.json, if staged, moved last). If
-/// the run fails before commit(), the staging folder is removed and `dir` holds no new file.
+/// the run fails before commit(), the staging folder is removed and `dir` holds no new file; a
+/// `dir` this object created is removed too when it is left empty.
 class StagedOutputDir {
  public:
   explicit StagedOutputDir(std::filesystem::path dir);
@@ -47,6 +48,8 @@ class StagedOutputDir {
  private:
   std::filesystem::path m_dir;
   std::filesystem::path m_staging;
+  bool m_created_dir = false;
+  bool m_committed = false;
 };
 
 /// Writes `text` to `path` atomically (throws IoError).

@@ -151,6 +151,19 @@ std::array<double, 3> weights(int L, int i, int j) {
 
 }  // namespace
 
+std::optional<double> input_height(const ShellProjection& onto_input, int face, double u,
+                                   double v) {
+  PrismPoint q;
+  q.face = face;
+  q.u = u;
+  q.v = v;
+  const auto s = onto_input.project(q);
+  if (!s) return std::nullopt;
+  const bool type_a = is_type_a(Eigen::Vector3i(onto_input.shell().F.row(face)));
+  return height_on_fiber(onto_input.fiber(face, u, v), fiber_heights(type_a, {1 - u - v, u, v}),
+                         s->position);
+}
+
 DisplacementMap bake_displacement_map(const ShellProjection& onto_input, int level) {
   if (level < 1) throw InputError("displacement map: the level must be at least 1");
   const Shell& shell = onto_input.shell();
@@ -161,18 +174,11 @@ DisplacementMap bake_displacement_map(const ShellProjection& onto_input, int lev
   map.h.assign(std::size_t(map.faces) * S, k_nan);
   const auto grid = sample_grid(level);
   tbb::parallel_for(0, map.faces, [&](int f) {
-    const bool type_a = is_type_a(Eigen::Vector3i(shell.F.row(f)));
     for (int t = 0; t < S; ++t) {
       const auto [i, j] = grid[std::size_t(t)];
       const std::array<double, 3> w = weights(level, i, j);
-      PrismPoint q;
-      q.face = f;
-      q.u = w[1];
-      q.v = w[2];
-      const auto s = onto_input.project(q);
-      if (!s) continue;
-      map.h[std::size_t(f) * S + t] =
-          height_on_fiber(onto_input.fiber(f, q.u, q.v), fiber_heights(type_a, w), s->position);
+      if (const auto h = input_height(onto_input, f, w[1], w[2]))
+        map.h[std::size_t(f) * S + t] = *h;
     }
   });
   map.failures =

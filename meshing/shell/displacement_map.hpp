@@ -20,6 +20,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,10 @@ struct DisplacementMap {
 };
 
 inline int samples_per_face(int level) { return (level + 1) * (level + 2) / 2; }
+
+/// The prism coordinate h of the input point on the fiber of (face, u, v) (rotated order, as
+/// PrismPoint): P_T's crossing, placed on the fiber polyline. nullopt where the fiber misses.
+std::optional<double> input_height(const ShellProjection& onto_input, int face, double u, double v);
 
 /// Bakes the map of `onto_input` (ShellProjection(shell, input)) at `level` ≥ 1; parallel over
 /// faces. A sample whose fiber misses the input is NaN and counted.

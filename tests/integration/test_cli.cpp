@@ -347,6 +347,48 @@ TEST(Cli, ShellNestedCagesAreWrittenCheckedAndReported) {
   EXPECT_GT(c["per_layer"][0]["self_intersecting_pairs_before_shrinking"].get<int>(), 0);
 }
 
+TEST(Cli, ShellGeometricTextureFromABuiltInTileAndAnObjTile) {
+  const auto dir = test::scratch_dir("cli_shell_texture");
+  io::write_surface(dir / "sphere.obj", make_icosphere(2), io::SurfaceFormat::obj);  // 320 faces
+  std::string out;
+  // Not simplified: the middle surface is the input, so the upper half (t > 1/2) is above it.
+  ASSERT_EQ(test::run_command(cli() + " shell -q " + (dir / "sphere.obj").string() + " -o " +
+                                  (dir / "knob").string() + " --no-simplify --texture knob",
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "knob" / "report.json");
+  const auto& t = r["geometric_texture"];
+  EXPECT_EQ(t["copies"], 320);
+  EXPECT_EQ(t["self_intersecting_pairs"], 0);
+  EXPECT_EQ(t["pairs_with_input"], 0);
+  EXPECT_EQ(t["degenerate_faces"], 0);
+  EXPECT_GT(t["min_distance_to_input_rel"].get<double>(), 0.0);
+  EXPECT_EQ(io::read_surface(dir / "knob" / "textured.obj").num_faces(), t["faces"].get<int>());
+  // A tile of one's own: a tetrahedron in the upper half of the prism.
+  std::ofstream(dir / "tet.obj") << "v 0.2 0.2 0.6\nv 0.6 0.2 0.6\nv 0.2 0.6 0.6\nv 0.3 0.3 0.9\n"
+                                    "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+  ASSERT_EQ(
+      test::run_command(cli() + " shell -q " + (dir / "sphere.obj").string() + " -o " +
+                            (dir / "tet").string() + " --texture " + (dir / "tet.obj").string(),
+                        &out),
+      0)
+      << out;
+  EXPECT_EQ(read_json(dir / "tet" / "report.json")["geometric_texture"]["self_intersecting_pairs"],
+            0);
+  // A tile reaching out of the prism is refused (exit 2), naming the vertex; no output folder.
+  std::ofstream(dir / "bad.obj") << "v 0.2 0.2 0.6\nv 0.9 0.2 0.6\nv 0.2 0.6 0.6\nv 0.3 0.3 0.9\n"
+                                    "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+  EXPECT_EQ(
+      test::run_command(cli() + " shell -q " + (dir / "sphere.obj").string() + " -o " +
+                            (dir / "bad").string() + " --texture " + (dir / "bad.obj").string(),
+                        &out),
+      2)
+      << out;
+  EXPECT_NE(out.find("tile vertex 1"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+}
+
 TEST(Cli, ShellReportsBeveling) {
   const auto dir = test::scratch_dir("cli_shell_bevel");
   // The crater of tests/meshing/shell/test_shell_bevel.cpp: its own shell is no section.

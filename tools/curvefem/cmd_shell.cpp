@@ -1,7 +1,8 @@
 // `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--remesh-section L]
-// [--displacement-map L] [--cages K] [--threads N]`: builds the prismatic shell of a closed surface
-// (meshing/shell), verifies it with independent code and writes shell.vtu (prisms as VTK_WEDGE,
-// cell data `half`: 0 base→mid, 1 mid→top, `input_face`), middle.obj and report.json. Without
+// [--displacement-map L] [--cages K] [--texture TILE] [--threads N]`: builds the prismatic shell of
+// a closed surface (meshing/shell), verifies it with independent code and writes shell.vtu (prisms
+// as VTK_WEDGE, cell data `half`: 0 base→mid, 1 mid→top, `input_face`), middle.obj and report.json.
+// Without
 // --no-simplify the shell is coarsened by collapses that keep it positive, a section of the input
 // and separated from it (meshing/shell/simplify.hpp). With --remesh-section the middle surface is
 // also remeshed isotropically as a section of the shell (meshing/shell/section_remesh.hpp) into
@@ -9,8 +10,9 @@
 // With
 // --displacement-map a displacement map is baked through P (meshing/shell/displacement_map.hpp)
 // and the surface it rebuilds is checked against the input and against normal projection; with
-// --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp) and checked
-// (tools/curvefem/shell_applications.hpp).
+// --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp), with
+// --texture a tile is copied into every prism (meshing/shell/geometric_texture.hpp); each is
+// checked by tools/curvefem/shell_applications.hpp.
 // Where the input's own shell is not a section, the input is first refined by topological
 // beveling (meshing/shell/bevel.hpp; same geometry) and the shell built, simplified and verified
 // on the refined surface; `input_face` in shell.vtu still names faces of the input.
@@ -51,6 +53,7 @@ struct ShellArgs {
   double zoom = 0.1;
   int displacement_level = 0;  // --displacement-map L; 0: none
   int cages = 0;               // --cages K; 0: none
+  std::string texture;         // --texture TILE; empty: none
   GlobalOptions global;
 };
 
@@ -165,11 +168,16 @@ void register_shell(CLI::App& app) {
                   "also build this many nested cages around the input (each the top surface of a "
                   "shell around the one inside it): cage_1.obj ...")
       ->check(CLI::Range(1, 16));
+  sub->add_option("--texture", args->texture,
+                  "copy a tile into every prism above the input (geometric texture): knob, ring, "
+                  "spike, or an OBJ whose vertices (a, b, t) lie in the unit prism; writes "
+                  "textured.obj");
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
     Stopwatch total;
     const SurfaceMesh input = io::read_surface(args->input);
+    const SurfaceMesh tile = args->texture.empty() ? SurfaceMesh() : load_tile(args->texture);
     sh::ShellOptions options;
     options.max_thickness_rel = args->thickness;
     options.threads = args->global.threads;
@@ -197,6 +205,9 @@ void register_shell(CLI::App& app) {
     if (args->displacement_level > 0) {
       displacement = run_displacement_map(shell, surface, args->displacement_level, out);
     }
+    nlohmann::ordered_json texture = nullptr;
+    if (!args->texture.empty())
+      texture = run_geometric_texture(shell, surface, tile, args->texture, out);
     sh::restore_input_ids(shell, beveled.surface);
     nlohmann::ordered_json cages = nullptr;
     if (args->cages > 0) {
@@ -270,6 +281,7 @@ void register_shell(CLI::App& app) {
     if (args->remesh_section > 0) report["section_remesh"] = section_remesh;
     if (args->displacement_level > 0) report["displacement_map"] = displacement;
     if (args->cages > 0) report["nested_cages"] = cages;
+    if (!args->texture.empty()) report["geometric_texture"] = texture;
     report["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
@@ -322,9 +334,19 @@ void register_shell(CLI::App& app) {
           args->cages, sizes.c_str(), cages["intersecting_pairs_between_layers"].get<int>(),
           cages_ok ? "yes" : "NO");
     }
+    const bool texture_ok = args->texture.empty() || geometric_texture_ok(texture);
+    if (!args->texture.empty())
+      std::printf(
+          "geometric texture: %d copies of %s, %d faces, %d self-intersecting pairs "
+          "(%d pairs with the input): %s\n",
+          texture["copies"].get<int>(), args->texture.c_str(), texture["faces"].get<int>(),
+          texture["self_intersecting_pairs"].get<int>(), texture["pairs_with_input"].get<int>(),
+          texture_ok ? "ok" : "FAILED");
     std::fflush(stdout);
-    return check.positive() && check.separated() && remesh_ok && displacement_ok && cages_ok ? 0
-                                                                                             : 3;
+    return texture_ok && check.positive() && check.separated() && remesh_ok && displacement_ok &&
+                   cages_ok
+               ? 0
+               : 3;
   });
 }
 

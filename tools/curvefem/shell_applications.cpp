@@ -12,6 +12,7 @@
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/shell/displacement_map.hpp"
+#include "meshing/shell/geometric_texture.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/section.hpp"
 
@@ -235,6 +236,46 @@ bool nested_cages_ok(const nlohmann::ordered_json& j) {
         l["map_roundtrip_max_rel"].get<double>() > 1e-9)
       return false;
   return true;
+}
+
+SurfaceMesh load_tile(const std::string& spec) {
+  const bool from_file = spec.size() > 4 && spec.substr(spec.size() - 4) == ".obj";
+  const SurfaceMesh tile = from_file ? io::read_surface(spec) : sh::builtin_tile(spec);
+  sh::check_tile(tile, spec);
+  return tile;
+}
+
+nlohmann::ordered_json run_geometric_texture(const sh::Shell& shell, const SurfaceMesh& surface,
+                                             const SurfaceMesh& tile, const std::string& tile_spec,
+                                             const StagedOutputDir& out) {
+  Stopwatch clock;
+  const sh::ShellProjection onto_input(shell, surface);
+  const sh::TexturedSurface textured = sh::apply_geometric_texture(onto_input, tile);
+  const double map_s = clock.seconds();
+  io::write_surface(out.path("textured.obj"), textured.mesh, io::SurfaceFormat::obj);
+  nlohmann::ordered_json j = {{"tile", tile_spec},
+                              {"tile_faces", tile.num_faces()},
+                              {"copies", int(shell.F.rows())},
+                              {"faces", textured.mesh.num_faces()}};
+  {
+    const SurfaceMesh& m = textured.mesh;
+    const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
+    int degenerate_faces = 0;
+    for (char d : degenerate) degenerate_faces += d;
+    j["degenerate_faces"] = degenerate_faces;
+    j["self_intersecting_pairs"] =
+        int(check::find_self_intersections(m.V, m.F, degenerate, false).pairs.size());
+    j["pairs_with_input"] = pairs_between(m, surface);
+    const double unit = bbox_longest_edge(surface.V);
+    j["min_distance_to_input_rel"] =
+        check::distances_to_surface(m.V, surface.V, surface.F).minCoeff() / unit;
+  }
+  j["time_s"] = {{"map", map_s}, {"checks", clock.seconds() - map_s}};
+  return j;
+}
+
+bool geometric_texture_ok(const nlohmann::ordered_json& j) {
+  return j["self_intersecting_pairs"].get<int>() == 0 && j["degenerate_faces"].get<int>() == 0;
 }
 
 }  // namespace curvefem::cli

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/surface_mesh.hpp"
@@ -34,5 +35,17 @@ nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
 /// True when the block says every layer is embedded, apart from the others, nested, and the
 /// maps sampled roundtrip.
 bool nested_cages_ok(const nlohmann::ordered_json& block);
+
+/// The tile of --texture TILE: a built-in name or an OBJ file, checked to lie in the unit prism
+/// (InputError otherwise).
+SurfaceMesh load_tile(const std::string& spec);
+/// --texture on `shell` (built on `surface`): textured.obj, report block `geometric_texture`
+/// (exact: the copies' self-intersecting pairs and pairs with the input; CGAL distance to the
+/// input).
+nlohmann::ordered_json run_geometric_texture(const meshing::shell::Shell& shell,
+                                             const SurfaceMesh& surface, const SurfaceMesh& tile,
+                                             const std::string& tile_name,
+                                             const StagedOutputDir& out);
+bool geometric_texture_ok(const nlohmann::ordered_json& block);
 
 }  // namespace curvefem::cli

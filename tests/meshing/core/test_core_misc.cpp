@@ -52,6 +52,29 @@ TEST(AtomicFile, NoPartialOutputOnFailure) {
   EXPECT_EQ(s, "new");
 }
 
+TEST(StagedOutputDir, AFailedRunLeavesNoNewFileAndNoFolderItCreated) {
+  const auto dir = test::scratch_dir("staged");
+  {  // a folder it creates and never commits: removed
+    StagedOutputDir out(dir / "new");
+    std::ofstream(out.path("a.txt")) << "x";
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "new"));
+  std::filesystem::create_directories(dir / "old");
+  {  // a folder that was there: kept, with nothing new in it
+    StagedOutputDir out(dir / "old");
+    std::ofstream(out.path("a.txt")) << "x";
+  }
+  EXPECT_TRUE(std::filesystem::is_directory(dir / "old"));
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "old"));
+  {  // committed: the files are there
+    StagedOutputDir out(dir / "done");
+    std::ofstream(out.path("a.txt")) << "x";
+    out.commit();
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "done" / "a.txt"));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "done"), {}), 1);
+}
+
 TEST(Primitives, ClosedOutwardWithExpectedVolume) {
   const auto sphere = make_icosphere(4);
   EXPECT_EQ(sphere.num_faces(), 20 * 256);
