@@ -2,11 +2,13 @@
 // demo's report.json.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "meshing/core/primitives.hpp"
 #include "meshing/io/surface_io.hpp"
+#include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/displacement_map.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -387,6 +389,51 @@ TEST(Cli, ShellGeometricTextureFromABuiltInTileAndAnObjTile) {
       << out;
   EXPECT_NE(out.find("tile vertex 1"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+}
+
+TEST(Cli, ShellBooleanCarriesBothOperandsOntoTheCoarseResult) {
+  const auto dir = test::scratch_dir("cli_shell_boolean");
+  io::write_surface(dir / "a.obj", make_icosphere(3), io::SurfaceFormat::obj);
+  io::write_surface(dir / "b.obj", make_icosphere(3, 0.7, Eigen::Vector3d(0.9, 0.3, 0.2)),
+                    io::SurfaceFormat::obj);
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " shell -q " + (dir / "a.obj").string() + " -o " +
+                                  (dir / "u").string() + " --boolean union --with " +
+                                  (dir / "b.obj").string() + " --threads 1",
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "u" / "report.json");
+  const auto& b = r["boolean"];
+  EXPECT_EQ(b["operation"], "union");
+  EXPECT_EQ(r["input_faces"], b["result_faces"]);  // the shell is built on the result
+  EXPECT_GT(b["result_faces_from_a"].get<int>(), 0);
+  EXPECT_GT(b["result_faces_from_b"].get<int>(), 0);
+  EXPECT_EQ(b["result_self_intersecting_pairs"], 0);
+  EXPECT_EQ(b["map_failures"], 0);
+  EXPECT_LT(b["map_to_operand_max_distance_rel"].get<double>(), 1e-13);
+  EXPECT_EQ(r["is_section_verified"], true);
+  // Both fields reach the coarse result: each operand owns some of its vertices.
+  const auto remeshed = io::read_vtu(dir / "u" / "remeshed.vtu");
+  EXPECT_EQ(remeshed.mesh.num_cells(), b["remeshed_faces"].get<int>());
+  const auto& fields = remeshed.fields.point_data;
+  auto operand =
+      std::find_if(fields.begin(), fields.end(), [](const auto& f) { return f.name == "operand"; });
+  ASSERT_NE(operand, fields.end());
+  EXPECT_GT(std::count(operand->values.begin(), operand->values.end(), 0.0), 0);
+  EXPECT_GT(std::count(operand->values.begin(), operand->values.end(), 1.0), 0);
+  // An open operand is refused before any corefinement, naming it; no output folder.
+  SurfaceMesh open = make_icosphere(2);
+  open.F.conservativeResize(open.F.rows() - 1, 3);
+  io::write_surface(dir / "open.obj", open, io::SurfaceFormat::obj);
+  EXPECT_EQ(test::run_command(cli() + " shell -q " + (dir / "a.obj").string() + " -o " +
+                                  (dir / "x").string() + " --boolean union --with " +
+                                  (dir / "open.obj").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("open.obj is not a closed, embedded surface"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
 
 TEST(Cli, ShellReportsBeveling) {

@@ -1,8 +1,8 @@
 // `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--remesh-section L]
-// [--displacement-map L] [--cages K] [--texture TILE] [--threads N]`: builds the prismatic shell of
-// a closed surface (meshing/shell), verifies it with independent code and writes shell.vtu (prisms
-// as VTK_WEDGE, cell data `half`: 0 base→mid, 1 mid→top, `input_face`), middle.obj and report.json.
-// Without
+// [--displacement-map L] [--cages K] [--texture TILE] [--boolean OP --with B] [--threads N]`:
+// builds the prismatic shell of a closed surface (meshing/shell), verifies it with independent code
+// and writes shell.vtu (prisms as VTK_WEDGE, cell data `half`: 0 base→mid, 1 mid→top,
+// `input_face`), middle.obj and report.json. Without
 // --no-simplify the shell is coarsened by collapses that keep it positive, a section of the input
 // and separated from it (meshing/shell/simplify.hpp). With --remesh-section the middle surface is
 // also remeshed isotropically as a section of the shell (meshing/shell/section_remesh.hpp) into
@@ -11,8 +11,10 @@
 // --displacement-map a displacement map is baked through P (meshing/shell/displacement_map.hpp)
 // and the surface it rebuilds is checked against the input and against normal projection; with
 // --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp), with
-// --texture a tile is copied into every prism (meshing/shell/geometric_texture.hpp); each is
-// checked by tools/curvefem/shell_applications.hpp.
+// --texture a tile is copied into every prism (meshing/shell/geometric_texture.hpp), with
+// --boolean the shell is built on INPUT OP B (meshing/shell/boolean.hpp) and both operands'
+// fields are carried onto its coarse remeshing; each is checked by
+// tools/curvefem/shell_applications.hpp.
 // Where the input's own shell is not a section, the input is first refined by topological
 // beveling (meshing/shell/bevel.hpp; same geometry) and the shell built, simplified and verified
 // on the refined surface; `input_face` in shell.vtu still names faces of the input.
@@ -54,6 +56,7 @@ struct ShellArgs {
   int displacement_level = 0;  // --displacement-map L; 0: none
   int cages = 0;               // --cages K; 0: none
   std::string texture;         // --texture TILE; empty: none
+  std::string boolean, with;   // --boolean OP --with B
   GlobalOptions global;
 };
 
@@ -172,11 +175,25 @@ void register_shell(CLI::App& app) {
                   "copy a tile into every prism above the input (geometric texture): knob, ring, "
                   "spike, or an OBJ whose vertices (a, b, t) lie in the unit prism; writes "
                   "textured.obj");
+  auto* boolean_opt =
+      sub->add_option("--boolean", args->boolean,
+                      "build the shell on INPUT OP B (union, intersection, difference; CGAL "
+                      "corefinement) and carry a field of each operand onto the result and its "
+                      "coarse remeshing: result.vtu, remeshed.vtu")
+          ->check(CLI::IsMember({"union", "intersection", "difference"}));
+  auto* with_opt = sub->add_option("--with", args->with, "the second operand B of --boolean")
+                       ->check(CLI::ExistingFile);
+  boolean_opt->needs(with_opt);
+  with_opt->needs(boolean_opt);
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
     Stopwatch total;
-    const SurfaceMesh input = io::read_surface(args->input);
+    std::unique_ptr<BooleanInput> boolean;
+    if (!args->boolean.empty())
+      boolean = std::make_unique<BooleanInput>(
+          prepare_boolean(io::read_surface(args->input), args->with, args->boolean));
+    const SurfaceMesh input = boolean ? boolean->result.mesh : io::read_surface(args->input);
     const SurfaceMesh tile = args->texture.empty() ? SurfaceMesh() : load_tile(args->texture);
     sh::ShellOptions options;
     options.max_thickness_rel = args->thickness;
@@ -205,6 +222,8 @@ void register_shell(CLI::App& app) {
     if (args->displacement_level > 0) {
       displacement = run_displacement_map(shell, surface, args->displacement_level, out);
     }
+    nlohmann::ordered_json boolean_block = nullptr;
+    if (boolean) boolean_block = run_boolean_transfer(*boolean, shell, beveled.surface, out);
     nlohmann::ordered_json texture = nullptr;
     if (!args->texture.empty())
       texture = run_geometric_texture(shell, surface, tile, args->texture, out);
@@ -282,6 +301,7 @@ void register_shell(CLI::App& app) {
     if (args->displacement_level > 0) report["displacement_map"] = displacement;
     if (args->cages > 0) report["nested_cages"] = cages;
     if (!args->texture.empty()) report["geometric_texture"] = texture;
+    if (boolean) report["boolean"] = boolean_block;
     report["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
@@ -342,9 +362,19 @@ void register_shell(CLI::App& app) {
           texture["copies"].get<int>(), args->texture.c_str(), texture["faces"].get<int>(),
           texture["self_intersecting_pairs"].get<int>(), texture["pairs_with_input"].get<int>(),
           texture_ok ? "ok" : "FAILED");
+    const bool boolean_checks_ok = !boolean || boolean_ok(boolean_block);
+    if (boolean)
+      std::printf(
+          "boolean %s: %d result faces (%d from %s, %d from %s), remeshed to %d; every "
+          "coarse vertex mapped onto its operand: %s (field error %.2g)\n",
+          args->boolean.c_str(), boolean_block["result_faces"].get<int>(),
+          boolean_block["result_faces_from_a"].get<int>(), args->input.c_str(),
+          boolean_block["result_faces_from_b"].get<int>(), args->with.c_str(),
+          boolean_block["remeshed_faces"].get<int>(), boolean_checks_ok ? "yes" : "NO",
+          boolean_block["field_max_error"].get<double>());
     std::fflush(stdout);
-    return texture_ok && check.positive() && check.separated() && remesh_ok && displacement_ok &&
-                   cages_ok
+    return boolean_checks_ok && texture_ok && check.positive() && check.separated() && remesh_ok &&
+                   displacement_ok && cages_ok
                ? 0
                : 3;
   });

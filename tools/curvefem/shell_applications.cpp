@@ -7,14 +7,19 @@
 #include <numbers>
 #include <string>
 
+#include "meshing/check/check_surface.hpp"
 #include "meshing/check/self_intersections.hpp"
 #include "meshing/check/surface_distance.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
+#include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/displacement_map.hpp"
 #include "meshing/shell/geometric_texture.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/section.hpp"
+#include "meshing/shell/section_transfer.hpp"
 
 namespace curvefem::cli {
 namespace {
@@ -276,6 +281,174 @@ nlohmann::ordered_json run_geometric_texture(const sh::Shell& shell, const Surfa
 
 bool geometric_texture_ok(const nlohmann::ordered_json& j) {
   return j["self_intersecting_pairs"].get<int>() == 0 && j["degenerate_faces"].get<int>() == 0;
+}
+
+BooleanInput prepare_boolean(const SurfaceMesh& a, const std::string& b_path,
+                             const std::string& operation) {
+  Stopwatch clock;
+  BooleanInput in;
+  in.a = a;
+  in.b = io::read_surface(b_path);
+  in.operation = operation;
+  // CGAL's corefinement needs two closed, embedded, outward surfaces: say which one is not.
+  for (const auto& [m, name] :
+       {std::pair<const SurfaceMesh*, std::string>{&in.a, "the input"}, {&in.b, b_path}}) {
+    const check::CheckReport c = check::check_surface(*m);
+    if (!c.acceptable)
+      throw InputError("boolean " + operation + ": " + name +
+                       " is not a closed, embedded surface: " +
+                       (c.defects.empty() ? std::string("empty") : c.defects.front().message));
+  }
+  in.result = sh::corefine_boolean(in.a, in.b, sh::parse_boolean_operation(operation));
+  const SurfaceMesh& r = in.result.mesh;
+  const auto degenerate = check::exactly_degenerate_faces(r.V, r.F);
+  in.self_intersecting_pairs =
+      int(check::find_self_intersections(r.V, r.F, degenerate, true).pairs.size());
+  int degenerate_faces = 0;
+  for (char d : degenerate) degenerate_faces += d;
+  if (in.self_intersecting_pairs > 0 || degenerate_faces > 0)
+    throw MeshingError("boolean " + operation + ": the result rounded to double has " +
+                       std::to_string(in.self_intersecting_pairs) +
+                       " self-intersecting face pairs and " + std::to_string(degenerate_faces) +
+                       " degenerate faces; no shell can be built on it");
+  in.seconds = clock.seconds();
+  return in;
+}
+
+namespace {
+
+/// The two operands' test fields: the smooth field of section_transfer.hpp on A, another on B
+/// (shifted and scaled), so that the result shows where each part came from.
+double operand_field(int operand, const Eigen::Vector3d& x, const Eigen::Vector3d& center,
+                     double scale) {
+  const Eigen::Vector3d p = (x - center) / scale;
+  return operand == 0 ? std::sin(3 * p.x()) * std::cos(2 * p.y()) + p.z() * p.z()
+                      : 2 + std::cos(2 * p.x() + p.z()) * std::sin(3 * p.y());
+}
+
+LagrangeMesh triangles(const SurfaceMesh& m) {
+  LagrangeMesh t;
+  t.kind = CellKind::triangle;
+  t.order = 1;
+  t.nodes = m.V;
+  t.cells = m.F;
+  return t;
+}
+
+}  // namespace
+
+nlohmann::ordered_json run_boolean_transfer(const BooleanInput& in, const sh::Shell& shell,
+                                            const sh::BeveledSurface& surface,
+                                            const StagedOutputDir& out) {
+  Stopwatch clock;
+  const SurfaceMesh& r = in.result.mesh;
+  const double unit = bbox_longest_edge(r.V);
+  const Eigen::Vector3d center =
+      0.5 * (r.V.colwise().minCoeff() + r.V.colwise().maxCoeff()).transpose();
+  const double scale = 0.5 * unit;
+  // Operand fields at the operands' vertices, interpolated linearly in their faces.
+  auto field_on = [&](int operand, int face, const Eigen::Vector3d& bary) {
+    const SurfaceMesh& m = operand == 0 ? in.a : in.b;
+    double v = 0;
+    for (int k = 0; k < 3; ++k)
+      v += bary[k] * operand_field(operand, m.V.row(m.F(face, k)).transpose(), center, scale);
+    return v;
+  };
+  // The result's vertices: through the first face holding each.
+  std::vector<int> first_face(std::size_t(r.num_vertices()), -1);
+  for (int f = 0; f < r.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (first_face[std::size_t(r.F(f, k))] < 0) first_face[std::size_t(r.F(f, k))] = f;
+  const auto at_result = sh::locate_in_operands(in.a, in.b, in.result, r.V, first_face);
+  Eigen::VectorXd result_field(r.num_vertices()), result_operand_cells(r.num_faces());
+  for (int v = 0; v < r.num_vertices(); ++v)
+    result_field[v] = field_on(at_result[std::size_t(v)].operand, at_result[std::size_t(v)].face,
+                               at_result[std::size_t(v)].bary);
+  for (int f = 0; f < r.num_faces(); ++f)
+    result_operand_cells[f] = in.result.operand[std::size_t(f)];
+  MeshFields rf;
+  rf.point_data.push_back(
+      {"field", 1,
+       std::vector<double>(result_field.data(), result_field.data() + result_field.size())});
+  rf.cell_data.push_back(
+      {"operand", 1,
+       std::vector<double>(result_operand_cells.data(),
+                           result_operand_cells.data() + result_operand_cells.size())});
+  io::write_vtu(out.path("result.vtu"), triangles(r), rf);
+  // The coarse middle surface: each vertex through P to the result (the beveled refinement's
+  // point, then its place in the result face), then to its operand.
+  const sh::ShellProjection onto(shell, surface.mesh);
+  const int n = int(shell.mid.rows());
+  Eigen::MatrixXd image(n, 3);
+  std::vector<int> image_face(std::size_t(n), -1);
+  int failures = 0;
+  for (int v = 0; v < n; ++v) {
+    const auto s = onto.project(Eigen::Vector3d(shell.mid.row(v)));
+    if (!s) {
+      ++failures;
+      image.row(v) = shell.mid.row(v);
+      image_face[std::size_t(v)] = 0;
+      continue;
+    }
+    const auto [face, bary] = surface.refined() ? surface.to_input(s->face, s->bary)
+                                                : std::pair<int, Eigen::Vector3d>{s->face, s->bary};
+    image_face[std::size_t(v)] = face;
+    image.row(v) = s->position.transpose();
+  }
+  const auto at_coarse = sh::locate_in_operands(in.a, in.b, in.result, image, image_face);
+  Eigen::VectorXd coarse_field(n), coarse_operand(n);
+  double field_error = 0, on_operand = 0;
+  Eigen::MatrixXd on_a(0, 3), on_b(0, 3);
+  std::vector<Eigen::Vector3d> pa, pb;
+  for (int v = 0; v < n; ++v) {
+    const auto& o = at_coarse[std::size_t(v)];
+    coarse_field[v] = field_on(o.operand, o.face, o.bary);
+    coarse_operand[v] = o.operand;
+    field_error = std::max(
+        field_error, std::abs(coarse_field[v] -
+                              operand_field(o.operand, image.row(v).transpose(), center, scale)));
+    (o.operand == 0 ? pa : pb).push_back(image.row(v).transpose());
+  }
+  auto max_distance = [&](const std::vector<Eigen::Vector3d>& pts, const SurfaceMesh& m) {
+    if (pts.empty()) return 0.0;
+    Eigen::MatrixXd P(Eigen::Index(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) P.row(Eigen::Index(i)) = pts[i].transpose();
+    return check::distances_to_surface(P, m.V, m.F).maxCoeff();
+  };
+  on_operand = std::max(max_distance(pa, in.a), max_distance(pb, in.b)) / unit;
+  SurfaceMesh middle;
+  middle.V = shell.mid;
+  middle.F = shell.F;
+  MeshFields cf;
+  cf.point_data.push_back(
+      {"field", 1, std::vector<double>(coarse_field.data(), coarse_field.data() + n)});
+  cf.point_data.push_back(
+      {"operand", 1, std::vector<double>(coarse_operand.data(), coarse_operand.data() + n)});
+  io::write_vtu(out.path("remeshed.vtu"), triangles(middle), cf);
+  int from_a = 0;
+  for (int o : in.result.operand) from_a += o == 0;
+  return {{"operation", in.operation},
+          {"operand_faces", {in.a.num_faces(), in.b.num_faces()}},
+          {"result_faces", r.num_faces()},
+          {"result_faces_from_a", from_a},
+          {"result_faces_from_b", r.num_faces() - from_a},
+          {"result_self_intersecting_pairs", in.self_intersecting_pairs},
+          {"origin_max_distance_rel", in.result.max_origin_distance / unit},
+          {"remeshed_vertices", n},
+          {"remeshed_faces", int(shell.F.rows())},
+          {"map_failures", failures},
+          {"map_to_operand_max_distance_rel", on_operand},
+          {"field_max_error", field_error},
+          {"field",
+           "A: sin(3x) cos(2y) + z^2, B: 2 + cos(2x + z) sin(3y), at (p - bbox center) / (longest "
+           "bbox edge / 2), interpolated linearly in the operand's faces"},
+          {"time_s", {{"corefine", in.seconds}, {"transfer", clock.seconds()}}}};
+}
+
+bool boolean_ok(const nlohmann::ordered_json& j) {
+  return j["map_failures"].get<int>() == 0 &&
+         j["map_to_operand_max_distance_rel"].get<double>() <= 1e-12 &&
+         j["result_self_intersecting_pairs"].get<int>() == 0;
 }
 
 }  // namespace curvefem::cli

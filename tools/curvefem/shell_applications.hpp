@@ -9,6 +9,8 @@
 
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/surface_mesh.hpp"
+#include "meshing/shell/bevel.hpp"
+#include "meshing/shell/boolean.hpp"
 #include "meshing/shell/nested_cages.hpp"
 #include "meshing/shell/shell.hpp"
 
@@ -47,5 +49,29 @@ nlohmann::ordered_json run_geometric_texture(const meshing::shell::Shell& shell,
                                              const std::string& tile_name,
                                              const StagedOutputDir& out);
 bool geometric_texture_ok(const nlohmann::ordered_json& block);
+
+/// --boolean OP --with B: the operands and the corefined result the shell is built on.
+struct BooleanInput {
+  SurfaceMesh a, b;
+  meshing::shell::BooleanResult result;
+  std::string operation;
+  int self_intersecting_pairs = 0;  ///< of the rounded result (exact); must be 0 to go on
+  double seconds = 0;
+};
+/// Reads B, corefines, checks the rounded result; MeshingError when it self-intersects.
+BooleanInput prepare_boolean(const SurfaceMesh& a, const std::string& b_path,
+                             const std::string& operation);
+
+/// After the shell is built on the result (beveled.surface) and simplified: carries a smooth test
+/// field of each operand (different per operand) from the operands onto the result and through P
+/// onto the coarse middle surface; writes result.vtu and remeshed.vtu (point data `field`,
+/// `operand`) and returns the report block `boolean`: sizes, and the checks (every coarse
+/// vertex's image on the result lies on its operand, CGAL distance; the carried value against the
+/// operand's field at that point).
+nlohmann::ordered_json run_boolean_transfer(const BooleanInput& in,
+                                            const meshing::shell::Shell& shell,
+                                            const meshing::shell::BeveledSurface& surface,
+                                            const StagedOutputDir& out);
+bool boolean_ok(const nlohmann::ordered_json& block);
 
 }  // namespace curvefem::cli
