@@ -75,37 +75,51 @@ NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions
     if (progress) progress("nested cages", double(k) / options.layers);
     Stopwatch clock;
     CageLayer layer;
-    ShellOptions so = options.shell;
-    so.threads = options.threads;
-    ShellStats stats;
-    BeveledShell beveled = build_beveled_shell(current, so, stats);
-    layer.surface = beveled.surface.mesh;
-    layer.surface_face_parent = beveled.surface.face_parent;
-    layer.surface_corner_bary = beveled.surface.corner_bary;
-    layer.singular_vertices = stats.singular_vertices;
     // Attempts, coarsest first: simplified with thickness growth, simplified without it, the
-    // shell as built (its middle surface is the layer inside, where shrinking cannot fail).
-    std::vector<std::pair<std::string, double>> attempts;  // name, zoom (< 0: no simplification)
+    // same on a shell of a quarter of the thickness (thinner tops meet less across concave
+    // parts), and the shell as built (its middle surface is the layer inside, which shrinking
+    // cannot cross).
+    struct Attempt {
+      std::string name;
+      double zoom;       // < 0: no simplification
+      double thickness;  // factor on options.shell.max_thickness_rel
+    };
+    std::vector<Attempt> attempts;
     if (options.simplify) {
-      attempts.emplace_back("simplified", options.zoom_rel);
-      if (options.zoom_rel > 0) attempts.emplace_back("simplified without growth", 0.0);
+      attempts.push_back({"simplified", options.zoom_rel, 1.0});
+      if (options.zoom_rel > 0) attempts.push_back({"simplified without growth", 0.0, 1.0});
+      attempts.push_back({"simplified, thinner", 0.0, 0.25});
     }
-    attempts.emplace_back("not simplified", -1.0);
+    attempts.push_back({"not simplified", -1.0, 1.0});
     std::string why;
     Shell shell;
+    std::unique_ptr<BeveledShell> beveled;
+    double built_thickness = -1;
     for (std::size_t a = 0; a < attempts.size(); ++a) {
-      shell = beveled.shell;
-      if (attempts[a].second >= 0) {
+      if (attempts[a].thickness != built_thickness) {
+        ShellOptions so = options.shell;
+        so.threads = options.threads;
+        so.max_thickness_rel *= attempts[a].thickness;
+        ShellStats stats;
+        beveled = std::make_unique<BeveledShell>(build_beveled_shell(current, so, stats));
+        built_thickness = attempts[a].thickness;
+        layer.surface = beveled->surface.mesh;
+        layer.surface_face_parent = beveled->surface.face_parent;
+        layer.surface_corner_bary = beveled->surface.corner_bary;
+        layer.singular_vertices = stats.singular_vertices;
+      }
+      shell = beveled->shell;
+      if (attempts[a].zoom >= 0) {
         SimplifyOptions simplify;
         simplify.threads = options.threads;
-        simplify.zoom = attempts[a].second * bbox_longest_edge(current.V);
+        simplify.zoom = attempts[a].zoom * bbox_longest_edge(current.V);
         SimplifyStats ss;
         shell = simplify_shell(shell, layer.surface, simplify, ss);
       }
-      layer.attempt = attempts[a].first;
+      layer.attempt = attempts[a].name;
       why = shrink_top(shell, layer, options);
       if (why.empty()) break;
-      log::info("nested cages: layer ", k + 1, ", ", attempts[a].first, ": ", why);
+      log::info("nested cages: layer ", k + 1, ", ", attempts[a].name, ": ", why);
       if (a + 1 == attempts.size())
         throw MeshingError("nested cages: layer " + std::to_string(k + 1) + ": " + why);
     }

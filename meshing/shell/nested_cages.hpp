@@ -10,8 +10,9 @@
 // self-intersecting pair, and every round is verified: the shell must stay positive, separated
 // from its input and a section (verify_shell). The thesis refines the middle surface where a
 // shrink would break the shell; that refinement is not implemented. Instead the layer is tried
-// again with a less coarsened shell: simplified without thickness growth, then not simplified
-// (its middle surface is the layer inside, which shrinking cannot cross). Only when even that
+// again with a less coarsened shell: simplified without thickness growth, then the same on a
+// shell a quarter as thick, then not simplified (its middle surface is the layer inside, which
+// shrinking cannot cross). Only when even that
 // fails does the construction stop, with a MeshingError naming the layer and the pairs left.
 // At a singular vertex of a layer (zero-length pillar) the next cage touches that layer: the
 // thesis fills the shell there (§4.5, pinching alternative); that is not done, and the touching
@@ -58,8 +59,9 @@ struct CageLayer {
   std::vector<int> surface_face_parent;
   std::vector<Eigen::Matrix3d> surface_corner_bary;
   Shell shell;
-  /// Which shell was kept: "simplified", "simplified without growth" (SimplifyOptions::zoom 0) or
-  /// "not simplified", the first whose top surface could be freed of self-intersections.
+  /// Which shell was kept: "simplified", "simplified without growth" (SimplifyOptions::zoom 0),
+  /// "simplified, thinner" (no growth, a quarter of max_thickness_rel) or "not simplified", the
+  /// first whose top surface could be freed of self-intersections.
   std::string attempt;
   int singular_vertices = 0;  ///< zero-length pillars: the cage touches the layer inside there
   int self_intersecting_pairs_before = 0;  ///< the top surface's pairs before shrinking
