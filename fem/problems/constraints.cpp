@@ -122,7 +122,9 @@ Eigen::VectorXd reduce_and_solve(const SparseMatrix& K, const Eigen::VectorXd& F
   }
   CF_VERIFY(k == nnz, "reduced system: entry count mismatch");
   if (owned) *owned = SparseMatrix();
-  const Eigen::VectorXd uf = solve_spd(Kff, rhs, reduced_options(options, reduced, m), info);
+  // Kff is this function's own: handed over, a distributed solve frees it once distributed.
+  const Eigen::VectorXd uf =
+      solve_spd(std::move(Kff), rhs, reduced_options(options, reduced, m), info);
   Eigen::VectorXd u(n);
   for (int i = 0; i < n; ++i) u[i] = reduced[i] >= 0 ? uf[reduced[i]] : c.values[i];
   return u;

@@ -11,8 +11,9 @@
 // from its owned nodes' coordinates; `direct`: MUMPS Cholesky), the solution is gathered on rank 0
 // (VecScatterCreateToZero) and put back in the caller's numbering.
 // Not distributed (yet): assembly and everything before and after the solve stay on rank 0, so
-// rank 0's memory is the one-process run's, the others hold their rows and their part of the
-// preconditioner only.
+// rank 0's peak is at least the assembly's; through the solve, when the caller hands the matrix
+// over (solve_spd(SparseMatrix&&), as the constrained solves do), rank 0 keeps only its own rows
+// like the other ranks, plus its part of the preconditioner.
 //
 // Protocol: every rank calls start(); ranks != 0 call serve(), which returns when rank 0 calls
 // release_workers(); then every rank calls finish(). Between the two, rank 0 alone runs library
@@ -59,6 +60,13 @@ std::vector<double> peak_rss_mb_per_rank();
 Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
                       const LinearSolverOptions& options, bool direct,
                       const Eigen::MatrixXd& null_space, LinearSolveInfo& info);
+/// The same, freeing A (*owned, which must be A) once every rank's rows are built and sent, so
+/// that rank 0 holds only its own rows through the preconditioner's set-up and the solve; also
+/// fills info.relative_residual from the distributed matrix (MatMult on the ranks).
+Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
+                      const LinearSolverOptions& options, bool direct,
+                      const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
+                      SparseMatrix* owned);
 
 /// Renumbering of nodes by owning rank, keeping the order within a rank: new_of[old] and the
 /// first new index of each rank (size ranks + 1). Pure; unit-tested.

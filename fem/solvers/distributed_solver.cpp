@@ -198,6 +198,7 @@ PetscErrorCode record_residual(KSP, PetscInt, PetscReal norm, void* ctx) {
 
 struct SolveOutcome {
   std::vector<double> x;  // rank 0: the whole solution in the new numbering
+  double relative_residual = 0;  // ‖b − M x‖ / ‖b‖ on the distributed matrix
   int iterations = 0, reason = 0;
   std::vector<double> history;
   double setup_s = 0, solve_s = 0;
@@ -289,6 +290,17 @@ SolveOutcome solve_part(const Header& h, LocalPart& part) {
   check(KSPGetIterationNumber(ksp, &its), "KSPGetIterationNumber");
   out.reason = static_cast<int>(reason);
   out.iterations = static_cast<int>(its);
+  {  // the true residual, on every rank's rows (collective)
+    Vec r;
+    check(VecDuplicate(b, &r), "VecDuplicate");
+    check(MatMult(M, x, r), "MatMult");
+    check(VecAYPX(r, -1.0, b), "VecAYPX");  // r = b − M x
+    PetscReal rn = 0, bn = 0;
+    check(VecNorm(r, NORM_2, &rn), "VecNorm");
+    check(VecNorm(b, NORM_2, &bn), "VecNorm");
+    out.relative_residual = static_cast<double>(rn / (bn > 0 ? bn : 1.0));
+    VecDestroy(&r);
+  }
   VecScatter to_zero;
   Vec all;
   check(VecScatterCreateToZero(x, &to_zero, &all), "VecScatterCreateToZero");
@@ -406,7 +418,15 @@ Renumbering renumber_by_owner(const std::vector<int>& owner, int ranks) {
 Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
                       const LinearSolverOptions& options, bool direct,
                       const Eigen::MatrixXd& null_space, LinearSolveInfo& info) {
+  return solve(A, b, options, direct, null_space, info, nullptr);
+}
+
+Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
+                      const LinearSolverOptions& options, bool direct,
+                      const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
+                      SparseMatrix* owned) {
   if (!active() || g_rank != 0) throw Error("distributed::solve: only on rank 0 of several");
+  CF_VERIFY(owned == nullptr || owned == &A, "distributed::solve: owned must be A");
   const long long n = A.rows();
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
   const bool use_coordinates = !direct && options.use_near_nullspace && coordinates.size() > 0;
@@ -530,10 +550,12 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
         send_part(part, p);
     }
     copy = SparseMatrix();
+    if (owned) *owned = SparseMatrix();  // rank 0 keeps its own rows only, like the others
     const double distribute_s = watch.seconds() - partition_s;
     out = solve_part(h, own);
     info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + to_string(options.preconditioner);
     info.iterations = out.iterations;
+    info.relative_residual = out.relative_residual;
     info.residual_history = std::move(out.history);
     info.near_nullspace = out.near_nullspace;
     info.setup_s = partition_s + distribute_s + out.setup_s;

@@ -106,8 +106,12 @@ Eigen::VectorXd solve_pinned(const SparseMatrix& A, const Eigen::VectorXd& b,
 
 }  // namespace
 
-Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
-                          const LinearSolverOptions& options, LinearSolveInfo* info) {
+namespace {
+
+/// solve_spd; `owned`, if set, is A itself, which a distributed solve may free.
+Eigen::VectorXd solve_spd_impl(const SparseMatrix& A, const Eigen::VectorXd& b,
+                               const LinearSolverOptions& options, LinearSolveInfo* info,
+                               SparseMatrix* owned) {
   if (A.rows() != A.cols() || A.rows() != b.size())
     throw InputError("linear system: matrix " + std::to_string(A.rows()) + "x" +
                      std::to_string(A.cols()) + ", right-hand side " + std::to_string(b.size()));
@@ -136,18 +140,33 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
   if (direct && singular)
     x = solve_pinned(A, rhs, options.null_space, options, out, options.factorization_cache.get());
   else if (several_ranks)
-    x = distributed::solve(A, rhs, options, direct, Q, out);
+    x = distributed::solve(A, rhs, options, direct, Q, out, owned);
   else if (direct)
     x = solve_cholmod(A, rhs, out, options.factorization_cache.get());
   else
     x = solve_petsc_cg(A, rhs, options, Q, out, options.factorization_cache.get());
   const double bn = rhs.norm();
-  out.relative_residual = (rhs - A * x).norm() / (bn > 0 ? bn : 1.0);
+  const Eigen::Index n = b.size();
+  if (A.rows() == n)  // else freed by the distributed solve, which measured the residual
+    out.relative_residual = (rhs - A * x).norm() / (bn > 0 ? bn : 1.0);
   log::info("linear solve (", out.method, singular ? ", singular" : "",
-            several_ranks ? ", " + std::to_string(out.ranks) + " ranks" : "", "): ", A.rows(),
+            several_ranks ? ", " + std::to_string(out.ranks) + " ranks" : "", "): ", n,
             " unknowns, ", out.iterations, " iterations, relative residual ", out.relative_residual,
             ", setup ", out.setup_s, " s, solve ", out.solve_s, " s");
   return x;
+}
+
+}  // namespace
+
+Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
+                          const LinearSolverOptions& options, LinearSolveInfo* info) {
+  return solve_spd_impl(A, b, options, info, nullptr);
+}
+
+Eigen::VectorXd solve_spd(SparseMatrix&& A, const Eigen::VectorXd& b,
+                          const LinearSolverOptions& options, LinearSolveInfo* info) {
+  SparseMatrix owned = std::move(A);
+  return solve_spd_impl(owned, b, options, info, &owned);
 }
 
 }  // namespace curvefem::fem

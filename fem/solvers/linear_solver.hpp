@@ -119,6 +119,11 @@ int blas_threads();
 /// kernel given in options.null_space. Throws InputError for size mismatch.
 Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
                           const LinearSolverOptions& options, LinearSolveInfo* info = nullptr);
+/// The same, given A to keep or free: on several MPI ranks (fem/solvers/distributed.hpp) rank 0
+/// frees A once every rank has its rows, before the preconditioner is set up, and the relative
+/// residual is PETSc's on the distributed matrix; elsewhere as above.
+Eigen::VectorXd solve_spd(SparseMatrix&& A, const Eigen::VectorXd& b,
+                          const LinearSolverOptions& options, LinearSolveInfo* info = nullptr);
 
 // Engines (linear_solver_cholmod.cpp, linear_solver_petsc.cpp).
 Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
