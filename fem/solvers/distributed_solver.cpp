@@ -197,7 +197,7 @@ PetscErrorCode record_residual(KSP, PetscInt, PetscReal norm, void* ctx) {
 }
 
 struct SolveOutcome {
-  std::vector<double> x;  // rank 0: the whole solution in the new numbering
+  std::vector<double> x;         // rank 0: the whole solution in the new numbering
   double relative_residual = 0;  // ‖b − M x‖ / ‖b‖ on the distributed matrix
   int iterations = 0, reason = 0;
   std::vector<double> history;
