@@ -169,4 +169,18 @@ SelfIntersectionResult find_self_intersections(const Eigen::MatrixXd& V, const E
   return result;
 }
 
+int intersecting_pairs_between(const Eigen::MatrixXd& Va, const Eigen::MatrixXi& Fa,
+                               const Eigen::MatrixXd& Vb, const Eigen::MatrixXi& Fb) {
+  Eigen::MatrixXd V(Va.rows() + Vb.rows(), 3);
+  V << Va, Vb;
+  Eigen::MatrixXi F(Fa.rows() + Fb.rows(), 3);
+  F << Fa, (Fb.array() + int(Va.rows())).matrix();
+  const auto degenerate = exactly_degenerate_faces(V, F);
+  int n = 0;
+  for (const auto& [f, g] :
+       find_self_intersections(V, F, degenerate, false, SelfIntersectionEngine::soup).pairs)
+    n += (f < Fa.rows()) != (g < Fa.rows());
+  return n;
+}
+
 }  // namespace curvefem::check

@@ -45,4 +45,9 @@ SelfIntersectionResult find_self_intersections(
     const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::vector<char>& degenerate,
     bool is_oriented_manifold, SelfIntersectionEngine engine = SelfIntersectionEngine::automatic);
 
+/// Exactly intersecting face pairs between two surfaces (a's faces against b's; the two share no
+/// vertex, so touching counts): the union's soup pairs with one face from each.
+int intersecting_pairs_between(const Eigen::MatrixXd& Va, const Eigen::MatrixXi& Fa,
+                               const Eigen::MatrixXd& Vb, const Eigen::MatrixXi& Fb);
+
 }  // namespace curvefem::check

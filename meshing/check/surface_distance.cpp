@@ -6,7 +6,9 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "meshing/core/error.hpp"
@@ -69,6 +71,20 @@ HausdorffEstimate sampled_hausdorff(const Eigen::MatrixXd& Va, const Eigen::Matr
   h.mean_a_to_b = ab.size() ? ab.mean() : 0.0;
   h.mean_b_to_a = ba.size() ? ba.mean() : 0.0;
   return h;
+}
+
+double winding_number(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                      const Eigen::Vector3d& x) {
+  double sum = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = Eigen::Vector3d(V.row(F(f, 0))) - x,
+                          b = Eigen::Vector3d(V.row(F(f, 1))) - x,
+                          c = Eigen::Vector3d(V.row(F(f, 2))) - x;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    sum += 2 * std::atan2(a.dot(b.cross(c)),
+                          la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
+  }
+  return sum / (4 * std::numbers::pi);
 }
 
 }  // namespace curvefem::check

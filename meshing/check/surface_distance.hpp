@@ -31,4 +31,8 @@ HausdorffEstimate sampled_hausdorff(const Eigen::MatrixXd& Va, const Eigen::Matr
                                     const Eigen::MatrixXd& Vb, const Eigen::MatrixXi& Fb,
                                     int density = 3);
 
+/// The generalized winding number of the closed surface (V, F) at x: the faces' solid angles
+/// (Van Oosterom–Strackee) over 4π; 1 inside, 0 outside, for x away from the surface.
+double winding_number(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const Eigen::Vector3d& x);
+
 }  // namespace curvefem::check

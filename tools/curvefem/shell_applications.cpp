@@ -117,19 +117,8 @@ bool displacement_map_ok(const nlohmann::ordered_json& d) {
 
 namespace {
 
-/// Intersecting face pairs between two surfaces (exact, CGAL; the two share no vertex, so
-/// touching counts): the union's self-intersecting pairs with one face from each.
 int pairs_between(const SurfaceMesh& a, const SurfaceMesh& b) {
-  Eigen::MatrixXd V(a.V.rows() + b.V.rows(), 3);
-  V << a.V, b.V;
-  Eigen::MatrixXi F(a.F.rows() + b.F.rows(), 3);
-  F << a.F, (b.F.array() + int(a.V.rows())).matrix();
-  const auto degenerate = check::exactly_degenerate_faces(V, F);
-  const auto r =
-      check::find_self_intersections(V, F, degenerate, false, check::SelfIntersectionEngine::soup);
-  int n = 0;
-  for (const auto& [f, g] : r.pairs) n += (f < a.F.rows()) != (g < a.F.rows());
-  return n;
+  return check::intersecting_pairs_between(a.V, a.F, b.V, b.F);
 }
 
 int self_pairs(const SurfaceMesh& m) {
@@ -137,22 +126,6 @@ int self_pairs(const SurfaceMesh& m) {
   return int(check::find_self_intersections(m.V, m.F, degenerate, true,
                                             check::SelfIntersectionEngine::mesh)
                  .pairs.size());
-}
-
-/// The generalized winding number of closed surface m at x (sum of the faces' solid angles,
-/// Van Oosterom–Strackee, / 4π): 1 inside, 0 outside, for x away from m.
-double winding_number(const SurfaceMesh& m, const Eigen::Vector3d& x) {
-  double sum = 0;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
-    const Eigen::Vector3d a = Eigen::Vector3d(m.V.row(m.F(f, 0))) - x,
-                          b = Eigen::Vector3d(m.V.row(m.F(f, 1))) - x,
-                          c = Eigen::Vector3d(m.V.row(m.F(f, 2))) - x;
-    const double la = a.norm(), lb = b.norm(), lc = c.norm();
-    const double num = a.dot(b.cross(c));
-    const double den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-    sum += 2 * std::atan2(num, den);
-  }
-  return sum / (4 * std::numbers::pi);
 }
 
 }  // namespace
@@ -206,7 +179,8 @@ nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
          {"shrunk_pillars", layer.shrunk_pillars},
          {"shell_verified", layer.verification.valid()},
          {"self_intersecting_pairs", self_pairs(layer.cage)},
-         {"winding_number_of_layer_inside", winding_number(layer.cage, layers[k]->V.row(0))},
+         {"winding_number_of_layer_inside",
+          check::winding_number(layer.cage.V, layer.cage.F, layers[k]->V.row(0).transpose())},
          {"min_gap_to_layer_inside_rel", gap.minCoeff() / unit},
          {"max_gap_to_layer_inside_rel", gap.maxCoeff() / unit},
          {"map_samples", int(points.size())},

@@ -23,6 +23,7 @@
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/simplify.hpp"
 #include "meshing/shell/verify.hpp"
+#include "tests/meshing/shell/coarse_shell.hpp"
 
 namespace sh = curvefem::meshing::shell;
 using curvefem::SurfaceMesh;
@@ -39,20 +40,6 @@ SurfaceMesh bumpy_sphere(int level, double amplitude) {
   return s;
 }
 
-/// The shell of `curvefem shell` (defaults, simplified), on one thread so that it is the same
-/// coarse surface every run.
-sh::Shell coarse_shell(const SurfaceMesh& s) {
-  sh::ShellOptions o;
-  o.threads = 1;
-  sh::ShellStats stats;
-  sh::Shell shell = sh::build_shell(s, o, stats);
-  sh::SimplifyOptions so;
-  so.threads = 1;
-  so.zoom = 0.1 * curvefem::bbox_longest_edge(s.V);
-  sh::SimplifyStats ss;
-  return sh::simplify_shell(shell, s, so, ss);
-}
-
 int self_intersecting_pairs(const SurfaceMesh& m) {
   const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
   return int(curvefem::check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
@@ -62,7 +49,7 @@ int self_intersecting_pairs(const SurfaceMesh& m) {
 
 TEST(DisplacementMap, EveryRebuiltVertexIsOnTheInputAndOnItsFiberAndTheErrorFallsWithTheLevel) {
   const SurfaceMesh input = bumpy_sphere(4, 0.08);  // 5120 faces
-  const sh::Shell shell = coarse_shell(input);
+  const sh::Shell shell = curvefem::test::coarse_shell(input);
   ASSERT_TRUE(sh::verify_shell(shell, input).valid());
   ASSERT_LT(shell.F.rows(), 200);  // coarse: the map carries the detail
   const sh::ShellProjection onto_input(shell, input);
@@ -100,7 +87,7 @@ TEST(DisplacementMap, FoldsNowhereWhereTheNormalProjectionFolds) {
   // interpolated normals the level-4 surface self-intersects in hundreds of face pairs (712
   // measured) and is farther from the input; through P's fibers it does not self-intersect.
   const SurfaceMesh input = curvefem::make_adversarial("noise_sphere_5");
-  const sh::Shell shell = coarse_shell(input);
+  const sh::Shell shell = curvefem::test::coarse_shell(input);
   ASSERT_TRUE(sh::verify_shell(shell, input).valid());
   const sh::ShellProjection onto_input(shell, input);
   const double unit = curvefem::bbox_longest_edge(input.V);
@@ -133,7 +120,7 @@ TEST(DisplacementMap, FoldsNowhereWhereTheNormalProjectionFolds) {
 
 TEST(DisplacementMap, TheFileRoundtripsAndAMalformedOneIsRefusedWithItsLine) {
   const SurfaceMesh input = bumpy_sphere(3, 0.05);
-  const sh::Shell shell = coarse_shell(input);
+  const sh::Shell shell = curvefem::test::coarse_shell(input);
   const sh::ShellProjection onto_input(shell, input);
   const sh::DisplacementMap map = sh::bake_displacement_map(onto_input, 3);
   const auto dir = std::filesystem::temp_directory_path() / "curvefem_test_displacement_map";

@@ -13,25 +13,10 @@
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/simplify.hpp"
 #include "meshing/shell/verify.hpp"
+#include "tests/meshing/shell/coarse_shell.hpp"
 
 namespace sh = curvefem::meshing::shell;
 using curvefem::SurfaceMesh;
-
-namespace {
-
-sh::Shell coarse_shell(const SurfaceMesh& s) {
-  sh::ShellOptions o;
-  o.threads = 1;
-  sh::ShellStats stats;
-  sh::Shell shell = sh::build_shell(s, o, stats);
-  sh::SimplifyOptions so;
-  so.threads = 1;
-  so.zoom = 0.1 * curvefem::bbox_longest_edge(s.V);
-  sh::SimplifyStats ss;
-  return sh::simplify_shell(shell, s, so, ss);
-}
-
-}  // namespace
 
 TEST(GeometricTexture, SplitPiecesLieInOneTetOfTheReferencePrism) {
   for (const auto& name : sh::builtin_tile_names())
@@ -69,7 +54,7 @@ TEST(GeometricTexture, SplitPiecesLieInOneTetOfTheReferencePrism) {
 
 TEST(GeometricTexture, CopiesAreTheExactImageAndDoNotIntersect) {
   const SurfaceMesh input = curvefem::make_adversarial("noise_sphere_5");
-  const sh::Shell shell = coarse_shell(input);
+  const sh::Shell shell = curvefem::test::coarse_shell(input);
   ASSERT_TRUE(sh::verify_shell(shell, input).valid());
   const sh::ShellProjection projection(shell, input);
   const SurfaceMesh tile = sh::builtin_tile("knob");

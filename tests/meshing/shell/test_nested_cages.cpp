@@ -20,35 +20,9 @@ using curvefem::SurfaceMesh;
 
 namespace {
 
-/// Exactly intersecting face pairs of the union of two surfaces with one face from each.
-int pairs_between(const SurfaceMesh& a, const SurfaceMesh& b) {
-  Eigen::MatrixXd V(a.V.rows() + b.V.rows(), 3);
-  V << a.V, b.V;
-  Eigen::MatrixXi F(a.F.rows() + b.F.rows(), 3);
-  F << a.F, (b.F.array() + int(a.V.rows())).matrix();
-  const auto degenerate = curvefem::check::exactly_degenerate_faces(V, F);
-  int n = 0;
-  for (const auto& [f, g] : curvefem::check::find_self_intersections(V, F, degenerate, false).pairs)
-    n += (f < a.F.rows()) != (g < a.F.rows());
-  return n;
-}
-
 int self_pairs(const SurfaceMesh& m) {
   const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
   return int(curvefem::check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
-}
-
-double winding_number(const SurfaceMesh& m, const Eigen::Vector3d& x) {
-  double sum = 0;
-  for (int f = 0; f < m.num_faces(); ++f) {
-    const Eigen::Vector3d a = Eigen::Vector3d(m.V.row(m.F(f, 0))) - x,
-                          b = Eigen::Vector3d(m.V.row(m.F(f, 1))) - x,
-                          c = Eigen::Vector3d(m.V.row(m.F(f, 2))) - x;
-    const double la = a.norm(), lb = b.norm(), lc = c.norm();
-    sum += 2 * std::atan2(a.dot(b.cross(c)),
-                          la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
-  }
-  return sum / (4 * std::numbers::pi);
 }
 
 void expect_nested_and_mapped(const sh::NestedCages& cages) {
@@ -58,10 +32,16 @@ void expect_nested_and_mapped(const sh::NestedCages& cages) {
   for (std::size_t a = 0; a < layers.size(); ++a) {
     EXPECT_EQ(self_pairs(*layers[a]), 0) << "layer " << a;
     for (std::size_t b = a + 1; b < layers.size(); ++b) {
-      EXPECT_EQ(pairs_between(*layers[a], *layers[b]), 0) << a << " " << b;
+      EXPECT_EQ(curvefem::check::intersecting_pairs_between(layers[a]->V, layers[a]->F,
+                                                            layers[b]->V, layers[b]->F),
+                0)
+          << a << " " << b;
       // Every vertex of the inner layer is inside the outer one.
       for (int v = 0; v < layers[a]->num_vertices(); v += 7)
-        EXPECT_NEAR(winding_number(*layers[b], layers[a]->V.row(v)), 1.0, 1e-6) << a << " " << b;
+        EXPECT_NEAR(curvefem::check::winding_number(layers[b]->V, layers[b]->F,
+                                                    layers[a]->V.row(v).transpose()),
+                    1.0, 1e-6)
+            << a << " " << b;
     }
   }
   for (int k = 0; k < int(cages.layers.size()); ++k) {
