@@ -121,10 +121,10 @@ Eigen::VectorXd reduce_and_solve(const SparseMatrix& K, const Eigen::VectorXd& F
     if (rc >= 0) outer[rc + 1] = static_cast<int>(k);
   }
   CF_VERIFY(k == nnz, "reduced system: entry count mismatch");
-  if (owned) *owned = SparseMatrix();
+  if (owned) release(*owned);
   // Kff is this function's own: handed over, a distributed solve frees it once distributed.
   const Eigen::VectorXd uf =
-      solve_spd(std::move(Kff), rhs, reduced_options(options, reduced, m), info);
+      solve_spd(std::move(Kff), rhs, reduced_options(options, reduced, m), info);  // swapped in
   Eigen::VectorXd u(n);
   for (int i = 0; i < n; ++i) u[i] = reduced[i] >= 0 ? uf[reduced[i]] : c.values[i];
   return u;
@@ -140,7 +140,8 @@ Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& 
 
 Eigen::VectorXd solve_constrained(SparseMatrix&& K, const Eigen::VectorXd& F, const Constraints& c,
                                   const LinearSolverOptions& options, LinearSolveInfo* info) {
-  SparseMatrix owned = std::move(K);
+  SparseMatrix owned;
+  owned.swap(K);  // not std::move: Eigen's SparseMatrix would copy (linear_solver.hpp)
   return reduce_and_solve(owned, F, c, options, info, &owned);
 }
 

@@ -293,7 +293,7 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   }
   const Setup& setup = *kept->setup;
   // A copy where the cache keeps it for the next solve; otherwise the assembled matrix itself.
-  SparseMatrix K = solver.factorization_cache ? kept->K : std::move(kept->K);
+  SparseMatrix K = solver.factorization_cache ? kept->K : take(kept->K);
   Eigen::VectorXd body;
   Eigen::VectorXd F = external_load(mesh, space, problem, setup, &body);
   const Eigen::VectorXd load = F;  // l(v) before the Nitsche terms join F
@@ -427,7 +427,7 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
                  with_matrix ? s.K.valuePtr() : nullptr, &s.internal);
   s.valid = valid;
   if (!s.valid) {
-    s.K = SparseMatrix();  // a partial tangent is not handed out
+    release(s.K);  // a partial tangent is not handed out
     s.strain_energy = std::numeric_limits<double>::infinity();
     return s;
   }

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "fem/problems/boundary_conditions.hpp"
@@ -63,6 +64,22 @@ struct AssembledSystem {
   double rhs_integral = 0.0;   ///< Σ of F's volume part = ∫f (by quadrature)
   double flux_integral = 0.0;  ///< Σ of F's Neumann part = ∫g
   double robin_area = 0.0;     ///< ∫ 1 over the Robin conditions' points (by quadrature)
+
+  AssembledSystem() = default;
+  AssembledSystem(const AssembledSystem&) = default;
+  AssembledSystem& operator=(const AssembledSystem&) = default;
+  // Moves hand K's storage over (Eigen's SparseMatrix has no moves of its own and would copy:
+  // fem/solvers/linear_solver.hpp).
+  AssembledSystem(AssembledSystem&& o) noexcept { *this = std::move(o); }
+  AssembledSystem& operator=(AssembledSystem&& o) noexcept {
+    K.swap(o.K);
+    F = std::move(o.F);
+    F_volume = std::move(o.F_volume);
+    rhs_integral = o.rhs_integral;
+    flux_integral = o.flux_integral;
+    robin_area = o.robin_area;
+    return *this;
+  }
 };
 
 AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& space,

@@ -85,7 +85,8 @@ void release(std::vector<T>& v) {
 
 /// What every rank needs to know about a solve (rank 0 broadcasts it).
 struct Header {
-  long long n = 0;  // global rows
+  long long n = 0;            // global rows
+  long long graph_nodes = 0;  // vertices of the graph partitioned (groups of nodes)
   int block_size = 1;
   int kernel_columns = 0;  // exact null space (singular A)
   int vector_columns = 0;  // explicit near-nullspace vectors
@@ -328,7 +329,7 @@ void serve_solve() {
   MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
   wait(request);
   std::string partitioner;
-  partition({}, {}, h.n / h.block_size, partitioner);
+  partition({}, {}, h.graph_nodes, partitioner);
   LocalPart part = receive_part();
   solve_part(h, part);
 }
@@ -458,24 +459,35 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
   }
   const SparseMatrix& C = A.isCompressed() ? A : copy;
   // The node graph: node i = rows i*bs .. i*bs+bs-1; neighbours from the (symmetric) pattern.
+  // The graph PT-Scotch partitions: nodes (blocks of bs rows) in groups of `group` consecutive
+  // ones, neighbours from the (symmetric) pattern. The DOFs are numbered in spatial order
+  // (fem/space), so consecutive nodes are near each other; grouping keeps the graph at most
+  // k_graph_target vertices, whose partitioning on rank 0 (it holds the whole graph) then costs
+  // a fraction of the matrix's memory instead of several times the pattern's.
+  constexpr long long k_graph_target = 1 << 17;
   const long long nodes = n / bs;
-  std::vector<int> ptr(std::size_t(nodes) + 1, 0), adj;
+  const long long group = std::max(1LL, (nodes + k_graph_target - 1) / k_graph_target);
+  const long long groups = (nodes + group - 1) / group;
+  std::vector<int> ptr(std::size_t(groups) + 1, 0), adj;
   {
-    std::vector<int> seen(std::size_t(nodes), -1);
-    for (long long i = 0; i < nodes; ++i) {
-      for (int c = 0; c < bs; ++c)
-        for (SparseMatrix::InnerIterator it(C, int(i * bs + c)); it; ++it) {
-          const int j = it.row() / bs;
-          if (j != i && seen[std::size_t(j)] != int(i)) {
-            seen[std::size_t(j)] = int(i);
-            adj.push_back(j);
+    std::vector<int> seen(std::size_t(groups), -1);
+    for (long long G = 0; G < groups; ++G) {
+      for (long long i = G * group; i < std::min(nodes, (G + 1) * group); ++i)
+        for (int c = 0; c < bs; ++c)
+          for (SparseMatrix::InnerIterator it(C, int(i * bs + c)); it; ++it) {
+            const int J = int(it.row() / bs / group);
+            if (J != G && seen[std::size_t(J)] != int(G)) {
+              seen[std::size_t(J)] = int(G);
+              adj.push_back(J);
+            }
           }
-        }
-      ptr[std::size_t(i) + 1] = int(adj.size());
+      ptr[std::size_t(G) + 1] = int(adj.size());
     }
+    adj.shrink_to_fit();
   }
   Header h;
   h.n = n;
+  h.graph_nodes = groups;
   h.block_size = bs;
   h.kernel_columns = int(null_space.cols());
   h.vector_columns = use_vectors ? int(vectors.cols()) : 0;
@@ -492,9 +504,14 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
     wait(request);
     std::string partitioner;
-    const std::vector<int> owner = partition(ptr, adj, nodes, partitioner);
+    const std::vector<int> group_owner = partition(ptr, adj, groups, partitioner);
     release(ptr);
     release(adj);
+    std::vector<int> owner(static_cast<std::size_t>(nodes));
+    for (long long i = 0; i < nodes; ++i)
+      owner[std::size_t(i)] = group_owner[std::size_t(i / group)];
+    log::debug("distributed solve: ", nodes, " nodes partitioned in ", groups, " groups of ",
+               group);
     const Renumbering r = renumber_by_owner(owner, g_size);
     auto new_row = [&](int old) { return r.new_of[std::size_t(old / bs)] * bs + old % bs; };
     const double partition_s = watch.seconds();
@@ -549,8 +566,8 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
       else
         send_part(part, p);
     }
-    copy = SparseMatrix();
-    if (owned) *owned = SparseMatrix();  // rank 0 keeps its own rows only, like the others
+    fem::release(copy);
+    if (owned) fem::release(*owned);  // rank 0 keeps its own rows only, like the others
     const double distribute_s = watch.seconds() - partition_s;
     out = solve_part(h, own);
     info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + to_string(options.preconditioner);

@@ -165,7 +165,8 @@ Eigen::VectorXd solve_spd(const SparseMatrix& A, const Eigen::VectorXd& b,
 
 Eigen::VectorXd solve_spd(SparseMatrix&& A, const Eigen::VectorXd& b,
                           const LinearSolverOptions& options, LinearSolveInfo* info) {
-  SparseMatrix owned = std::move(A);
+  SparseMatrix owned;
+  owned.swap(A);  // not std::move: Eigen's SparseMatrix would copy (linear_solver.hpp)
   return solve_spd_impl(owned, b, options, info, &owned);
 }
 

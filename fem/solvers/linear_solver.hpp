@@ -106,6 +106,18 @@ struct LinearSolveInfo {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
+// Eigen 3.4's SparseMatrix has no move constructor and no move assignment: `B =
+// std::move(A)` and `SparseMatrix B = std::move(A)` copy A, and `A = SparseMatrix()` keeps A's
+// storage (its clear() keeps the capacity). These two do what a move and a release should.
+/// Moves A's storage into the result (A left empty); no copy.
+inline SparseMatrix take(SparseMatrix& A) {
+  SparseMatrix out;
+  out.swap(A);
+  return out;  // NRVO; GCC elides it, and at worst this is the copy a std::move would be
+}
+/// Frees A's storage.
+inline void release(SparseMatrix& A) { SparseMatrix().swap(A); }
+
 /// Limits the threads of the BLAS the solvers call (CHOLMOD's supernodal factorization, PETSc's
 /// dense kernels) to `threads` (>= 1), so that a run's thread count holds for BLAS too: Debian's
 /// OpenBLAS starts one thread per core, and its idle threads spin (sched_yield) beside a

@@ -158,3 +158,27 @@ TEST(Solvers, PoissonSolvesSharingACacheAssembleTheStiffnessOnce) {
   EXPECT_EQ(c.u, fem::solve_poisson(mesh, space, problem(1.0, 3.0), fresh).u);
   EXPECT_EQ(cached.factorization_cache->assemblies(), 2);
 }
+
+TEST(SparseMatrixOwnership, TakeMovesTheStorageAndReleaseFreesIt) {
+  // Eigen 3.4's SparseMatrix has no moves: std::move copies and `= SparseMatrix()` keeps the
+  // storage. take() and release() must do neither (rank 0's memory in a distributed solve, and
+  // a copy of K per solve, depended on it).
+  curvefem::fem::SparseMatrix A(1000, 1000);
+  A.setIdentity();
+  A.makeCompressed();
+  const double* values = A.valuePtr();
+  curvefem::fem::SparseMatrix B = curvefem::fem::take(A);
+  EXPECT_EQ(B.valuePtr(), values);  // the same storage, not a copy
+  EXPECT_EQ(B.nonZeros(), 1000);
+  EXPECT_EQ(A.nonZeros(), 0);
+  curvefem::fem::release(B);
+  EXPECT_EQ(B.data().allocatedSize(), 0);
+  // What the helpers replace: the copy and the kept capacity.
+  curvefem::fem::SparseMatrix C(1000, 1000);
+  C.setIdentity();
+  curvefem::fem::SparseMatrix D = std::move(C);
+  EXPECT_NE(D.valuePtr(), C.valuePtr());
+  EXPECT_EQ(C.nonZeros(), 1000);  // std::move left C whole: it copied
+  C = curvefem::fem::SparseMatrix();
+  EXPECT_GE(C.data().allocatedSize(), 1000);  // cleared, not freed
+}
