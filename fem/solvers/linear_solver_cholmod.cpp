@@ -67,7 +67,7 @@ Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
       factorized = true;
     } else {
       c.llt.reset();
-      c.matrix = std::move(compressed);
+      c.matrix.swap(compressed);  // not std::move: it would copy (linear_solver.hpp)
       auto fresh = std::make_unique<Llt>();
       fresh->compute(c.matrix);
       ++c.factorizations;
