@@ -3,7 +3,8 @@
 // Model: rank 0 runs the whole pipeline (meshing, discretization, assembly, Dirichlet elimination,
 // errors, output); the other ranks wait in `serve()` for rank 0's requests. A linear solve on
 // rank 0 (solve_spd) becomes collective: rank 0 partitions the unknowns' graph (nodes = blocks of
-// block_size rows, edges = the matrix pattern) with PETSc's MatPartitioning "ptscotch" (a
+// block_size rows in groups of consecutive ones, at most 2^17 groups; edges = the matrix
+// pattern) with PETSc's MatPartitioning "ptscotch" (a
 // contiguous split with a warning when that fails), renumbers the rows so that every rank owns a
 // contiguous range, sends each rank its rows (CSR), its slice of the right-hand side, of the
 // near-nullspace coordinates / vectors and of the kernel; every rank builds its part of a
