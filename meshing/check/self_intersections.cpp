@@ -169,6 +169,11 @@ SelfIntersectionResult find_self_intersections(const Eigen::MatrixXd& V, const E
   return result;
 }
 
+int count_self_intersecting_pairs(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
+  const auto degenerate = exactly_degenerate_faces(V, F);
+  return int(find_self_intersections(V, F, degenerate, true).pairs.size());
+}
+
 int intersecting_pairs_between(const Eigen::MatrixXd& Va, const Eigen::MatrixXi& Fa,
                                const Eigen::MatrixXd& Vb, const Eigen::MatrixXi& Fb) {
   Eigen::MatrixXd V(Va.rows() + Vb.rows(), 3);

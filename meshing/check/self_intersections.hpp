@@ -45,6 +45,10 @@ SelfIntersectionResult find_self_intersections(
     const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::vector<char>& degenerate,
     bool is_oriented_manifold, SelfIntersectionEngine engine = SelfIntersectionEngine::automatic);
 
+/// The number of self-intersecting pairs of non-degenerate faces of an oriented manifold (V, F)
+/// (PMP's mesh engine; degenerate faces are not paired).
+int count_self_intersecting_pairs(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
+
 /// Exactly intersecting face pairs between two surfaces (a's faces against b's; the two share no
 /// vertex, so touching counts): the union's soup pairs with one face from each.
 int intersecting_pairs_between(const Eigen::MatrixXd& Va, const Eigen::MatrixXi& Fa,

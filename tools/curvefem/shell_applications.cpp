@@ -121,13 +121,6 @@ int pairs_between(const SurfaceMesh& a, const SurfaceMesh& b) {
   return check::intersecting_pairs_between(a.V, a.F, b.V, b.F);
 }
 
-int self_pairs(const SurfaceMesh& m) {
-  const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
-  return int(check::find_self_intersections(m.V, m.F, degenerate, true,
-                                            check::SelfIntersectionEngine::mesh)
-                 .pairs.size());
-}
-
 }  // namespace
 
 nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
@@ -178,7 +171,8 @@ nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
          {"shrink_rounds", layer.shrink_rounds},
          {"shrunk_pillars", layer.shrunk_pillars},
          {"shell_verified", layer.verification.valid()},
-         {"self_intersecting_pairs", self_pairs(layer.cage)},
+         {"self_intersecting_pairs",
+          check::count_self_intersecting_pairs(layer.cage.V, layer.cage.F)},
          {"winding_number_of_layer_inside",
           check::winding_number(layer.cage.V, layer.cage.F, layers[k]->V.row(0).transpose())},
          {"min_gap_to_layer_inside_rel", gap.minCoeff() / unit},

@@ -13,15 +13,6 @@
 namespace sh = curvefem::meshing::shell;
 using curvefem::SurfaceMesh;
 
-namespace {
-
-int self_pairs(const SurfaceMesh& m) {
-  const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
-  return int(curvefem::check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
-}
-
-}  // namespace
-
 TEST(Boolean, ResultsAreEmbeddedWithInclusionExclusionVolumesAndKnownOrigins) {
   const SurfaceMesh a = curvefem::make_icosphere(3);
   const SurfaceMesh b = curvefem::make_icosphere(3, 0.7, Eigen::Vector3d(0.9, 0.3, 0.2));
@@ -30,7 +21,7 @@ TEST(Boolean, ResultsAreEmbeddedWithInclusionExclusionVolumesAndKnownOrigins) {
   for (auto op : {sh::BooleanOperation::union_of, sh::BooleanOperation::intersection,
                   sh::BooleanOperation::difference}) {
     const sh::BooleanResult r = sh::corefine_boolean(a, b, op);
-    EXPECT_EQ(self_pairs(r.mesh), 0) << k;
+    EXPECT_EQ(curvefem::check::count_self_intersecting_pairs(r.mesh.V, r.mesh.F), 0) << k;
     EXPECT_EQ(r.mesh.num_vertices() - r.mesh.num_faces() / 2, 2) << k;  // closed, genus 0
     volume[k] = curvefem::signed_volume(r.mesh);
     // Every face is on the operand face it names: its corners at distance ~0 from it.

@@ -20,17 +20,13 @@ using curvefem::SurfaceMesh;
 
 namespace {
 
-int self_pairs(const SurfaceMesh& m) {
-  const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
-  return int(curvefem::check::find_self_intersections(m.V, m.F, degenerate, true).pairs.size());
-}
-
 void expect_nested_and_mapped(const sh::NestedCages& cages) {
   const double unit = curvefem::bbox_longest_edge(cages.input.V);
   std::vector<const SurfaceMesh*> layers{&cages.input};
   for (const auto& l : cages.layers) layers.push_back(&l.cage);
   for (std::size_t a = 0; a < layers.size(); ++a) {
-    EXPECT_EQ(self_pairs(*layers[a]), 0) << "layer " << a;
+    EXPECT_EQ(curvefem::check::count_self_intersecting_pairs(layers[a]->V, layers[a]->F), 0)
+        << "layer " << a;
     for (std::size_t b = a + 1; b < layers.size(); ++b) {
       EXPECT_EQ(curvefem::check::intersecting_pairs_between(layers[a]->V, layers[a]->F,
                                                             layers[b]->V, layers[b]->F),
