@@ -305,6 +305,9 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
     result.nitsche_faces += splits.back().partial_faces;
   }
   result.timings.add("assembly", watch.seconds());
+  // Without a cache nothing needs the assembly's pattern and tables again (`setup` is not used
+  // below this point): free them before the solver's copies and preconditioner.
+  if (!solver.factorization_cache) kept.reset();
   const Constraints constraints = dirichlet_constraints(space, problem, splits);
   result.free_unknowns = static_cast<int>(F.size()) - constraints.num_fixed();
   LinearSolverOptions options = solver;
