@@ -30,6 +30,16 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> vertex_bounding_box(const LagrangeMe
   return {lo, hi};
 }
 
+LagrangeMesh as_triangle_mesh(const SurfaceMesh& s) {
+  LagrangeMesh m;
+  m.kind = CellKind::triangle;
+  m.order = 1;
+  m.nodes = s.V;
+  m.cells = s.F;
+  m.cell_tags = s.tags;
+  return m;
+}
+
 void validate_structure(const LagrangeMesh& mesh, const std::string& what) {
   if (mesh.order < 1 || mesh.order > k_max_order)
     throw InputError(what + ": geometric order " + std::to_string(mesh.order) + " is not in 1.." +

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "meshing/core/lagrange_nodes.hpp"
+#include "meshing/core/surface_mesh.hpp"
 
 namespace curvefem {
 
@@ -38,6 +39,10 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> vertex_bounding_box(const LagrangeMe
 
 /// Throws InputError naming the first defect: bad order, wrong column count, node id out of
 /// range, non-finite coordinate, tag count mismatch.
+/// A triangle surface as an order-1 triangle LagrangeMesh (nodes = V, cells = F, cell_tags = the
+/// face tags), e.g. for write_vtu.
+LagrangeMesh as_triangle_mesh(const SurfaceMesh& s);
+
 void validate_structure(const LagrangeMesh& mesh, const std::string& what = "mesh");
 
 /// A named field attached to points (nodes) or cells; values are row-major, size n × components.

@@ -53,6 +53,7 @@ std::string shrink_top(Shell& shell, CageLayer& layer, const NestedCageOptions& 
              std::to_string(check.intersecting_input_faces) + " faces meeting it, " +
              std::to_string(check.non_section_faces) + " not a section)";
     shrunk.insert(vertices.begin(), vertices.end());
+    layer.verification = check;  // of the shell kept: no need to verify it again
     shell = std::move(trial);
     ++layer.shrink_rounds;
     pairs = top_pairs(shell);
@@ -123,7 +124,7 @@ NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions
       if (a + 1 == attempts.size())
         throw MeshingError("nested cages: layer " + std::to_string(k + 1) + ": " + why);
     }
-    layer.verification = verify_shell(shell, layer.surface);
+    if (layer.shrink_rounds == 0) layer.verification = verify_shell(shell, layer.surface);
     layer.cage.V = shell.top;
     layer.cage.F = shell.F;
     layer.shell = std::move(shell);

@@ -28,16 +28,6 @@ std::string extension(const std::string& path) {
   return e;
 }
 
-LagrangeMesh as_lagrange(const SurfaceMesh& s) {
-  LagrangeMesh m;
-  m.kind = CellKind::triangle;
-  m.order = 1;
-  m.nodes = s.V;
-  m.cells = s.F;
-  m.cell_tags = s.tags;
-  return m;
-}
-
 int run_convert(const ConvertOptions& o) {
   auto progress = apply_global_options(o.global);
   const std::string in = extension(o.input), out = extension(o.output);
@@ -64,7 +54,7 @@ int run_convert(const ConvertOptions& o) {
   }
   const SurfaceMesh surface = io::read_surface(o.input);
   if (out == ".vtu") {
-    io::write_vtu(o.output, as_lagrange(surface));
+    io::write_vtu(o.output, as_triangle_mesh(surface));
   } else {
     io::SurfaceFormat format = io::surface_format_from_extension(o.output);
     if (o.ascii && format == io::SurfaceFormat::stl_binary) format = io::SurfaceFormat::stl_ascii;

@@ -294,15 +294,6 @@ double operand_field(int operand, const Eigen::Vector3d& x, const Eigen::Vector3
                       : 2 + std::cos(2 * p.x() + p.z()) * std::sin(3 * p.y());
 }
 
-LagrangeMesh triangles(const SurfaceMesh& m) {
-  LagrangeMesh t;
-  t.kind = CellKind::triangle;
-  t.order = 1;
-  t.nodes = m.V;
-  t.cells = m.F;
-  return t;
-}
-
 }  // namespace
 
 nlohmann::ordered_json run_boolean_transfer(const BooleanInput& in, const sh::Shell& shell,
@@ -342,7 +333,7 @@ nlohmann::ordered_json run_boolean_transfer(const BooleanInput& in, const sh::Sh
       {"operand", 1,
        std::vector<double>(result_operand_cells.data(),
                            result_operand_cells.data() + result_operand_cells.size())});
-  io::write_vtu(out.path("result.vtu"), triangles(r), rf);
+  io::write_vtu(out.path("result.vtu"), as_triangle_mesh(r), rf);
   // The coarse middle surface: each vertex through P to the result (the beveled refinement's
   // point, then its place in the result face), then to its operand.
   const sh::ShellProjection onto(shell, surface.mesh);
@@ -392,7 +383,7 @@ nlohmann::ordered_json run_boolean_transfer(const BooleanInput& in, const sh::Sh
       {"field", 1, std::vector<double>(coarse_field.data(), coarse_field.data() + n)});
   cf.point_data.push_back(
       {"operand", 1, std::vector<double>(coarse_operand.data(), coarse_operand.data() + n)});
-  io::write_vtu(out.path("remeshed.vtu"), triangles(middle), cf);
+  io::write_vtu(out.path("remeshed.vtu"), as_triangle_mesh(middle), cf);
   int from_a = 0;
   for (int o : in.result.operand) from_a += o == 0;
   return {{"operation", in.operation},
