@@ -18,3 +18,26 @@ void slim_weights(const Eigen::Matrix2d& J, Eigen::Matrix2d& W, Eigen::Matrix2d&
 }
 
 }  // namespace curvefem::meshing::param
+
+namespace curvefem::meshing::param {
+
+void slim_weights_3d(const Eigen::Matrix3d& J, Eigen::Matrix3d& W, Eigen::Matrix3d& R,
+                     Eigen::Vector3d* singular_values) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+  Eigen::Vector3d s = svd.singularValues();
+  // det J > 0 gives det U = det V; make both rotations (flipping the same column of each keeps
+  // U Σ Vᵀ), so that R = U Vᵀ is the closest rotation.
+  if (U.determinant() < 0) {
+    U.col(2) *= -1;
+    V.col(2) *= -1;
+  }
+  R = U * V.transpose();
+  Eigen::Vector3d w;
+  for (int i = 0; i < 3; ++i)
+    w[i] = std::sqrt((1 + s[i]) * (1 + s[i] * s[i]) / (s[i] * s[i] * s[i]));
+  W = U * w.asDiagonal() * U.transpose();
+  if (singular_values) *singular_values = s;
+}
+
+}  // namespace curvefem::meshing::param

@@ -40,3 +40,26 @@ inline Eigen::Vector2d singular_values(const Eigen::Matrix2d& J) {
 void slim_weights(const Eigen::Matrix2d& J, Eigen::Matrix2d& W, Eigen::Matrix2d& R);
 
 }  // namespace curvefem::meshing::param
+
+namespace curvefem::meshing::param {
+
+// The same for 3 × 3 Jacobians (the tet scaffold of thesis §3.2.3): D(J) = ‖J‖²_F + ‖J⁻¹‖²_F
+// = Σ σ_i² + σ_i⁻² ≥ 6 (= 6 iff J is a rotation), +∞ when det J ≤ 0; the SLIM weights have the
+// same per-singular-value formula.
+inline double symmetric_dirichlet_3d(const Eigen::Matrix3d& J) {
+  const double det = J.determinant();
+  if (!(det > 0)) return std::numeric_limits<double>::infinity();
+  return J.squaredNorm() + J.inverse().squaredNorm();
+}
+
+/// ∂D/∂J = 2J − 2 J⁻ᵀ J⁻¹ J⁻ᵀ (det J > 0).
+inline Eigen::Matrix3d symmetric_dirichlet_gradient_3d(const Eigen::Matrix3d& J) {
+  const Eigen::Matrix3d Jit = J.inverse().transpose();
+  return 2.0 * J - 2.0 * Jit * Jit.transpose() * Jit;
+}
+
+/// Signed SVD of J (det J > 0): σ₁ ≥ σ₂ ≥ σ₃ > 0, U and V rotations. SLIM's W and R = U Vᵀ.
+void slim_weights_3d(const Eigen::Matrix3d& J, Eigen::Matrix3d& W, Eigen::Matrix3d& R,
+                     Eigen::Vector3d* singular_values = nullptr);
+
+}  // namespace curvefem::meshing::param

@@ -634,9 +634,13 @@ TetFillResult fill_interior(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                                 " moved boundary vertices, volume error ", check.volume_error_rel));
   }
   result.seconds = watch.seconds();
-  log::info("tetfill: ", F.rows(), " boundary faces -> ", result.T.rows(), " tets, ",
-            interior.size(), " interior vertices in ", result.seconds, " s (gmsh ",
-            result.gmsh_seconds, " s)");
+  const std::string summary = log::cat(
+      "tetfill: ", F.rows(), " boundary faces -> ", result.T.rows(), " tets, ", interior.size(),
+      " interior vertices in ", result.seconds, " s (gmsh ", result.gmsh_seconds, " s)");
+  if (options.quiet)
+    log::debug(summary);
+  else
+    log::info(summary);
   return result;
 }
 

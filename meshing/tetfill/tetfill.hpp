@@ -37,6 +37,8 @@ struct TetFillOptions {
   /// (abort) on near-degenerate surfaces; isolated, that becomes a MeshingError the caller can
   /// handle instead of killing the process. The child runs gmsh on one thread.
   bool isolate = true;
+  /// Report the result at debug level instead of info (for callers that fill many times).
+  bool quiet = false;
 };
 
 struct TetFillResult {

@@ -22,6 +22,7 @@ void register_validate(CLI::App& app);  // cmd_validate.cpp
 void register_study(CLI::App& app);     // cmd_study.cpp
 void register_schema(CLI::App& app);    // cmd_schema.cpp
 void register_param(CLI::App& app);     // cmd_param.cpp
+void register_deform(CLI::App& app);    // cmd_deform.cpp
 
 inline void register_commands(CLI::App& app) {
   register_check(app);
@@ -36,6 +37,7 @@ inline void register_commands(CLI::App& app) {
   register_study(app);
   register_schema(app);
   register_param(app);
+  register_deform(app);
 }
 
 /// Runs the action of the parsed subcommand and returns its exit code.

@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/core/adversarial.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/param/uv_check.hpp"
 #include "tests/meshing/param/param_inputs.hpp"
@@ -201,4 +203,71 @@ TEST(ParamCli, InitialMapFromTheInputTextureCoordinates) {
   EXPECT_NE(out.find("not a bijective map"), std::string::npos) << out;
   const int faces = test::bump_disk(8, 32, 1.0, 0.3).num_faces();
   EXPECT_NE(out.find(std::to_string(faces) + " flipped"), std::string::npos) << out;
+}
+
+// `curvefem deform`: the split ring's end caps sent across each other. The naive targets make the
+// surface cross itself; the deformed OBJ (re-read here) must not, exactly, and the report must
+// carry the tiling's verification. Bad input: exit 2 and no output.
+TEST(DeformCli, EndsOfASplitRingPulledAcrossStayApartAndBadInputIsRefused) {
+  const auto dir = test::scratch_dir("deform_cli");
+  const int n = 16;
+  const SurfaceMesh ring = make_split_ring(1.0, 1.4, 0.4, 0.3, n);
+  io::write_surface(dir / "ring.obj", ring, io::SurfaceFormat::obj);
+  {
+    std::ofstream t(dir / "targets.txt");
+    t.precision(17);
+    t << "# end caps swapped\n";
+    for (int k = 0; k < 4; ++k) {
+      const int a = k, b = 4 * n + k;
+      t << a << ' ' << ring.V(b, 0) << ' ' << ring.V(b, 1) << ' ' << ring.V(b, 2) << '\n';
+      t << b << ' ' << ring.V(a, 0) << ' ' << ring.V(a, 1) << ' ' << ring.V(a, 2) << '\n';
+    }
+  }
+  const std::string in = (dir / "ring.obj").string(), out_obj = (dir / "closed.obj").string();
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " deform -q " + in + " -o " + out_obj + " --targets " +
+                                  (dir / "targets.txt").string() + " --iterations 20 --report " +
+                                  (dir / "report.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "report.json");
+  EXPECT_GT(r["naive_self_intersecting_pairs"].get<int>(), 0);
+  EXPECT_EQ(r["self_intersecting_pairs"], 0);
+  EXPECT_EQ(r["max_self_intersecting_pairs_over_iterations"], 0);
+  EXPECT_EQ(r["non_positive_tets"], 0);
+  EXPECT_EQ(r["tiling_boundary_mismatches"], 0);
+  EXPECT_EQ(r["valid"], true);
+  // Each end can come at best halfway to its target (where the other end was): the two meet.
+  EXPECT_LT(r["target_error_rel"].get<double>(),
+            0.55 * r["initial_target_error_rel"].get<double>());
+  const auto& h = r["history"];
+  ASSERT_EQ(h.size(), std::size_t(r["iterations"].get<int>() + 1));
+  for (std::size_t i = 1; i < h.size(); ++i) {
+    EXPECT_LE(h[i]["objective"].get<double>(), h[i - 1]["objective"].get<double>());
+    EXPECT_GT(h[i]["min_tet_volume_rel"].get<double>(), 0);
+  }
+  const SurfaceMesh closed = io::read_surface(dir / "closed.obj");
+  EXPECT_EQ(closed.F, ring.F);
+  EXPECT_EQ(check::count_self_intersecting_pairs(closed.V, closed.F), 0);
+  // Bad input: a target vertex out of range (file:line), nothing to do, an open surface.
+  std::ofstream(dir / "bad.txt") << "0 0 0 0\n999 1 1 1\n";
+  EXPECT_EQ(test::run_command(cli() + " deform " + in + " -o " + (dir / "x.obj").string() +
+                                  " --targets " + (dir / "bad.txt").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("bad.txt:2"), std::string::npos) << out;
+  EXPECT_EQ(test::run_command(cli() + " deform " + in + " -o " + (dir / "x.obj").string(), &out), 2)
+      << out;
+  EXPECT_NE(out.find("nothing to do"), std::string::npos) << out;
+  SurfaceMesh open = ring;
+  open.F.conservativeResize(open.F.rows() - 1, 3);
+  io::write_surface(dir / "open.obj", open, io::SurfaceFormat::obj);
+  EXPECT_EQ(test::run_command(cli() + " deform " + (dir / "open.obj").string() + " -o " +
+                                  (dir / "x.obj").string() + " --grow 1.5",
+                              &out),
+            2)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.obj"));
 }

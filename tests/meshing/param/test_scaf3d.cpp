@@ -1,0 +1,160 @@
+// SCAF with a tet scaffold (meshing/param/scaf3d): a closed surface deformed toward targets that
+// would make it cross itself, and grown inside a box. The guarantee (every object and scaffold
+// tet positive, the two tiling the box, hence no self-intersection) is checked by code independent
+// of the optimisation: meshing/tetfill's exact verifier through verify_scaf3d, and meshing/check's
+// exact self-intersection count of the surface, after every iteration.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/core/adversarial.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
+#include "meshing/param/scaf3d.hpp"
+
+using namespace curvefem;
+using namespace curvefem::meshing::param;
+
+namespace {
+
+// The split ring's two end caps (rows 0..3 at angle +δ, rows 4n..4n+3 at −δ), each sent to the
+// other's position: applied naively, the ends pass through each other.
+struct RingCase {
+  SurfaceMesh ring;
+  std::vector<PositionTarget> targets;
+  double gap = 0;
+};
+
+RingCase split_ring_case() {
+  RingCase c;
+  const int n = 24;
+  c.gap = 0.3;
+  c.ring = make_split_ring(1.0, 1.4, 0.4, c.gap, n);
+  for (int k = 0; k < 4; ++k) {
+    const int a = k, b = 4 * n + k;
+    c.targets.push_back({a, c.ring.V.row(b).transpose()});
+    c.targets.push_back({b, c.ring.V.row(a).transpose()});
+  }
+  return c;
+}
+
+// The smallest distance between a corner of one end cap and a corner of the other (how close the
+// ends came; whether they cross is the exact self-intersection count's to say).
+double end_distance(const Eigen::MatrixXd& V, int n) {
+  double d = 1e300;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) d = std::min(d, (V.row(a) - V.row(4 * n + b)).norm());
+  return d;
+}
+
+}  // namespace
+
+TEST(Scaf3d, PullingTheEndsOfASplitRingAcrossEachOtherNeverCrossesThem) {
+  const RingCase c = split_ring_case();
+  // The naive answer (targets applied as they are) is self-intersecting: the test is meaningful.
+  SurfaceMesh naive = c.ring;
+  for (const PositionTarget& t : c.targets) naive.V.row(t.vertex) = t.target.transpose();
+  EXPECT_GT(check::count_self_intersecting_pairs(naive.V, naive.F), 0);
+  ASSERT_EQ(check::count_self_intersecting_pairs(c.ring.V, c.ring.F), 0);
+
+  Deform3dOptions options;
+  options.max_iterations = 30;
+  int iterations = 0, worst_pairs = 0;
+  double previous = 1e300;
+  bool monotone = true;
+  options.on_iteration = [&](const Deform3dIteration& st, const Eigen::MatrixXd& V) {
+    ++iterations;
+    worst_pairs = std::max(worst_pairs, check::count_self_intersecting_pairs(V, c.ring.F));
+    monotone = monotone && st.objective <= previous;
+    previous = st.objective;
+  };
+  const Deform3dResult r = scaf3d_deform(c.ring, c.targets, options);
+  EXPECT_GE(iterations, 3);
+  EXPECT_EQ(worst_pairs, 0);
+  EXPECT_TRUE(monotone);
+  const Deform3dCheck check = verify_scaf3d(c.ring, r);
+  EXPECT_EQ(check.non_positive_tets, 0);
+  EXPECT_EQ(check.boundary_mismatches, 0);
+  EXPECT_LT(check.volume_error_rel, 1e-9);
+  // The ends came most of the way toward each other, and are still apart.
+  const double before = end_distance(c.ring.V, 24), after = end_distance(r.V, 24);
+  EXPECT_NEAR(before, c.gap, 1e-12);
+  EXPECT_GT(after, 0);
+  EXPECT_LT(after, 0.25 * before) << "end distance " << before << " -> " << after;
+  EXPECT_GT(r.history.back().min_volume_rel, 0);
+}
+
+TEST(Scaf3d, ASphereGrownInsideItsBoxFillsItWithoutLeavingIt) {
+  const SurfaceMesh sphere = make_icosphere(2);
+  Deform3dOptions options;
+  options.grow = 2.0;
+  options.box_scale = 1.5;
+  options.max_iterations = 25;
+  const Deform3dResult r = scaf3d_deform(sphere, {}, options);
+  ASSERT_GE(r.history.size(), 2u);
+  for (std::size_t i = 1; i < r.history.size(); ++i)
+    EXPECT_LE(r.history[i].objective, r.history[i - 1].objective);
+  // E_M of the rest shape grown 2x is far above 6 at the start and falls as the sphere grows.
+  EXPECT_GT(r.history.front().energy, 10.0);
+  EXPECT_LT(r.history.back().energy, 0.8 * r.history.front().energy);
+  const double extent0 = (sphere.V.colwise().maxCoeff() - sphere.V.colwise().minCoeff()).maxCoeff();
+  const double extent = (r.V.colwise().maxCoeff() - r.V.colwise().minCoeff()).maxCoeff();
+  EXPECT_GT(extent, 1.2 * extent0);
+  EXPECT_LT(extent, 1.5 * extent0);  // inside the box
+  EXPECT_EQ(check::count_self_intersecting_pairs(r.V, sphere.F), 0);
+  const Deform3dCheck check = verify_scaf3d(sphere, r);
+  EXPECT_TRUE(check.ok());
+  EXPECT_LT(check.volume_error_rel, 1e-9);
+}
+
+TEST(Scaf3d, TheVerifierSeesAnInvertedScaffoldTet) {
+  const SurfaceMesh sphere = make_icosphere(1);
+  Deform3dOptions options;
+  options.max_iterations = 0;
+  Deform3dResult r = scaf3d_deform(sphere, {}, options);
+  EXPECT_TRUE(verify_scaf3d(sphere, r).ok());
+  std::swap(r.scaffold_tets(0, 0), r.scaffold_tets(0, 1));
+  const Deform3dCheck check = verify_scaf3d(sphere, r);
+  EXPECT_EQ(check.non_positive_tets, 1);
+  EXPECT_FALSE(check.ok());
+}
+
+TEST(Scaf3d, BadTargetsAreRefusedNamingTheLine) {
+  const auto dir = std::filesystem::temp_directory_path() / "curvefem_scaf3d_targets";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "t.txt").string();
+  {
+    std::ofstream out(path);
+    out << "# vertex x y z\n0 1 2 3\n\n7 1 2\n";
+  }
+  try {
+    read_target_file(path, 10);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.txt:4"), std::string::npos) << e.what();
+  }
+  {
+    std::ofstream out(path);
+    out << "0 1 2 3\n12 0 0 0\n";
+  }
+  try {
+    read_target_file(path, 10);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.txt:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("vertex 12"), std::string::npos) << e.what();
+  }
+  {
+    std::ofstream out(path);
+    out << "0 1 2 3  # a comment\n3 -1 0.5 2e-1\n";
+  }
+  const auto targets = read_target_file(path, 10);
+  ASSERT_EQ(targets.size(), 2u);
+  EXPECT_EQ(targets[1].vertex, 3);
+  EXPECT_DOUBLE_EQ(targets[1].target.z(), 0.2);
+  std::filesystem::remove_all(dir);
+  EXPECT_THROW(scaf3d_deform(make_icosphere(1), {{99, {0, 0, 0}}}), InputError);
+}
