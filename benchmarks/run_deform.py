@@ -6,6 +6,8 @@ Inputs:
   split_ring      a rectangular ring (radii 1..1.4, height 0.4) with a slit of 0.3, its two end
                   caps sent to each other's place by positional targets (written here as OBJ +
                   target file): applied as they are, the ends cross; SCAF must stop them at contact
+  split_ring_tangled  the same ring with its end caps already swapped (self-intersecting, genus
+                  0), run with --untangle: flowed until embedded, then pulled back toward itself
   <dev> grow S    a dev mesh whose rest shape is S times the input, inside a box B times its
                   bounding box (the thesis' Fig. 3.10 "bunny grown inside a box")
 Every iteration's surface is checked for self-intersection by meshing/check (exact) and the final
@@ -89,6 +91,16 @@ with tempfile.TemporaryDirectory() as work:
             f.write("%d %.17g %.17g %.17g\n" % ((a,) + V[b]))
             f.write("%d %.17g %.17g %.17g\n" % ((b,) + V[a]))
     rows.append(run("split_ring", ring, ["--targets", targets], work))
+    tangled = os.path.join(work, "split_ring_tangled_in.obj")
+    T = list(V)
+    for k in range(4):
+        T[k], T[4 * n + k] = V[4 * n + k], V[k]
+    with open(tangled, "w") as f:
+        for v in T:
+            f.write("v %.17g %.17g %.17g\n" % v)
+        for t in F:
+            f.write("f %d %d %d\n" % (t[0] + 1, t[1] + 1, t[2] + 1))
+    rows.append(run("split_ring_tangled", tangled, ["--untangle"], work))
     for name in args.dev:
         path = os.path.join(args.data, name + ".obj")
         if not os.path.exists(path):
@@ -138,6 +150,21 @@ for row in rows:
          r["non_positive_tets"], "yes" if r["valid"] else "NO", r["time_s"]["per_iteration"],
          mean("scaffold"), mean("assemble"), mean("solve"), r["time_s"]["total"]))
 lines.append("")
+unt = [row for row in rows if row["report"].get("untangle")]
+if unt:
+    lines.append("With --untangle (naive = the input's own self-intersecting pairs): the flow, and "
+                 "the distance of the result to the input (/ the input's bounding box diagonal).")
+    lines.append("")
+    lines.append("| input | input pairs | flow steps | pairs after each flow step | flow s | max "
+                 "distance | mean distance |")
+    lines.append("|---|---|---|---|---|---|---|")
+    for row in unt:
+        u = row["report"]["untangle"]
+        lines.append("| %s | %d | %d | %s | %.3f | %.3g | %.3g |" %
+                     (row["name"], u["input_self_intersecting_pairs"], u["flow_steps"],
+                      ", ".join(map(str, u["pairs_after_each_flow_step"])), u["flow_s"],
+                      u["max_distance_to_input_rel"], u["mean_distance_to_input_rel"]))
+    lines.append("")
 lines.append("Commands (paths relative to the temporary work folder):")
 lines.append("")
 for row in rows:

@@ -350,7 +350,12 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
   Layout L;
   L.ns = ns;
   L.no = int(object.V.rows()) - ns;
-  const Eigen::Vector3d lo = surface.V.colwise().minCoeff(), hi = surface.V.colwise().maxCoeff();
+  // The box holds the surface and the targets (a target outside it could not be reached).
+  Eigen::Vector3d lo = surface.V.colwise().minCoeff(), hi = surface.V.colwise().maxCoeff();
+  for (const PositionTarget& c : targets) {
+    lo = lo.cwiseMin(c.target);
+    hi = hi.cwiseMax(c.target);
+  }
   const Eigen::Vector3d centre = 0.5 * (lo + hi), half = 0.5 * options.box_scale * (hi - lo);
   const SurfaceMesh box =
       make_box_surface(centre - half, centre + half, std::max(1, options.box_divisions));

@@ -61,7 +61,7 @@ struct Deform3dOptions {
   double scaffold_weight = 0.01;  ///< λ = scaffold_weight · E_M / |S|
   double target_weight = 1e4;     ///< w of the positional targets (per target, distances / L)
   double grow = 1.0;  ///< rest shape = the input scaled by this (no centre: E is rigid-invariant)
-  double box_scale = 2.0;  ///< box = the input's bounding box scaled by this about its centre
+  double box_scale = 2.0;  ///< box: the bounding box of the input and targets, scaled
   int box_divisions = 4;   ///< grid of each box side (quads split in two)
   double armijo = 1e-4;
   /// Called with each iteration's statistics and the surface vertices (#V × 3).

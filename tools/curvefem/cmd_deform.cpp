@@ -1,10 +1,13 @@
 // `curvefem deform IN -o OUT.obj [--targets FILE] [--grow S] [--box B] [--iterations N]
-// [--tolerance T] [--target-weight W] [--report report.json] [--quiet]`: deform a closed surface
-// toward positional targets (and/or a grown rest shape) without self-intersection: SCAF with a
-// tetrahedral scaffold (meshing/param/scaf3d.hpp). After every iteration the surface is checked
-// for self-intersection by meshing/check (exact); at the end the object and scaffold tets are
-// verified positive and tiling the box (meshing/tetfill's exact verifier). Exit 0 when both
-// checks pass, 3 when not, 2 for bad input (an open or self-intersecting surface, a bad target).
+// [--tolerance T] [--target-weight W] [--untangle [--flow-step D] [--flow-steps N]]
+// [--report report.json] [--quiet]`: deform a closed surface toward positional targets (and/or a
+// grown rest shape) without self-intersection: SCAF with a tetrahedral scaffold
+// (meshing/param/scaf3d.hpp). With --untangle, a self-intersecting genus-0 input is flowed until
+// embedded and pulled back toward itself in the scaffold (meshing/param/untangle.hpp). After every
+// iteration the surface is checked for self-intersection by meshing/check (exact); at the end the
+// object and scaffold tets are verified positive and tiling the box (meshing/tetfill's exact
+// verifier). Exit 0 when both checks pass, 3 when not, 2 for bad input (an open surface, a
+// self-intersecting one without --untangle, a bad target).
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -16,6 +19,7 @@
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/param/scaf3d.hpp"
+#include "meshing/param/untangle.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
@@ -27,6 +31,8 @@ namespace pa = meshing::param;
 struct DeformArgs {
   std::string input, output, targets, report;
   pa::Deform3dOptions options;
+  bool untangle = false;
+  pa::UntangleOptions untangle_options;
   GlobalOptions global;
 };
 
@@ -46,7 +52,8 @@ void register_deform(CLI::App& app) {
                   "in size inside its box)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--box", args->options.box_scale,
-                  "scaffold box = the input's bounding box scaled by this about its centre")
+                  "scaffold box = the bounding box of the input and the targets, scaled by this "
+                  "about its centre")
       ->check(CLI::Range(1.01, 100.0));
   sub->add_option("--iterations", args->options.max_iterations, "maximum iterations")
       ->check(CLI::NonNegativeNumber);
@@ -55,6 +62,16 @@ void register_deform(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--target-weight", args->options.target_weight,
                   "weight of the targets (squared distances relative to the box diagonal)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--untangle", args->untangle,
+                "remove the input's self-intersections (genus 0): a conformalized mean curvature "
+                "flow until embedded, then every vertex pulled back toward its input position "
+                "inside the scaffold");
+  sub->add_option("--flow-step", args->untangle_options.flow_step,
+                  "--untangle: flow time step relative to the surface area")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--flow-steps", args->untangle_options.max_flow_steps,
+                  "--untangle: at most this many flow steps")
       ->check(CLI::PositiveNumber);
   sub->add_option("--report", args->report, "write report.json here");
   add_global_options(*sub, args->global);
@@ -65,17 +82,21 @@ void register_deform(CLI::App& app) {
     const io::SurfaceFormat format = io::surface_format_from_extension(args->output);
     std::vector<pa::PositionTarget> targets;
     if (!args->targets.empty()) targets = pa::read_target_file(args->targets, mesh.num_vertices());
-    if (targets.empty() && args->options.grow == 1.0)
-      throw InputError("deform: nothing to do: give --targets FILE and/or --grow S (S != 1)");
+    if (args->untangle && (!targets.empty() || args->options.grow != 1.0))
+      throw InputError(
+          "deform: --untangle takes no --targets or --grow (its targets are the input's vertices)");
+    if (!args->untangle && targets.empty() && args->options.grow == 1.0)
+      throw InputError(
+          "deform: nothing to do: give --targets FILE, --grow S (S != 1) or --untangle");
     const int input_pairs = check::count_self_intersecting_pairs(mesh.V, mesh.F);
-    if (input_pairs > 0)
+    if (!args->untangle && input_pairs > 0)
       throw InputError("deform: the input surface intersects itself (" +
                        std::to_string(input_pairs) +
-                       " face pairs; meshing/check): the scaffold "
-                       "needs an embedded surface");
+                       " face pairs; meshing/check): the scaffold needs an embedded surface "
+                       "(--untangle removes the intersections of a genus-0 surface)");
     // The targets applied as they are, for comparison: what a deformation without the scaffold's
-    // guarantee could do.
-    int naive_pairs = 0;
+    // guarantee could do (with --untangle the targets are the input itself).
+    int naive_pairs = input_pairs;
     if (!targets.empty()) {
       Eigen::MatrixXd naive = mesh.V;
       for (const auto& t : targets) naive.row(t.vertex) = t.target.transpose();
@@ -113,7 +134,23 @@ void register_deform(CLI::App& app) {
       if (report_progress)
         report_progress("scaf3d", double(st.iteration) / std::max(1, options.max_iterations));
     };
-    const pa::Deform3dResult result = pa::scaf3d_deform(mesh, targets, options);
+    pa::Deform3dResult result;
+    nlohmann::ordered_json untangle_json = nullptr;
+    if (args->untangle) {
+      pa::UntangleOptions untangle = args->untangle_options;
+      untangle.deform = options;
+      pa::UntangleResult u = pa::untangle_surface(mesh, untangle);
+      untangle_json = {{"input_self_intersecting_pairs", u.input_pairs},
+                       {"flow_step", untangle.flow_step},
+                       {"flow_steps", u.flow_pairs.size()},
+                       {"pairs_after_each_flow_step", u.flow_pairs},
+                       {"flow_s", u.flow_seconds},
+                       {"max_distance_to_input_rel", u.max_distance_rel},
+                       {"mean_distance_to_input_rel", u.mean_distance_rel}};
+      result = std::move(u.back);
+    } else {
+      result = pa::scaf3d_deform(mesh, targets, options);
+    }
     Stopwatch stage;
     const pa::Deform3dCheck tiling = pa::verify_scaf3d(mesh, result);
     const int final_pairs = check::count_self_intersecting_pairs(result.V, mesh.F);
@@ -130,7 +167,8 @@ void register_deform(CLI::App& app) {
           {"output", args->output},
           {"targets", args->targets.empty() ? nlohmann::ordered_json(nullptr)
                                             : nlohmann::ordered_json(args->targets)},
-          {"target_count", targets.size()},
+          {"target_count", args->untangle ? std::size_t(mesh.num_vertices()) : targets.size()},
+          {"untangle", untangle_json},
           {"grow", options.grow},
           {"box_scale", options.box_scale},
           {"vertices", mesh.num_vertices()},
@@ -150,8 +188,9 @@ void register_deform(CLI::App& app) {
           {"max_singular_value", h.back().max_singular},
           {"self_intersecting_pairs", final_pairs},
           {"max_self_intersecting_pairs_over_iterations", worst_pairs},
-          {"naive_self_intersecting_pairs",
-           targets.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(naive_pairs)},
+          {"naive_self_intersecting_pairs", targets.empty() && !args->untangle
+                                                ? nlohmann::ordered_json(nullptr)
+                                                : nlohmann::ordered_json(naive_pairs)},
           {"non_positive_tets", tiling.non_positive_tets},
           {"tiling_boundary_mismatches", tiling.boundary_mismatches},
           {"tiling_volume_error_rel", tiling.volume_error_rel},

@@ -250,6 +250,31 @@ TEST(DeformCli, EndsOfASplitRingPulledAcrossStayApartAndBadInputIsRefused) {
   const SurfaceMesh closed = io::read_surface(dir / "closed.obj");
   EXPECT_EQ(closed.F, ring.F);
   EXPECT_EQ(check::count_self_intersecting_pairs(closed.V, closed.F), 0);
+  // --untangle: the ring with its ends already swapped (self-intersecting) comes back embedded.
+  SurfaceMesh tangled = ring;
+  for (int k = 0; k < 4; ++k) tangled.V.row(k).swap(tangled.V.row(4 * n + k));
+  io::write_surface(dir / "tangled.obj", tangled, io::SurfaceFormat::obj);
+  ASSERT_EQ(test::run_command(cli() + " deform -q " + (dir / "tangled.obj").string() + " -o " +
+                                  (dir / "untangled.obj").string() + " --untangle --report " +
+                                  (dir / "untangle.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto u = read_json(dir / "untangle.json");
+  EXPECT_GT(u["untangle"]["input_self_intersecting_pairs"].get<int>(), 0);
+  EXPECT_GE(u["untangle"]["flow_steps"].get<int>(), 1);
+  EXPECT_EQ(u["untangle"]["pairs_after_each_flow_step"].back(), 0);
+  EXPECT_LT(u["untangle"]["mean_distance_to_input_rel"].get<double>(), 0.01);
+  EXPECT_EQ(u["self_intersecting_pairs"], 0);
+  EXPECT_EQ(u["valid"], true);
+  const SurfaceMesh untangled = io::read_surface(dir / "untangled.obj");
+  EXPECT_EQ(check::count_self_intersecting_pairs(untangled.V, untangled.F), 0);
+  // --untangle of an embedded surface: nothing to do (exit 2).
+  EXPECT_EQ(test::run_command(
+                cli() + " deform " + in + " -o " + (dir / "x.obj").string() + " --untangle", &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("no self-intersection"), std::string::npos) << out;
   // Bad input: a target vertex out of range (file:line), nothing to do, an open surface.
   std::ofstream(dir / "bad.txt") << "0 0 0 0\n999 1 1 1\n";
   EXPECT_EQ(test::run_command(cli() + " deform " + in + " -o " + (dir / "x.obj").string() +

@@ -14,6 +14,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/param/scaf3d.hpp"
+#include "meshing/param/untangle.hpp"
 
 using namespace curvefem;
 using namespace curvefem::meshing::param;
@@ -157,4 +158,32 @@ TEST(Scaf3d, BadTargetsAreRefusedNamingTheLine) {
   EXPECT_DOUBLE_EQ(targets[1].target.z(), 0.2);
   std::filesystem::remove_all(dir);
   EXPECT_THROW(scaf3d_deform(make_icosphere(1), {{99, {0, 0, 0}}}), InputError);
+}
+
+// The flow and the way back (untangle.hpp): the split ring with its end caps already swapped is a
+// self-intersecting genus-0 surface. The flow separates it; the scaffold brings every vertex back
+// toward the input until the ends meet. Checked exactly: no pair at the end, a valid tiling.
+TEST(Untangle, ASplitRingWhoseEndsCrossIsSeparatedThenPulledBackUntilTheEndsMeet) {
+  const RingCase c = split_ring_case();
+  SurfaceMesh tangled = c.ring;
+  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  const int pairs = check::count_self_intersecting_pairs(tangled.V, tangled.F);
+  ASSERT_GT(pairs, 0);
+  UntangleOptions options;
+  const UntangleResult r = untangle_surface(tangled, options);
+  EXPECT_EQ(r.input_pairs, pairs);
+  ASSERT_FALSE(r.flow_pairs.empty());
+  EXPECT_EQ(r.flow_pairs.back(), 0);
+  EXPECT_EQ(check::count_self_intersecting_pairs(r.flowed, tangled.F), 0);
+  EXPECT_EQ(check::count_self_intersecting_pairs(r.V, tangled.F), 0);
+  const Deform3dCheck check = verify_scaf3d(tangled, r.back);
+  EXPECT_TRUE(check.ok());
+  // Back near the input: away from the ends the ring returns to it; the ends stop where they
+  // meet, about half their overlap (0.3 to 0.42 apart) from where the input had them.
+  const double diag = (tangled.V.colwise().maxCoeff() - tangled.V.colwise().minCoeff()).norm();
+  EXPECT_LT(r.mean_distance_rel, 0.01);
+  EXPECT_LT(r.max_distance_rel * diag, 0.3);
+  EXPECT_GT(r.max_distance_rel * diag, 0.1);
+  // An embedded surface is refused: nothing to do.
+  EXPECT_THROW(untangle_surface(c.ring, options), InputError);
 }
