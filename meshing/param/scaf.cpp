@@ -1,7 +1,6 @@
 // The SCAF iteration: scaffold rebuild, SLIM proxy assembly, CHOLMOD solve, flip-free line search.
 #include "meshing/param/scaf.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
+#include "meshing/param/slim_solve.hpp"
 #include "meshing/param/symmetric_dirichlet.hpp"
 
 namespace curvefem::meshing::param {
@@ -204,41 +204,10 @@ Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_
   A.setFromTriplets(trip.begin(), trip.end());
   assemble_s += watch.seconds();
   watch.reset();
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
-  // AMD only: CHOLMOD's default also tries METIS when AMD's fill looks high, which here cost
-  // about twice the solve time on a 32k-face disk (0.96–1.40 s vs 0.48–0.50 s per solve, measured
-  // with the machine shared): the pattern changes every iteration, so analysis is never reused.
-  llt.cholmod().print = 0;  // a failed attempt is handled below, not printed on stderr
-  llt.cholmod().nmethods = 1;
-  llt.cholmod().method[0].ordering = CHOLMOD_AMD;
-  // SLIM weights grow like σ⁻³: on a badly distorted start (σ_min ~ 1e-6) the system is SPD only
-  // in exact arithmetic and the factorisation may break down. Then a proximal term
-  // δ Σ_i A_ii (x_i − x_k,i)² is added (its gradient vanishes at x_k, so the direction is still a
-  // descent direction), with δ growing until the factorisation succeeds.
   Eigen::VectorXd x0(n);
   for (int v = 0; v < int(p.dof.size()); ++v)
     if (p.dof[v] >= 0) x0.segment<2>(2 * p.dof[v]) = p.X.row(v).transpose();
-  const Eigen::VectorXd diag = A.diagonal();
-  bool factorised = false;
-  Eigen::VectorXd b = rhs;
-  for (double delta : {0.0, 1e-10, 1e-7, 1e-4, 1e-2}) {
-    Eigen::SparseMatrix<double> Ad = A;
-    b = rhs;
-    if (delta > 0) {
-      for (int i = 0; i < n; ++i) Ad.coeffRef(i, i) += delta * diag[i];
-      b += delta * diag.cwiseProduct(x0);
-    }
-    llt.compute(Ad);
-    if (llt.info() == Eigen::Success) {
-      factorised = true;
-      regularisation = delta;
-      break;
-    }
-  }
-  if (!factorised)
-    throw SolverError("param: CHOLMOD factorisation of the SLIM system failed (not SPD)");
-  const Eigen::VectorXd x = llt.solve(b);
-  if (llt.info() != Eigen::Success) throw SolverError("param: CHOLMOD solve failed");
+  const Eigen::VectorXd x = solve_slim_system(A, rhs, x0, regularisation, "param");
   solve_s += watch.seconds();
   Eigen::MatrixXd target = p.X;
   for (int v = 0; v < int(p.dof.size()); ++v)

@@ -1,7 +1,6 @@
 // SCAF with a tetrahedral scaffold: object fill, scaffold rebuild, SLIM proxy, flip-free search.
 #include "meshing/param/scaf3d.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/Sparse>
@@ -16,6 +15,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
+#include "meshing/param/slim_solve.hpp"
 #include "meshing/param/symmetric_dirichlet.hpp"
 #include "meshing/tetfill/tetfill.hpp"
 
@@ -245,35 +245,11 @@ Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_
   A.setFromTriplets(trip.begin(), trip.end());
   assemble_s += watch.seconds();
   watch.reset();
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
-  llt.cholmod().print = 0;
-  llt.cholmod().nmethods = 1;
-  llt.cholmod().method[0].ordering = CHOLMOD_AMD;
-  // As in 2D (scaf.cpp): a proximal term where the SLIM weights of a very distorted tet make the
-  // system numerically indefinite.
   Eigen::VectorXd x0(n);
   for (int v = 0; v < int(p.dof.size()); ++v)
     if (p.dof[v] >= 0) x0.segment<3>(3 * p.dof[v]) = p.X.row(v).transpose();
-  const Eigen::VectorXd diag = A.diagonal();
-  Eigen::VectorXd b = rhs;
-  bool factorised = false;
-  for (double delta : {0.0, 1e-10, 1e-7, 1e-4, 1e-2}) {
-    Eigen::SparseMatrix<double> Ad = A;
-    b = rhs;
-    if (delta > 0) {
-      for (int i = 0; i < n; ++i) Ad.coeffRef(i, i) += delta * diag[i];
-      b += delta * diag.cwiseProduct(x0);
-    }
-    llt.compute(Ad);
-    if (llt.info() == Eigen::Success) {
-      factorised = true;
-      break;
-    }
-  }
-  if (!factorised)
-    throw SolverError("scaf3d: CHOLMOD factorisation of the SLIM system failed (not SPD)");
-  const Eigen::VectorXd x = llt.solve(b);
-  if (llt.info() != Eigen::Success) throw SolverError("scaf3d: CHOLMOD solve failed");
+  double regularisation = 0;
+  const Eigen::VectorXd x = solve_slim_system(A, rhs, x0, regularisation, "scaf3d");
   solve_s += watch.seconds();
   Eigen::MatrixXd target = p.X;
   for (int v = 0; v < int(p.dof.size()); ++v)
