@@ -1,8 +1,6 @@
 // SCAF with a tetrahedral scaffold: object fill, scaffold rebuild, SLIM proxy, flip-free search.
 #include "meshing/param/scaf3d.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/Sparse>
@@ -207,28 +205,20 @@ Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_
   std::vector<Eigen::Triplet<double>> trip;
   trip.reserve(p.tet.size() * 144 + p.targets.size() * 3);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
-  // Per tet, in parallel: ‖W (J − R)‖² with J = Xᵀ G is, in the unknowns l = 4 i + k
-  // (coordinate i of corner k), the quadratic with matrix w (WᵀW) ⊗ (G Gᵀ) and linear part
-  // w vec(Wᵀ W R Gᵀ). Then scattered serially (same order, same sums, for any thread count).
-  const int nt = int(p.tet.size());
-  std::vector<Eigen::Matrix<double, 12, 12>> Ms(static_cast<std::size_t>(nt));
-  std::vector<Eigen::Matrix<double, 12, 1>> bs(static_cast<std::size_t>(nt));
-  tbb::parallel_for(0, nt, [&](int t) {
+  for (int t = 0; t < int(p.tet.size()); ++t) {
     Eigen::Matrix3d W, R;
     slim_weights_3d(p.jacobian(t, p.X), W, R);
-    const Eigen::Matrix3d WtW = W.transpose() * W;
-    const Eigen::Matrix4d GGt = p.G[t] * p.G[t].transpose();
-    const Eigen::Matrix<double, 3, 4> B = WtW * R * p.G[t].transpose();
-    auto& M = Ms[std::size_t(t)];
-    auto& b = bs[std::size_t(t)];
-    for (int i = 0; i < 3; ++i) {
-      b.segment<4>(4 * i) = p.weight[t] * B.row(i).transpose();
-      for (int j = 0; j < 3; ++j) M.block<4, 4>(4 * i, 4 * j) = p.weight[t] * WtW(i, j) * GGt;
-    }
-  });
-  for (int t = 0; t < nt; ++t) {
-    const auto& M = Ms[std::size_t(t)];
-    const auto& b = bs[std::size_t(t)];
+    const Eigen::Matrix3d WR = W * R;
+    // Unknown l = 4 i + k: coordinate i of corner k. (W J)_{jc} = Σ_{i,k} W_ji G_kc X_ki.
+    Eigen::Matrix<double, 12, 12> M = Eigen::Matrix<double, 12, 12>::Zero();
+    Eigen::Matrix<double, 12, 1> b = Eigen::Matrix<double, 12, 1>::Zero();
+    for (int j = 0; j < 3; ++j)
+      for (int c = 0; c < 3; ++c) {
+        Eigen::Matrix<double, 12, 1> a;
+        for (int i = 0; i < 3; ++i) a.segment<4>(4 * i) = W(j, i) * p.G[t].col(c);
+        M.noalias() += p.weight[t] * a * a.transpose();
+        b += p.weight[t] * WR(j, c) * a;
+      }
     int row[12];
     for (int l = 0; l < 12; ++l) {
       const int v = p.tet[t][l % 4];
