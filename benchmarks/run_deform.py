@@ -8,8 +8,9 @@ Inputs:
                   target file): applied as they are, the ends cross; SCAF must stop them at contact
   split_ring_tangled  the same ring with its end caps already swapped (self-intersecting, genus
                   0), run with --untangle: flowed until embedded, then pulled back toward itself
-  <dev> grow S    a dev mesh whose rest shape is S times the input, inside a box B times its
-                  bounding box (the thesis' Fig. 3.10 "bunny grown inside a box")
+  <dev> grow S    a dev mesh whose rest shape is S times the input, inside its bounding box padded
+                  by (B - 1) / 2 x its longest extent on every side (`--box B`; the thesis'
+                  Fig. 3.10 "bunny grown inside a box")
 Every iteration's surface is checked for self-intersection by meshing/check (exact) and the final
 object + scaffold tets by the exact tiling verifier (report.json); the time per iteration
 excludes those checks.
@@ -114,7 +115,7 @@ with tempfile.TemporaryDirectory() as work:
 lines = ["# SCAF with a tetrahedral scaffold — `curvefem deform` (issue 25, thesis §3.2.3)", ""]
 lines.append("Written by `benchmarks/run_deform.py` on %s UTC, 2-core machine. Command: "
              "`/usr/bin/python3 benchmarks/run_deform.py` (defaults: --iterations %d, dev meshes "
-             "grown %g× inside a box %g× their bounding box)." %
+             "grown %g× inside their bounding box padded by (%g − 1) / 2 × its longest extent)." %
              (datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M"), args.iterations, args.grow,
               args.box))
 lines.append("")

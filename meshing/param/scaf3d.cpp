@@ -332,7 +332,11 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     lo = lo.cwiseMin(c.target);
     hi = hi.cwiseMax(c.target);
   }
-  const Eigen::Vector3d centre = 0.5 * (lo + hi), half = 0.5 * options.box_scale * (hi - lo);
+  // Padded by the same length on every side, (box_scale − 1) / 2 × the longest extent, so that
+  // a thin object (a plate) still gets a scaffold of well-shaped tets across its thin direction.
+  const double pad = 0.5 * (options.box_scale - 1) * (hi - lo).maxCoeff();
+  const Eigen::Vector3d centre = 0.5 * (lo + hi),
+                        half = 0.5 * (hi - lo) + Eigen::Vector3d::Constant(pad);
   const SurfaceMesh box =
       make_box_surface(centre - half, centre + half, std::max(1, options.box_divisions));
   L.nb = int(box.V.rows());

@@ -61,8 +61,10 @@ struct Deform3dOptions {
   double scaffold_weight = 0.01;  ///< λ = scaffold_weight · E_M / |S|
   double target_weight = 1e4;     ///< w of the positional targets (per target, distances / L)
   double grow = 1.0;  ///< rest shape = the input scaled by this (no centre: E is rigid-invariant)
-  double box_scale = 2.0;  ///< box: the bounding box of the input and targets, scaled
-  int box_divisions = 4;   ///< grid of each box side (quads split in two)
+  /// box: the bounding box of the input and the targets, widened on every side by
+  /// (box_scale − 1) / 2 × its longest extent
+  double box_scale = 2.0;
+  int box_divisions = 4;  ///< grid of each box side (quads split in two)
   double armijo = 1e-4;
   /// Called with each iteration's statistics and the surface vertices (#V × 3).
   std::function<void(const Deform3dIteration&, const Eigen::MatrixXd&)> on_iteration;

@@ -52,8 +52,8 @@ void register_deform(CLI::App& app) {
                   "in size inside its box)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--box", args->options.box_scale,
-                  "scaffold box = the bounding box of the input and the targets, scaled by this "
-                  "about its centre")
+                  "scaffold box = the bounding box of the input and the targets, widened on "
+                  "every side by (B - 1) / 2 x its longest extent")
       ->check(CLI::Range(1.01, 100.0));
   sub->add_option("--iterations", args->options.max_iterations, "maximum iterations")
       ->check(CLI::NonNegativeNumber);
