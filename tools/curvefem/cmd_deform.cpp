@@ -6,8 +6,8 @@
 // embedded and pulled back toward itself in the scaffold (meshing/param/untangle.hpp). After every
 // iteration the surface is checked for self-intersection by meshing/check (exact); at the end the
 // object and scaffold tets are verified positive and tiling the box (meshing/tetfill's exact
-// verifier). Exit 0 when both checks pass, 3 when not, 2 for bad input (an open surface, a
-// self-intersecting one without --untangle, a bad target).
+// verifier). Exit 0 when both checks pass, 3 when not (no surface written; the report is), 2 for
+// bad input (an open surface, a self-intersecting one without --untangle, a bad target).
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -155,11 +155,14 @@ void register_deform(CLI::App& app) {
     const pa::Deform3dCheck tiling = pa::verify_scaf3d(mesh, result);
     const int final_pairs = check::count_self_intersecting_pairs(result.V, mesh.F);
     check_s += stage.seconds();
-    SurfaceMesh out = mesh;
-    out.V = result.V;
-    io::write_surface(args->output, out, format);
-    progress.reset();
     const bool ok = tiling.ok() && final_pairs == 0 && worst_pairs == 0;
+    // A surface that failed a check is not written (exit 3); the report says why.
+    if (ok) {
+      SurfaceMesh out = mesh;
+      out.V = result.V;
+      io::write_surface(args->output, out, format);
+    }
+    progress.reset();
     const auto& h = result.history;
     if (!args->report.empty()) {
       nlohmann::ordered_json report = {
