@@ -5,6 +5,8 @@
 #include <Eigen/Geometry>
 #include <Eigen/Sparse>
 #include <cmath>
+#include <map>
+#include <set>
 
 #include "meshing/check/self_intersections.hpp"
 #include "meshing/core/error.hpp"
@@ -59,6 +61,36 @@ Eigen::VectorXd lumped_mass(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, 
   return m;
 }
 
+// Σ over connected components of (2 − χ) / 2, χ = V − E + F of the component (closed surface).
+int surface_genus(const Eigen::MatrixXi& F, int nv) {
+  std::vector<int> link(static_cast<std::size_t>(nv));
+  for (int v = 0; v < nv; ++v) link[std::size_t(v)] = v;
+  auto find = [&](int v) {
+    while (link[std::size_t(v)] != v)
+      v = link[std::size_t(v)] = link[std::size_t(link[std::size_t(v)])];
+    return v;
+  };
+  std::set<std::pair<int, int>> edges;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      edges.emplace(std::min(a, b), std::max(a, b));
+      link[std::size_t(find(a))] = find(b);
+    }
+  std::map<int, long long> chi;  // per component root: V − E + F
+  std::vector<char> used(static_cast<std::size_t>(nv), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    chi[find(F(f, 0))] += 1;
+    for (int k = 0; k < 3; ++k) used[std::size_t(F(f, k))] = 1;
+  }
+  for (const auto& [a, b] : edges) chi[find(a)] -= 1;
+  for (int v = 0; v < nv; ++v)
+    if (used[std::size_t(v)]) chi[find(v)] += 1;
+  long long genus = 0;
+  for (const auto& [root, c] : chi) genus += std::max(0LL, (2 - c) / 2);
+  return int(genus);
+}
+
 // Area-weighted centroid.
 Eigen::RowVector3d centroid(const Eigen::MatrixXd& V, const Eigen::VectorXd& mass) {
   return (mass.asDiagonal() * V).colwise().sum() / mass.sum();
@@ -73,6 +105,10 @@ UntangleResult untangle_surface(const SurfaceMesh& input, const UntangleOptions&
   result.input_pairs = check::count_self_intersecting_pairs(V0, F);
   if (result.input_pairs == 0)
     throw InputError("untangle: the surface has no self-intersection: nothing to do");
+  result.genus = surface_genus(F, int(V0.rows()));
+  if (result.genus > 0)
+    log::warn("untangle: the surface has genus ", result.genus,
+              "; the flow separates genus-0 surfaces, a higher genus may keep its crossings");
   Stopwatch flow_watch;
   const Eigen::SparseMatrix<double> K = cotangent_stiffness(V0, F);
   double area0 = 0;

@@ -10,7 +10,8 @@
 // relative to the input's area (δ · A). The self-intersecting pairs are counted exactly
 // (meshing/check) after every step; the flow stops at the first step without any.
 // Where the flow has not separated the surface after `max_flow_steps`, a MeshingError names the
-// pairs left (a surface of genus > 0 need not become embedded under the flow).
+// pairs left. The flow is meant for genus 0: for a higher genus it is still tried (a small local
+// crossing may well separate), with a warning naming the genus.
 #pragma once
 
 #include <Eigen/Core>
@@ -31,6 +32,7 @@ struct UntangleResult {
   Eigen::MatrixXd V;            ///< the untangled surface (the input's faces)
   Eigen::MatrixXd flowed;       ///< the embedded flowed surface the way back started from
   int input_pairs = 0;          ///< self-intersecting pairs of the input
+  int genus = 0;                ///< (2 − χ) / 2 summed over components (a warning when > 0)
   std::vector<int> flow_pairs;  ///< after each flow step
   Deform3dResult back;          ///< the scaffold deformation toward the input
   double max_distance_rel = 0;  ///< max ‖V − V_input‖ over vertices / the input's bbox diagonal

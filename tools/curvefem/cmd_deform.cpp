@@ -141,6 +141,7 @@ void register_deform(CLI::App& app) {
       untangle.deform = options;
       pa::UntangleResult u = pa::untangle_surface(mesh, untangle);
       untangle_json = {{"input_self_intersecting_pairs", u.input_pairs},
+                       {"genus", u.genus},
                        {"flow_step", untangle.flow_step},
                        {"flow_steps", u.flow_pairs.size()},
                        {"pairs_after_each_flow_step", u.flow_pairs},

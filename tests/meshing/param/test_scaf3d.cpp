@@ -187,3 +187,25 @@ TEST(Untangle, ASplitRingWhoseEndsCrossIsSeparatedThenPulledBackUntilTheEndsMeet
   // An embedded surface is refused: nothing to do.
   EXPECT_THROW(untangle_surface(c.ring, options), InputError);
 }
+
+TEST(Untangle, TheGenusIsReportedAndTheRingIsGenusZero) {
+  // The crossed split ring is a sphere (genus 0); a torus whose tube crosses itself is genus 1
+  // and gets the warning, but the flow is still tried (here it separates it: the crossing is a
+  // small local fold).
+  const RingCase c = split_ring_case();
+  SurfaceMesh tangled = c.ring;
+  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  UntangleOptions options;
+  options.deform.max_iterations = 2;
+  EXPECT_EQ(untangle_surface(tangled, options).genus, 0);
+  SurfaceMesh torus = make_torus(1.0, 0.3, 24, 12);
+  // Push one vertex of the outer equator through the tube to the inner side: a local crossing.
+  int v = 0;
+  for (int i = 1; i < torus.num_vertices(); ++i)
+    if (torus.V(i, 0) > torus.V(v, 0)) v = i;
+  torus.V(v, 0) = 0.5;
+  ASSERT_GT(check::count_self_intersecting_pairs(torus.V, torus.F), 0);
+  const UntangleResult r = untangle_surface(torus, options);
+  EXPECT_EQ(r.genus, 1);
+  EXPECT_EQ(check::count_self_intersecting_pairs(r.V, torus.F), 0);
+}
