@@ -9,11 +9,11 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
-#include <map>
 #include <sstream>
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/core/primitives.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/param/slim_solve.hpp"
 #include "meshing/param/symmetric_dirichlet.hpp"
@@ -38,53 +38,6 @@ Eigen::Matrix3d edge_matrix(const Eigen::MatrixXd& X, const Eigen::Vector4i& t) 
   Eigen::Matrix3d D;
   for (int k = 0; k < 3; ++k) D.col(k) = (X.row(t[k + 1]) - X.row(t[0])).transpose();
   return D;
-}
-
-// The box: its 6 sides as grids of n × n quads split in two, outward.
-SurfaceMesh make_box_surface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n) {
-  std::vector<Eigen::Vector3d> pts;
-  std::map<std::array<long long, 3>, int> index;
-  auto vertex = [&](int i, int j, int k) {
-    const std::array<long long, 3> key{i, j, k};
-    auto it = index.find(key);
-    if (it != index.end()) return it->second;
-    const Eigen::Vector3d p(lo.x() + (hi.x() - lo.x()) * i / n, lo.y() + (hi.y() - lo.y()) * j / n,
-                            lo.z() + (hi.z() - lo.z()) * k / n);
-    pts.push_back(p);
-    index.emplace(key, int(pts.size()) - 1);
-    return int(pts.size()) - 1;
-  };
-  std::vector<Eigen::Vector3i> faces;
-  // Each side: axis a fixed at 0 or n; (u, v) the two other axes in right-handed order.
-  for (int a = 0; a < 3; ++a)
-    for (int side = 0; side < 2; ++side) {
-      const int u = (a + 1) % 3, v = (a + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          auto at = [&](int di, int dj) {
-            int c[3];
-            c[a] = side * n;
-            c[u] = i + di;
-            c[v] = j + dj;
-            return vertex(c[0], c[1], c[2]);
-          };
-          const int p00 = at(0, 0), p10 = at(1, 0), p11 = at(1, 1), p01 = at(0, 1);
-          // (u, v, a) is right-handed: counter-clockwise in (u, v) points along +a.
-          if (side == 1) {
-            faces.emplace_back(p00, p10, p11);
-            faces.emplace_back(p00, p11, p01);
-          } else {
-            faces.emplace_back(p00, p11, p10);
-            faces.emplace_back(p00, p01, p11);
-          }
-        }
-    }
-  SurfaceMesh box;
-  box.V.resize(Eigen::Index(pts.size()), 3);
-  for (std::size_t i = 0; i < pts.size(); ++i) box.V.row(Eigen::Index(i)) = pts[i].transpose();
-  box.F.resize(Eigen::Index(faces.size()), 3);
-  for (std::size_t i = 0; i < faces.size(); ++i) box.F.row(Eigen::Index(i)) = faces[i].transpose();
-  return box;
 }
 
 // Rows of X: surface (ns), object Steiner points (no), box (nb), scaffold Steiner points.
@@ -338,7 +291,7 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
   const Eigen::Vector3d centre = 0.5 * (lo + hi),
                         half = 0.5 * (hi - lo) + Eigen::Vector3d::Constant(pad);
   const SurfaceMesh box =
-      make_box_surface(centre - half, centre + half, std::max(1, options.box_divisions));
+      make_box(centre - half, centre + half, std::max(1, options.box_divisions));
   L.nb = int(box.V.rows());
   const double diag = (2 * half).norm();
 
