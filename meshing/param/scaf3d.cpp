@@ -5,7 +5,6 @@
 #include <Eigen/LU>
 #include <Eigen/Sparse>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
