@@ -16,10 +16,13 @@
 
 #include "fem/solvers/linear_solver.hpp"
 #include "meshing/check/check_surface.hpp"
+#include "meshing/check/self_intersections.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "meshing/param/scaf3d.hpp"
+#include "meshing/param/untangle.hpp"
 #include "pipeline/case_file.hpp"
 #include "pipeline/case_schema.hpp"
 #include "pipeline/mesh_dir.hpp"
@@ -413,6 +416,69 @@ PYBIND11_MODULE(_curvefem, m) {
       },
       py::arg("case"), py::arg("threads") = 0, py::arg("paraview") = false, py::arg("write") = true,
       py::arg("progress") = py::none());
+
+  m.def(
+      "deform",
+      [](const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const Eigen::VectorXi& target_vertices,
+         const Eigen::MatrixXd& target_positions, double grow, double box, int iterations,
+         double tolerance, bool untangle, int threads) {
+        namespace pa = meshing::param;
+        if (target_vertices.size() != target_positions.rows() ||
+            (target_positions.size() > 0 && target_positions.cols() != 3))
+          throw InputError("deform: targets need one row (x, y, z) per target vertex");
+        SurfaceMesh surface;
+        surface.V = V;
+        surface.F = F;
+        std::vector<pa::PositionTarget> targets;
+        for (Eigen::Index i = 0; i < target_vertices.size(); ++i)
+          targets.push_back({target_vertices[i], target_positions.row(i).transpose()});
+        pa::Deform3dOptions options;
+        options.grow = grow;
+        options.box_scale = box;
+        options.max_iterations = iterations;
+        options.tolerance = tolerance;
+        py::gil_scoped_release release;
+        const auto limit = limit_threads(threads);
+        nlohmann::ordered_json report;
+        pa::Deform3dResult result;
+        if (untangle) {
+          if (!targets.empty() || grow != 1.0)
+            throw InputError("deform: untangle takes no targets or grow");
+          pa::UntangleOptions u;
+          u.deform = options;
+          pa::UntangleResult r = pa::untangle_surface(surface, u);
+          report["untangle"] = {{"input_self_intersecting_pairs", r.input_pairs},
+                                {"genus", r.genus},
+                                {"flow_steps", r.flow_pairs.size()},
+                                {"max_distance_to_input_rel", r.max_distance_rel},
+                                {"mean_distance_to_input_rel", r.mean_distance_rel}};
+          result = std::move(r.back);
+        } else {
+          if (check::count_self_intersecting_pairs(V, F) > 0)
+            throw InputError("deform: the input surface intersects itself (use untangle=True)");
+          result = pa::scaf3d_deform(surface, targets, options);
+        }
+        // The same independent checks as `curvefem deform`.
+        const pa::Deform3dCheck tiling = pa::verify_scaf3d(surface, result);
+        const int pairs = check::count_self_intersecting_pairs(result.V, F);
+        nlohmann::ordered_json energy = nlohmann::ordered_json::array();
+        for (const auto& st : result.history) energy.push_back(st.energy);
+        report["iterations"] = result.history.back().iteration;
+        report["stop_reason"] = result.stop_reason;
+        report["energy"] = result.history.back().energy;
+        report["energy_per_iteration"] = energy;
+        report["target_error_rel"] = result.history.back().target_error;
+        report["self_intersecting_pairs"] = pairs;
+        report["non_positive_tets"] = tiling.non_positive_tets;
+        report["tiling_boundary_mismatches"] = tiling.boundary_mismatches;
+        report["valid"] = tiling.ok() && pairs == 0;
+        report["seconds"] = result.seconds;
+        return std::make_tuple(result.V, report.dump());
+      },
+      py::arg("V"), py::arg("F"), py::arg("target_vertices"), py::arg("target_positions"),
+      py::arg("grow") = 1.0, py::arg("box") = 2.0, py::arg("iterations") = 50,
+      py::arg("tolerance") = 1e-5, py::arg("untangle") = false, py::arg("threads") = 0,
+      "SCAF with a tet scaffold (meshing/param/scaf3d.hpp); returns (V, report JSON text).");
 
   m.def(
       "run_study",

@@ -1,0 +1,62 @@
+"""curvefem.deform (SCAF with a tet scaffold) from Python: the guarantee comes back in the report
+from exact checks independent of the solver, and bad input raises curvefem.InputError."""
+
+import subprocess
+import pathlib
+
+import numpy as np
+import pytest
+
+import curvefem
+
+BUILD = pathlib.Path(curvefem.__file__).resolve().parents[2]
+CLI = BUILD / "tools" / "curvefem" / "curvefem"
+
+
+def read_obj(path):
+    V, F = [], []
+    for line in pathlib.Path(path).read_text().splitlines():
+        if line.startswith("v "):
+            V.append([float(x) for x in line.split()[1:4]])
+        elif line.startswith("f "):
+            F.append([int(x.split("/")[0]) - 1 for x in line.split()[1:4]])
+    return np.array(V), np.array(F, dtype=np.int32)
+
+
+def split_ring(tmp_path):
+    path = tmp_path / "ring.obj"
+    subprocess.run([str(CLI), "generate", "split_ring_01", "-q", "-o", str(path)], check=True)
+    return read_obj(path)
+
+
+def test_pulling_the_ends_of_a_split_ring_across_keeps_it_embedded(tmp_path):
+    V, F = split_ring(tmp_path)
+    last = len(V) - 4  # the generator's last section: the other end cap
+    targets = {}
+    for k in range(4):
+        targets[k] = V[last + k]
+        targets[last + k] = V[k]
+    W, report = curvefem.deform(V, F, targets, iterations=20)
+    assert W.shape == V.shape
+    assert report["valid"] is True
+    assert report["self_intersecting_pairs"] == 0
+    assert report["non_positive_tets"] == 0
+    assert report["iterations"] >= 1
+    # the ends moved toward each other: at least a quarter of the way
+    assert np.linalg.norm(W[0] - V[last]) < 0.75 * np.linalg.norm(V[0] - V[last])
+
+
+def test_untangle_and_bad_input(tmp_path):
+    V, F = split_ring(tmp_path)
+    last = len(V) - 4
+    crossed = V.copy()
+    crossed[:4], crossed[last:] = V[last:], V[:4]
+    W, report = curvefem.deform(crossed, F, untangle=True, iterations=10)
+    assert report["untangle"]["input_self_intersecting_pairs"] > 0
+    assert report["untangle"]["genus"] == 0
+    assert report["self_intersecting_pairs"] == 0
+    assert report["valid"] is True
+    with pytest.raises(curvefem.InputError, match="intersects itself"):
+        curvefem.deform(crossed, F, {0: V[0]})
+    with pytest.raises(curvefem.InputError, match="not a vertex"):
+        curvefem.deform(V, F, {len(V) + 5: (0, 0, 0)})
