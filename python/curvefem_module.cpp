@@ -16,13 +16,11 @@
 
 #include "fem/solvers/linear_solver.hpp"
 #include "meshing/check/check_surface.hpp"
-#include "meshing/check/self_intersections.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
-#include "meshing/param/scaf3d.hpp"
-#include "meshing/param/untangle.hpp"
+#include "meshing/param/deform.hpp"
 #include "pipeline/case_file.hpp"
 #include "pipeline/case_schema.hpp"
 #include "pipeline/mesh_dir.hpp"
@@ -432,35 +430,26 @@ PYBIND11_MODULE(_curvefem, m) {
         std::vector<pa::PositionTarget> targets;
         for (Eigen::Index i = 0; i < target_vertices.size(); ++i)
           targets.push_back({target_vertices[i], target_positions.row(i).transpose()});
-        pa::Deform3dOptions options;
-        options.grow = grow;
-        options.box_scale = box;
-        options.max_iterations = iterations;
-        options.tolerance = tolerance;
+        pa::DeformRequest request;
+        request.targets = std::move(targets);
+        request.options.grow = grow;
+        request.options.box_scale = box;
+        request.options.max_iterations = iterations;
+        request.options.tolerance = tolerance;
+        request.untangle = untangle;
         py::gil_scoped_release release;
         const auto limit = limit_threads(threads);
+        // The same validation and exact checks as `curvefem deform` (meshing/param/deform.hpp).
+        const pa::DeformOutcome outcome = pa::deform_checked(surface, request);
+        const pa::Deform3dResult& result = outcome.result;
         nlohmann::ordered_json report;
-        pa::Deform3dResult result;
-        if (untangle) {
-          if (!targets.empty() || grow != 1.0)
-            throw InputError("deform: untangle takes no targets or grow");
-          pa::UntangleOptions u;
-          u.deform = options;
-          pa::UntangleResult r = pa::untangle_surface(surface, u);
-          report["untangle"] = {{"input_self_intersecting_pairs", r.input_pairs},
-                                {"genus", r.genus},
-                                {"flow_steps", r.flow_pairs.size()},
-                                {"max_distance_to_input_rel", r.max_distance_rel},
-                                {"mean_distance_to_input_rel", r.mean_distance_rel}};
-          result = std::move(r.back);
-        } else {
-          if (check::count_self_intersecting_pairs(V, F) > 0)
-            throw InputError("deform: the input surface intersects itself (use untangle=True)");
-          result = pa::scaf3d_deform(surface, targets, options);
-        }
-        // The same independent checks as `curvefem deform`.
-        const pa::Deform3dCheck tiling = pa::verify_scaf3d(surface, result);
-        const int pairs = check::count_self_intersecting_pairs(result.V, F);
+        if (outcome.untangle)
+          report["untangle"] = {
+              {"input_self_intersecting_pairs", outcome.untangle->input_pairs},
+              {"genus", outcome.untangle->genus},
+              {"flow_steps", outcome.untangle->flow_pairs.size()},
+              {"max_distance_to_input_rel", outcome.untangle->max_distance_rel},
+              {"mean_distance_to_input_rel", outcome.untangle->mean_distance_rel}};
         nlohmann::ordered_json energy = nlohmann::ordered_json::array();
         for (const auto& st : result.history) energy.push_back(st.energy);
         report["iterations"] = result.history.back().iteration;
@@ -468,10 +457,12 @@ PYBIND11_MODULE(_curvefem, m) {
         report["energy"] = result.history.back().energy;
         report["energy_per_iteration"] = energy;
         report["target_error_rel"] = result.history.back().target_error;
-        report["self_intersecting_pairs"] = pairs;
-        report["non_positive_tets"] = tiling.non_positive_tets;
-        report["tiling_boundary_mismatches"] = tiling.boundary_mismatches;
-        report["valid"] = tiling.ok() && pairs == 0;
+        report["self_intersecting_pairs"] = outcome.final_pairs;
+        report["max_self_intersecting_pairs_over_iterations"] = outcome.max_pairs_over_iterations;
+        report["naive_self_intersecting_pairs"] = outcome.naive_pairs;
+        report["non_positive_tets"] = outcome.tiling.non_positive_tets;
+        report["tiling_boundary_mismatches"] = outcome.tiling.boundary_mismatches;
+        report["valid"] = outcome.valid();
         report["seconds"] = result.seconds;
         return std::make_tuple(result.V, report.dump());
       },

@@ -40,6 +40,8 @@ def test_pulling_the_ends_of_a_split_ring_across_keeps_it_embedded(tmp_path):
     assert W.shape == V.shape
     assert report["valid"] is True
     assert report["self_intersecting_pairs"] == 0
+    assert report["max_self_intersecting_pairs_over_iterations"] == 0
+    assert report["naive_self_intersecting_pairs"] > 0
     assert report["non_positive_tets"] == 0
     assert report["iterations"] >= 1
     # the ends moved toward each other: at least a quarter of the way

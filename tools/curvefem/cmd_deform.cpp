@@ -13,13 +13,11 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "meshing/check/self_intersections.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/io/surface_io.hpp"
-#include "meshing/param/scaf3d.hpp"
-#include "meshing/param/untangle.hpp"
+#include "meshing/param/deform.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
@@ -82,36 +80,14 @@ void register_deform(CLI::App& app) {
     const io::SurfaceFormat format = io::surface_format_from_extension(args->output);
     std::vector<pa::PositionTarget> targets;
     if (!args->targets.empty()) targets = pa::read_target_file(args->targets, mesh.num_vertices());
-    if (args->untangle && (!targets.empty() || args->options.grow != 1.0))
-      throw InputError(
-          "deform: --untangle takes no --targets or --grow (its targets are the input's vertices)");
-    if (!args->untangle && targets.empty() && args->options.grow == 1.0)
-      throw InputError(
-          "deform: nothing to do: give --targets FILE, --grow S (S != 1) or --untangle");
-    const int input_pairs = check::count_self_intersecting_pairs(mesh.V, mesh.F);
-    if (!args->untangle && input_pairs > 0)
-      throw InputError("deform: the input surface intersects itself (" +
-                       std::to_string(input_pairs) +
-                       " face pairs; meshing/check): the scaffold needs an embedded surface "
-                       "(--untangle removes the intersections of a genus-0 surface)");
-    // The targets applied as they are, for comparison: what a deformation without the scaffold's
-    // guarantee could do (with --untangle the targets are the input itself).
-    int naive_pairs = input_pairs;
-    if (!targets.empty()) {
-      Eigen::MatrixXd naive = mesh.V;
-      for (const auto& t : targets) naive.row(t.vertex) = t.target.transpose();
-      naive_pairs = check::count_self_intersecting_pairs(naive, mesh.F);
-    }
-    nlohmann::ordered_json iterations = nlohmann::ordered_json::array();
-    int worst_pairs = 0;
-    double check_s = 0;
     const ProgressFn report_progress = progress->callback();
-    pa::Deform3dOptions options = args->options;
-    options.on_iteration = [&](const pa::Deform3dIteration& st, const Eigen::MatrixXd& V) {
-      Stopwatch c;
-      const int pairs = check::count_self_intersecting_pairs(V, mesh.F);
-      check_s += c.seconds();
-      worst_pairs = std::max(worst_pairs, pairs);
+    nlohmann::ordered_json iterations = nlohmann::ordered_json::array();
+    pa::DeformRequest request;
+    request.targets = targets;
+    request.options = args->options;
+    request.untangle = args->untangle;
+    request.untangle_options = args->untangle_options;
+    request.observe = [&](const pa::Deform3dIteration& st, const Eigen::MatrixXd&, int pairs) {
       iterations.push_back({{"iteration", st.iteration},
                             {"energy", st.energy},
                             {"objective", st.objective},
@@ -132,31 +108,23 @@ void register_deform(CLI::App& app) {
                               {"solve", st.solve_s},
                               {"line_search", st.line_search_s}}}});
       if (report_progress)
-        report_progress("scaf3d", double(st.iteration) / std::max(1, options.max_iterations));
+        report_progress("scaf3d", double(st.iteration) / std::max(1, args->options.max_iterations));
     };
-    pa::Deform3dResult result;
+    const pa::DeformOutcome outcome = pa::deform_checked(mesh, request);
+    const pa::Deform3dResult& result = outcome.result;
     nlohmann::ordered_json untangle_json = nullptr;
-    if (args->untangle) {
-      pa::UntangleOptions untangle = args->untangle_options;
-      untangle.deform = options;
-      pa::UntangleResult u = pa::untangle_surface(mesh, untangle);
+    if (outcome.untangle) {
+      const pa::UntangleResult& u = *outcome.untangle;
       untangle_json = {{"input_self_intersecting_pairs", u.input_pairs},
                        {"genus", u.genus},
-                       {"flow_step", untangle.flow_step},
+                       {"flow_step", args->untangle_options.flow_step},
                        {"flow_steps", u.flow_pairs.size()},
                        {"pairs_after_each_flow_step", u.flow_pairs},
                        {"flow_s", u.flow_seconds},
                        {"max_distance_to_input_rel", u.max_distance_rel},
                        {"mean_distance_to_input_rel", u.mean_distance_rel}};
-      result = std::move(u.back);
-    } else {
-      result = pa::scaf3d_deform(mesh, targets, options);
     }
-    Stopwatch stage;
-    const pa::Deform3dCheck tiling = pa::verify_scaf3d(mesh, result);
-    const int final_pairs = check::count_self_intersecting_pairs(result.V, mesh.F);
-    check_s += stage.seconds();
-    const bool ok = tiling.ok() && final_pairs == 0 && worst_pairs == 0;
+    const bool ok = outcome.valid();
     // A surface that failed a check is not written (exit 3); the report says why.
     if (ok) {
       SurfaceMesh out = mesh;
@@ -173,8 +141,8 @@ void register_deform(CLI::App& app) {
                                             : nlohmann::ordered_json(args->targets)},
           {"target_count", args->untangle ? std::size_t(mesh.num_vertices()) : targets.size()},
           {"untangle", untangle_json},
-          {"grow", options.grow},
-          {"box_scale", options.box_scale},
+          {"grow", args->options.grow},
+          {"box_scale", args->options.box_scale},
           {"vertices", mesh.num_vertices()},
           {"faces", mesh.num_faces()},
           {"object_tets", result.object_tets.rows()},
@@ -190,20 +158,20 @@ void register_deform(CLI::App& app) {
           {"target_error_rel", h.back().target_error},
           {"min_singular_value", h.back().min_singular},
           {"max_singular_value", h.back().max_singular},
-          {"self_intersecting_pairs", final_pairs},
-          {"max_self_intersecting_pairs_over_iterations", worst_pairs},
+          {"self_intersecting_pairs", outcome.final_pairs},
+          {"max_self_intersecting_pairs_over_iterations", outcome.max_pairs_over_iterations},
           {"naive_self_intersecting_pairs", targets.empty() && !args->untangle
                                                 ? nlohmann::ordered_json(nullptr)
-                                                : nlohmann::ordered_json(naive_pairs)},
-          {"non_positive_tets", tiling.non_positive_tets},
-          {"tiling_boundary_mismatches", tiling.boundary_mismatches},
-          {"tiling_volume_error_rel", tiling.volume_error_rel},
+                                                : nlohmann::ordered_json(outcome.naive_pairs)},
+          {"non_positive_tets", outcome.tiling.non_positive_tets},
+          {"tiling_boundary_mismatches", outcome.tiling.boundary_mismatches},
+          {"tiling_volume_error_rel", outcome.tiling.volume_error_rel},
           {"valid", ok},
           {"history", iterations},
           {"time_s",
            {{"scaf3d", result.seconds},
             {"per_iteration", h.back().iteration > 0 ? result.seconds / h.back().iteration : 0.0},
-            {"checks", check_s},
+            {"checks", outcome.check_seconds},
             {"total", total.seconds()}}}};
       write_text_file_atomic(args->report, report.dump(2) + "\n");
     }
@@ -213,8 +181,8 @@ void register_deform(CLI::App& app) {
         "%d), non-positive tets %lld: %s; %.2f s\n",
         mesh.num_faces(), (long long)result.object_tets.rows(), h.front().objective,
         h.back().objective, h.back().energy, h.back().target_error, h.back().iteration,
-        result.stop_reason.c_str(), final_pairs, naive_pairs, tiling.non_positive_tets,
-        ok ? "valid" : "NOT VALID", total.seconds());
+        result.stop_reason.c_str(), outcome.final_pairs, outcome.naive_pairs,
+        outcome.tiling.non_positive_tets, ok ? "valid" : "NOT VALID", total.seconds());
     std::fflush(stdout);
     return ok ? 0 : 3;
   });
