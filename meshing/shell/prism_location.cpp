@@ -3,6 +3,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 
 #include "meshing/shell/shell_geometry.hpp"
 
@@ -19,6 +20,17 @@ std::optional<PrismCoordinates> locate_in_prism(const Eigen::Vector3i& F,
                                                 const std::array<Eigen::Vector3d, 3>& mid,
                                                 const std::array<Eigen::Vector3d, 3>& top,
                                                 const Eigen::Vector3d& p) {
+  // Outside the box of the nine points, p is in no closed split tet (each lies in its corners'
+  // box); compared exactly, so the answer is the one the orientation tests below would give.
+  for (int a = 0; a < 3; ++a) {
+    double lo = base[0][a], hi = lo;
+    for (const auto* layer : {&base, &mid, &top})
+      for (const Eigen::Vector3d& c : *layer) {
+        lo = std::min(lo, c[a]);
+        hi = std::max(hi, c[a]);
+      }
+    if (p[a] < lo || p[a] > hi) return std::nullopt;
+  }
   const int r = min_rotation(F);
   const bool type_a = is_type_a(F);
   const K::Point_3 q = pt(p);
@@ -34,13 +46,16 @@ std::optional<PrismCoordinates> locate_in_prism(const Eigen::Vector3i& F,
       }
       const auto o = CGAL::orientation(c[0], c[1], c[2], c[3]);
       if (o == CGAL::COPLANAR) continue;
+      // Facet i (opposite corner i) and the side corner i lies on: orientation(facet, c[i]) is
+      // o times the sign of the permutation (facet, i) of (0, 1, 2, 3) (the predicate is exactly
+      // antisymmetric).
       static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+      static const int parity[4] = {-1, 1, -1, 1};
       bool inside = true;
       for (int i = 0; i < 4 && inside; ++i) {
         const auto& fc = faces[i];
         const auto side = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], q);
-        inside =
-            side == CGAL::COPLANAR || side == CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], c[i]);
+        inside = side == CGAL::COPLANAR || int(side) == parity[i] * int(o);
       }
       if (!inside) continue;
       Eigen::Matrix3d A;

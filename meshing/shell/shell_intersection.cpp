@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -973,6 +974,27 @@ double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
   return std::min(found, coplanar);
 }
 
+namespace {
+// Traversal traits for AABB_tree::traversal (a CGAL-internal entry point, stable in the CGAL 5.5
+// of Debian 12) listing the primitives whose bounding box overlaps a query box. The tree's own
+// box query tests each candidate triangle against the box exactly, work the callers here redo
+// with the real shape anyway.
+struct BoxOverlapTraits {
+  const std::vector<Triangle>* triangles;
+  const std::vector<CGAL::Bbox_3>* boxes;
+  std::vector<int>* out;
+  bool go_further() const { return true; }
+  void intersection(const CGAL::Bbox_3& q, const Primitive& p) {
+    const int f = int(p.id() - triangles->cbegin());
+    if (CGAL::do_overlap(q, (*boxes)[std::size_t(f)])) out->push_back(f);
+  }
+  template <class Node>
+  bool do_intersect(const CGAL::Bbox_3& q, const Node& node) const {
+    return CGAL::do_overlap(q, node.bbox());
+  }
+};
+}  // namespace
+
 bool triangles_meet_beyond_pinch(const std::array<V3, 3>& a, int ka, const std::array<V3, 3>& b,
                                  int kb) {
   const Triangle ta(pt(a[0]), pt(a[1]), pt(a[2])), tb(pt(b[0]), pt(b[1]), pt(b[2]));
@@ -990,12 +1012,15 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
                                             const Eigen::Vector3i& corner_ids) const {
   const Triangle tri(pt(c[0]), pt(c[1]), pt(c[2]));
   if (tri.is_degenerate()) return true;  // never accept a flat base/top triangle
-  std::vector<std::vector<Triangle>::const_iterator> hits;
-  m_impl->tree.all_intersected_primitives(tri, std::back_inserter(hits));
-  for (const auto& it : hits) {
-    const int f = m_impl->id(it);
+  // Faces whose box overlaps the triangle's, then the exact test on each (the tree's own
+  // triangle query tests every node box against the triangle exactly, which costs more than it
+  // prunes here).
+  std::vector<int> candidates;
+  BoxOverlapTraits traits{&m_impl->triangles, &m_impl->boxes, &candidates};
+  m_impl->tree.traversal(tri.bbox(), traits);
+  for (int f : candidates) {
     if (m_impl->is_moved(f)) continue;  // below
-    if (face_contact(c, singular, corner_ids, f, true)) return true;
+    if (face_contact(c, singular, corner_ids, f, false)) return true;
   }
   // Moved faces of the reference copy, exactly.
   for (int f : m_impl->moved_near(tri.bbox()))
@@ -1055,28 +1080,65 @@ bool strictly_separated(const Triangle& tri, const K::Tetrahedron_3& tet) {
 }  // namespace
 
 namespace {
-// Traversal traits for AABB_tree::traversal (a CGAL-internal entry point, stable in the CGAL 5.5
-// of Debian 12) listing the primitives whose bounding box overlaps a query box. The tree's own
-// box query tests each candidate triangle against the box exactly, work the callers here redo
-// with the real shape anyway.
-struct BoxOverlapTraits {
-  const std::vector<Triangle>* triangles;
-  const std::vector<CGAL::Bbox_3>* boxes;
-  std::vector<int>* out;
-  bool go_further() const { return true; }
-  void intersection(const CGAL::Bbox_3& q, const Primitive& p) {
-    const int f = int(p.id() - triangles->cbegin());
-    if (CGAL::do_overlap(q, (*boxes)[std::size_t(f)])) out->push_back(f);
+// The orientation of point p against a fixed plane through a, b, c, many times: the cross
+// product and the absolute cofactors are computed once, each query is a dot product with a
+// semi-static error bound (Shewchuk's orient3d bound A, (7 + 56 eps) eps times the permanent,
+// taken with a margin), and CGAL's exact predicate decides where the bound does not.
+struct PlaneSide {
+  Point a, b, c;
+  V3 o, n, cof;
+  explicit PlaneSide(const Point& pa, const Point& pb, const Point& pc) : a(pa), b(pb), c(pc) {
+    o = V3(pa.x(), pa.y(), pa.z());
+    const V3 u = V3(pb.x(), pb.y(), pb.z()) - o, v = V3(pc.x(), pc.y(), pc.z()) - o;
+    n = u.cross(v);
+    cof = V3(std::abs(u.y() * v.z()) + std::abs(u.z() * v.y()),
+             std::abs(u.z() * v.x()) + std::abs(u.x() * v.z()),
+             std::abs(u.x() * v.y()) + std::abs(u.y() * v.x()));
   }
-  template <class Node>
-  bool do_intersect(const CGAL::Bbox_3& q, const Node& node) const {
-    return CGAL::do_overlap(q, node.bbox());
+  // CGAL::orientation(a, b, c, p).
+  CGAL::Orientation side(const Point& p) const {
+    const V3 w = V3(p.x(), p.y(), p.z()) - o;
+    const double det = w.dot(n);
+    const double permanent = w.cwiseAbs().dot(cof);
+    constexpr double k_bound = 2e-15;  // > (7 + 56 eps) eps = 7.8e-16
+    if (det > k_bound * permanent) return CGAL::POSITIVE;
+    if (-det > k_bound * permanent) return CGAL::NEGATIVE;
+    return CGAL::orientation(a, b, c, p);
+  }
+};
+
+// strictly_separated with the tet's facet planes and sides prepared once per tet.
+struct PreparedTet {
+  const K::Tetrahedron_3* tet;
+  std::array<std::optional<PlaneSide>, 4> facet;  // empty where the facet is flat with tet[j]
+  std::array<CGAL::Orientation, 4> inside{};
+  explicit PreparedTet(const K::Tetrahedron_3& t) : tet(&t) {
+    static constexpr int f[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    for (int j = 0; j < 4; ++j) {
+      inside[std::size_t(j)] = CGAL::orientation(t[f[j][0]], t[f[j][1]], t[f[j][2]], t[j]);
+      if (inside[std::size_t(j)] != CGAL::COPLANAR)
+        facet[std::size_t(j)].emplace(t[f[j][0]], t[f[j][1]], t[f[j][2]]);
+    }
+  }
+  // The same answer as strictly_separated(tri, *tet); `plane` is tri's.
+  bool separated(const Triangle& tri, const PlaneSide& plane) const {
+    for (std::size_t j = 0; j < 4; ++j) {
+      if (!facet[j]) continue;
+      bool all_out = true;
+      for (int k = 0; k < 3 && all_out; ++k) all_out = facet[j]->side(tri[k]) == -inside[j];
+      if (all_out) return true;
+    }
+    const auto s0 = plane.side((*tet)[0]);
+    if (s0 == CGAL::COPLANAR) return false;
+    for (int j = 1; j < 4; ++j)
+      if (plane.side((*tet)[j]) != s0) return false;
+    return true;
   }
 };
 }  // namespace
 
 std::vector<int> InputSurfaceIndex::faces_touching_tets(
-    const std::vector<std::array<Eigen::Vector3d, 4>>& tets) const {
+    const std::vector<std::array<Eigen::Vector3d, 4>>& tets, const std::vector<int>& known) const {
   std::vector<int> out;
   if (tets.empty()) return out;
   std::vector<K::Tetrahedron_3> T;
@@ -1099,10 +1161,17 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
         break;
       }
   }
+  for (int f : known)
+    if (!m_impl->is_moved(f)) out.push_back(f);
+  std::vector<PreparedTet> prepared;
+  prepared.reserve(T.size());
+  for (const auto& t : T) prepared.emplace_back(t);
   for (int f : candidates) {
-    if (m_impl->is_moved(f)) continue;  // above
+    if (m_impl->is_moved(f)) continue;                                // above
+    if (std::binary_search(known.begin(), known.end(), f)) continue;  // reported above
     const Triangle& tri = m_impl->triangles[std::size_t(f)];
     const CGAL::Bbox_3& fb = m_impl->boxes[std::size_t(f)];
+    std::optional<PlaneSide> plane;
     for (std::size_t i = 0; i < T.size(); ++i) {
       if (!CGAL::do_overlap(fb, tb[i])) continue;
       // A triangle corner that IS a tet corner touches the closed tet: decided without the exact
@@ -1111,7 +1180,8 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
       bool shared = false;
       for (int a = 0; a < 3 && !shared; ++a)
         for (int j = 0; j < 4 && !shared; ++j) shared = tri.vertex(a) == T[i].vertex(j);
-      if (shared || (!strictly_separated(tri, T[i]) && CGAL::do_intersect(tri, T[i]))) {
+      if (!shared && !plane) plane.emplace(tri[0], tri[1], tri[2]);
+      if (shared || (!prepared[i].separated(tri, *plane) && CGAL::do_intersect(tri, T[i]))) {
         out.push_back(f);
         break;
       }

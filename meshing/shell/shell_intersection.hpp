@@ -124,9 +124,11 @@ class InputSurfaceIndex {
   // Input faces whose triangle intersects the (closed) tetrahedron (exact), in increasing order.
   std::vector<int> faces_touching_tet(const std::array<Eigen::Vector3d, 4>& tet) const;
   // Input faces intersecting at least one of the closed tetrahedra (exact), in increasing order
-  // (one tree traversal for all of them).
-  std::vector<int> faces_touching_tets(
-      const std::vector<std::array<Eigen::Vector3d, 4>>& tets) const;
+  // (one tree traversal for all of them). `known` (sorted, unique): faces the caller knows to
+  // touch one of them (e.g. a corner of the face located in a tet by exact predicates); they are
+  // reported without a test, except moved faces of the reference copy, which are tested anyway.
+  std::vector<int> faces_touching_tets(const std::vector<std::array<Eigen::Vector3d, 4>>& tets,
+                                       const std::vector<int>& known = {}) const;
 
   // Non-degenerate input faces whose closed triangle contains p (exact), in increasing order.
   std::vector<int> faces_containing(const Eigen::Vector3d& p) const;

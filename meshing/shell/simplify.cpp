@@ -16,6 +16,8 @@
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/lagrange_nodes.hpp"
+#include "meshing/core/log.hpp"
+#include "meshing/editing/thread_slot.hpp"
 #include "meshing/editing/tri_mesh.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
 #include "meshing/shell/prism_location.hpp"
@@ -188,7 +190,71 @@ class ShellMesh : public TriMesh {
   bool count_rejections = false;
   Reject note(Reject why) {
     if (count_rejections && why != none) rejections[why].fetch_add(1, std::memory_order_relaxed);
+    if (why != none) last_reason.local() = why;
     return why;
+  }
+  editing::PerThread<Reject> last_reason;
+
+  // Refused collapses, remembered while `memo_active` (the collapse rounds). The invariants of a
+  // collapse v -> w read only the cells around v and w and the cells across their edges: the
+  // positions, pillars, owned points and tracks of those cells, the fixed input and the fixed
+  // options (an edge's faces are the cells of two vertices of the closed one-rings of v and w).
+  // Every accepted operation stamps the vertices of the cells it creates or changes with a
+  // fresh clock value (`changed_at`), so when no vertex of the closed one-rings of v and w has a
+  // stamp later than the refusal, the invariants would refuse again for the same reason and
+  // the refusal is replayed without running them: the same rejection counted and the same
+  // vertices flagged for smoothing. A chain collapse moves the reference copy, which other
+  // prisms read, so it forgets every refusal. Used on one thread only (the memo is not locked).
+  struct Refusal {
+    Id to = editing::k_no_id;
+    std::uint64_t at = 0;
+    bool shape = false;  // Check::shape (else Check::shell)
+    Reject why = none;
+    std::vector<Id> flagged;  // the vertices of the refused collapse's old cells
+  };
+  bool memo_active = false;
+  std::uint64_t clock = 0;
+  Attribute<std::uint64_t> changed_at{*this, 0, 0};
+  std::vector<std::vector<Refusal>> refusals;  // per removed vertex
+  long replayed = 0;
+  void forget_refusals() { refusals.clear(); }
+  std::uint64_t latest_change_near(Id v) const {
+    std::uint64_t t = changed_at[v];
+    for (Id f : vertex_cells(v))
+      for (Id u : cell(f)) t = std::max(t, changed_at[u]);
+    return t;
+  }
+  bool replay_refusal(Id v, Id w) {
+    if (std::size_t(v) >= refusals.size()) return false;
+    auto& list = refusals[std::size_t(v)];
+    const auto it =
+        std::find_if(list.begin(), list.end(), [w](const Refusal& x) { return x.to == w; });
+    if (it == list.end()) return false;
+    if (std::max(latest_change_near(v), latest_change_near(w)) > it->at) {
+      list.erase(it);
+      return false;
+    }
+    ++replayed;
+    note(it->why);
+    for (Id u : it->flagged)
+      if (it->shape)
+        revisit[2][u] = 1;
+      else
+        for (auto& flags : revisit) flags[u] = 1;
+    return true;
+  }
+  void remember_refusal(const OperationRecord& r, bool shape) {
+    Refusal x{r.v1, clock, shape, last_reason.local(), {}};
+    for (Id f : r.old_cells)
+      for (Id u : cell(f)) x.flagged.push_back(u);
+    if (refusals.size() <= std::size_t(r.v0)) refusals.resize(std::size_t(r.v0) + 1);
+    auto& list = refusals[std::size_t(r.v0)];
+    const auto it =
+        std::find_if(list.begin(), list.end(), [&](const Refusal& y) { return y.to == r.v1; });
+    if (it != list.end())
+      *it = std::move(x);
+    else
+      list.push_back(std::move(x));
   }
 
   double mips(Id f) const {
@@ -496,13 +562,27 @@ class ShellMesh : public TriMesh {
       if (input->face_section_contact(x, q)) return false;
     return true;
   }
+  // The input faces at the input vertices f owns: each such vertex lies in a closed split tet of
+  // f's prism (owned_place located it there with exact predicates), so its faces touch the prism.
+  // Vertices on a collapsed feature chain are left out (snapped, the reference copy moved them).
+  std::vector<int> faces_at_owned(Id f) const {
+    std::vector<int> out;
+    if (!vf || !(max_distance > 0) || owned[f].empty()) return out;
+    for (int x : owned[f]) {
+      if (!is_input_vertex(x) || (!on_chain.empty() && on_chain[std::size_t(x)])) continue;
+      out.insert(out.end(), (*vf)[std::size_t(x)].begin(), (*vf)[std::size_t(x)].end());
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
   Reject prism_check(Id f, std::vector<int>& touching) const {
     const PrismShape p = prism_shape(f);
     if (!shell_face_positive(p.b, p.m, p.t, p.s)) return positivity;  // I1
     if (input->triangle_intersects(p.b, p.s, p.ids) || input->triangle_intersects(p.t, p.s, p.ids))
       return intersection;  // I3
     // I2 for every touching face; the track keeps every touching face.
-    touching = input->faces_touching_tets(p.tets);
+    touching = input->faces_touching_tets(p.tets, faces_at_owned(f));
     for (int x : touching)
       if (!section_ok(p, x)) return section;
     return touching.empty() ? coverage : none;
@@ -554,7 +634,8 @@ class ShellMesh : public TriMesh {
   }
   bool collapse_edge_before(const Tuple& t) override {
     if (chain_mode) return chain_before(t);
-    return !singular[t.vid] && !frozen_vertex(t.vid);
+    if (singular[t.vid] || frozen_vertex(t.vid)) return false;
+    return !(memo_active && replay_refusal(t.vid, other_vertex(t)));
   }
 
   // A chain collapse removes v (on a chain vertex x) along its coarse feature edge to w; v's
@@ -1075,6 +1156,16 @@ class ShellMesh : public TriMesh {
     if (c == Check::shape)
       for (Id f : r.old_cells)
         for (Id v : cell(f)) revisit[2][v] = 1;
+    if (c == Check::ok) {
+      ++clock;
+      for (const auto* list : {&r.new_cells, &r.old_cells, &r.affected_cells})
+        for (Id f : *list)
+          for (Id v : cell(f)) changed_at.set(v, clock);
+      if (chain_mode) forget_refusals();
+    } else if (memo_active && !chain_mode && r.v0 != editing::k_no_id && r.v1 != editing::k_no_id &&
+               !r.old_cells.empty()) {
+      remember_refusal(r, c == Check::shape);
+    }
     return c == Check::ok;
   }
 };
@@ -1306,6 +1397,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     pass.position = [&m](Id v) { return m.mid[v]; };
     const editing::PassStats s = pass.run(m, work);
     stats.passes.emplace_back(name, s);
+    log::debug("simplify: ", name, ": ", s.summary());
     return int(s.succeeded);
   };
   // Collapses (ordinary or chain), shortest edge first; a success renews the edges around the
@@ -1327,9 +1419,13 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   };
   auto collapse_pass = [&] {
     m.count_rejections = true;
+    m.memo_active = options.threads <= 1;
     struct Off {
       ShellMesh& m;
-      ~Off() { m.count_rejections = false; }
+      ~Off() {
+        m.count_rejections = false;
+        m.memo_active = false;
+      }
     } off{m};
     Pass pass = shortest_first_collapses("collapse");
     return run("collapse", pass, edge_work("collapse", m.get_edges(), true));
@@ -1517,6 +1613,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     if (collapsed == 0 && (round > 0 || changed == 0)) break;
   }
 
+  log::debug("simplify: collapse refusals replayed: ", m.replayed);
   auto& why = stats.collapse_rejections;
   why.shape = m.rejections[ShellMesh::shape];
   why.distance = m.rejections[ShellMesh::distance];
