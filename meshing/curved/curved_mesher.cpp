@@ -1074,6 +1074,9 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       log::info("mesh: the repair left ", simplify_stats.violating_points,
                 " input vertices beyond eps of the linear surface: coarsening again");
       simplify_stats = sh::SimplifyStats();
+      // Each stage's seconds its own (the coarsening below starts its clock again).
+      stats.stage_seconds.emplace_back("repair (failed)", watch.seconds());
+      watch = Stopwatch();
     }
   }
   if (repaired) {
@@ -1104,6 +1107,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       st.resume = st.linear_phase_done = true;
       st.linear_phase_faces = int(st.start.F.rows());
       stats.stage_seconds.emplace_back("coarsen (linear phase)", phase.seconds());
+      watch = Stopwatch();  // "coarsen" below: the resumed coarsening only
       log::info("mesh: linear phase: shell ", beveled.shell.F.rows(), " prisms coarsened to ",
                 st.start.F.rows());
     }

@@ -1574,6 +1574,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (const auto& t : m.get_faces()) rounds = rounds && !(excess(t.fid) > 0);
     if (rounds) m.repair = false;
   }
+  log::debug("simplify: set-up and repair ",
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), " s");
   for (int round = 0; rounds && round < options.rounds; ++round) {
     int changed = 0;
     int collapsed = collapse_pass();
@@ -1624,6 +1626,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   why.curved = m.rejections[ShellMesh::curved];
   why.thickness = m.rejections[ShellMesh::thin];
 
+  log::debug("simplify: rounds done at ",
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), " s");
   m.consolidate();
   Shell out;
   const int mv = int(m.vertex_capacity());
