@@ -1677,7 +1677,22 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
       for (int x : m.owned[Id(f)]) {
         const auto d = m.owned_distance(Id(f), x);
         stats.max_distance = std::max(stats.max_distance, d ? *d : HUGE_VAL);
-        stats.violating_points += m.violating(x, d ? *d : HUGE_VAL);
+        const bool bad = m.violating(x, d ? *d : HUGE_VAL);
+        stats.violating_points += bad;
+        if (bad && log::enabled(log::Level::debug)) {
+          const auto& c = faces[f];
+          double longest = 0, shortest = HUGE_VAL, corner = HUGE_VAL;
+          for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector3d a = out.mid.row(int(c[std::size_t(k)])).transpose(),
+                                  b = out.mid.row(int(c[std::size_t((k + 1) % 3)])).transpose();
+            longest = std::max(longest, (a - b).norm());
+            shortest = std::min(shortest, (a - b).norm());
+            corner = std::min(corner, (a - input.V.row(x).transpose()).norm());
+          }
+          log::debug("simplify: input vertex ", x, " left at ", d ? *d : HUGE_VAL, " (bound ",
+                     m.max_distance, ") in coarse face ", f, ": MIPS ", m.mips(Id(f)),
+                     ", edges ", shortest, "..", longest, ", nearest corner ", corner);
+        }
       }
     }
   }
