@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -1690,8 +1690,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
             corner = std::min(corner, (a - input.V.row(x).transpose()).norm());
           }
           log::debug("simplify: input vertex ", x, " left at ", d ? *d : HUGE_VAL, " (bound ",
-                     m.max_distance, ") in coarse face ", f, ": MIPS ", m.mips(Id(f)),
-                     ", edges ", shortest, "..", longest, ", nearest corner ", corner);
+                     m.max_distance, ") in coarse face ", f, ": MIPS ", m.mips(Id(f)), ", edges ",
+                     shortest, "..", longest, ", nearest corner ", corner);
         }
       }
     }
