@@ -1,3 +1,4 @@
+#include "meshing/core/log.hpp"
 #include "meshing/curved/curved_edit.hpp"
 
 #include <Eigen/Dense>
@@ -579,6 +580,11 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
       return target_work(m.operation_record().new_cells, mode);
     };
     const auto s = pass.run(m, target_work(m.live_cells(), mode));
+    log::debug("optimize: curved edits, ",
+               mode == Mode::collapse ? "collapses"
+               : mode == Mode::flip   ? "flips"
+                                      : "splits",
+               ": ", s.summary());
     stats.rejected_topology += (long long)(s.rejected_topology);
     return (long long)(s.succeeded);
   };
