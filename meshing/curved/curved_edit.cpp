@@ -1,4 +1,3 @@
-#include "meshing/core/log.hpp"
 #include "meshing/curved/curved_edit.hpp"
 
 #include <Eigen/Dense>
@@ -13,6 +12,7 @@
 #include <unordered_map>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/curved/node_key.hpp"
