@@ -213,7 +213,7 @@ class ShellMesh : public TriMesh {
     std::vector<Id> flagged;  // the vertices of the refused collapse's old cells
   };
   bool memo_active = false;
-  std::uint64_t clock = 0;
+  std::atomic<std::uint64_t> clock{0};  // atomic: parallel passes stamp too (memo unused there)
   Attribute<std::uint64_t> changed_at{*this, 0, 0};
   std::vector<std::vector<Refusal>> refusals;  // per removed vertex
   long replayed = 0;
@@ -244,7 +244,7 @@ class ShellMesh : public TriMesh {
     return true;
   }
   void remember_refusal(const OperationRecord& r, bool shape) {
-    Refusal x{r.v1, clock, shape, last_reason.local(), {}};
+    Refusal x{r.v1, clock.load(std::memory_order_relaxed), shape, last_reason.local(), {}};
     for (Id f : r.old_cells)
       for (Id u : cell(f)) x.flagged.push_back(u);
     if (refusals.size() <= std::size_t(r.v0)) refusals.resize(std::size_t(r.v0) + 1);
@@ -1157,10 +1157,10 @@ class ShellMesh : public TriMesh {
       for (Id f : r.old_cells)
         for (Id v : cell(f)) revisit[2][v] = 1;
     if (c == Check::ok) {
-      ++clock;
+      const std::uint64_t now = clock.fetch_add(1, std::memory_order_relaxed) + 1;
       for (const auto* list : {&r.new_cells, &r.old_cells, &r.affected_cells})
         for (Id f : *list)
-          for (Id v : cell(f)) changed_at.set(v, clock);
+          for (Id v : cell(f)) changed_at.set(v, now);
       if (chain_mode) forget_refusals();
     } else if (memo_active && !chain_mode && r.v0 != editing::k_no_id && r.v1 != editing::k_no_id &&
                !r.old_cells.empty()) {
