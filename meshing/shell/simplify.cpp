@@ -1419,7 +1419,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   };
   auto collapse_pass = [&] {
     m.count_rejections = true;
-    m.memo_active = options.threads <= 1;
+    m.memo_active = options.threads <= 1 && options.replay_refusals;
     struct Off {
       ShellMesh& m;
       ~Off() {
@@ -1615,6 +1615,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     if (collapsed == 0 && (round > 0 || changed == 0)) break;
   }
 
+  stats.replayed_refusals = m.replayed;
   log::debug("simplify: collapse refusals replayed: ", m.replayed);
   auto& why = stats.collapse_rejections;
   why.shape = m.rejections[ShellMesh::shape];

@@ -33,6 +33,9 @@ namespace curvefem::meshing::shell {
 
 struct SimplifyOptions {
   int threads = 1;
+  // One-thread collapse passes replay a refusal while nothing it read has changed (same answers,
+  // meshing/shell/README.md "What the checks skip"); false runs every check (for comparisons).
+  bool replay_refusals = true;
   double section_cos = 0.0;  // distortion bound on pillar/normal cosines (0: strict positivity)
   int rounds = 3;            // collapse passes (a pass re-seeds every edge)
   // > 0: distance bound. Every input vertex is owned by the prism that contains it; a collapse is
@@ -170,8 +173,9 @@ struct SimplifyStats {
   // With max_distance: per output face, the points its prism owns (input vertex x, or extra
   // point x - #input V), the input of a later repair (SimplifyOptions::owned_points).
   std::vector<std::vector<int>> owned_points;
-  int violating_points = 0;  // repair mode: strict points still beyond max_distance at the end
-  int repair_passes = 0;     // repair mode: split passes run
+  int violating_points = 0;    // repair mode: strict points still beyond max_distance at the end
+  int repair_passes = 0;       // repair mode: split passes run
+  long replayed_refusals = 0;  // collapse refusals replayed (SimplifyOptions::replay_refusals)
   double seconds = 0;
 };
 

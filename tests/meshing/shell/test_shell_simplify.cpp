@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <random>
 #include <set>
 #include <string>
 
@@ -95,6 +97,70 @@ TEST(ShellSimplify, CoarsensABoxShellAcrossSharpEdges) {
   const sh::Shell coarse = sh::simplify_shell(shell, box, o, s);
   EXPECT_LT(s.faces_after, s.faces_before / 2);
   expect_valid(coarse, box);
+}
+
+// Replaying refused collapses (SimplifyOptions::replay_refusals) must not change anything: the
+// same coarse shell, bit for bit, the same refusals counted, on a noisy sphere under a distance
+// bound with flips, rotations and growth (the passes that change pillars between rounds) and on
+// a box whose feature chains collapse (which forget every refusal).
+TEST(ShellSimplify, ReplayedRefusalsGiveTheSameShell) {
+  auto same = [](const sh::Shell& a, const sh::Shell& b) {
+    return a.F == b.F && a.mid == b.mid && a.base == b.base && a.top == b.top &&
+           a.input_vertex == b.input_vertex && a.singular == b.singular;
+  };
+  SurfaceMesh sphere = curvefem::make_icosphere(3);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+  for (int v = 0; v < sphere.V.rows(); ++v) sphere.V.row(v) *= 1 + jitter(rng);
+  const SurfaceMesh box = curvefem::make_box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 2, 1), 6);
+  for (const SurfaceMesh* input : {static_cast<const SurfaceMesh*>(&sphere), &box}) {
+    sh::ShellStats stats;
+    const sh::Shell shell = build(*input, stats);
+    const double unit = curvefem::bbox_longest_edge(input->V);
+    sh::SimplifyOptions o;
+    o.max_distance = 0.03 * unit;
+    o.max_mips = 10;
+    o.rounds = 5;
+    o.zoom = 0.1 * unit;
+    if (input == &box) {
+      // The box's twelve edges as feature edges: every input edge between two faces at 90°.
+      std::map<std::pair<int, int>, std::vector<Eigen::Vector3d>> normals;
+      for (int f = 0; f < box.F.rows(); ++f) {
+        const Eigen::Vector3d a = box.V.row(box.F(f, 0)), b = box.V.row(box.F(f, 1)),
+                              c = box.V.row(box.F(f, 2));
+        const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+        for (int k = 0; k < 3; ++k) {
+          const int x = box.F(f, k), y = box.F(f, (k + 1) % 3);
+          normals[{std::min(x, y), std::max(x, y)}].push_back(n);
+        }
+      }
+      for (const auto& [e, n] : normals)
+        if (n.size() == 2 && n[0].dot(n[1]) < 0.5) o.feature_edges.push_back({e.first, e.second});
+      ASSERT_FALSE(o.feature_edges.empty());
+      o.frozen_input_vertices.assign(std::size_t(box.num_vertices()), 0);
+      for (const auto& e : o.feature_edges)
+        o.frozen_input_vertices[std::size_t(e[0])] = o.frozen_input_vertices[std::size_t(e[1])] = 1;
+      o.collapse_chains = true;
+    }
+    sh::SimplifyStats on, off;
+    const sh::Shell a = sh::simplify_shell(shell, *input, o, on);
+    o.replay_refusals = false;
+    const sh::Shell b = sh::simplify_shell(shell, *input, o, off);
+    EXPECT_GT(on.replayed_refusals, 20);
+    EXPECT_EQ(off.replayed_refusals, 0);
+    EXPECT_TRUE(same(a, b)) << on.faces_after << " vs " << off.faces_after << " faces";
+    EXPECT_EQ(on.collapses, off.collapses);
+    EXPECT_EQ(on.flips, off.flips);
+    EXPECT_EQ(on.rotations, off.rotations);
+    EXPECT_EQ(on.zooms, off.zooms);
+    EXPECT_EQ(on.collapse_rejections.shape, off.collapse_rejections.shape);
+    EXPECT_EQ(on.collapse_rejections.distance, off.collapse_rejections.distance);
+    EXPECT_EQ(on.collapse_rejections.positivity, off.collapse_rejections.positivity);
+    if (input == &box) {
+      EXPECT_GT(on.chain_collapses, 0);
+    }
+    expect_valid(a, *input);
+  }
 }
 
 TEST(ShellSimplify, FlipsRotationsAndGrowthCoarsenFurtherUnderADistanceBound) {
