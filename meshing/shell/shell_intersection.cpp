@@ -1056,30 +1056,6 @@ bool InputSurfaceIndex::face_contact(const std::array<Eigen::Vector3d, 3>& c,
 }
 
 namespace {
-// True if a plane strictly separates the closed triangle from the closed tet: one of the tet's
-// facet planes with all three triangle corners strictly outside, or the triangle's plane with
-// all four tet corners strictly on one side. Exact (filtered orientation predicates); a cheap
-// rejection before CGAL's general triangle-tetrahedron test, which most bounding-box candidates
-// would otherwise pay for in interval arithmetic.
-bool strictly_separated(const Triangle& tri, const K::Tetrahedron_3& tet) {
-  static constexpr int facet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-  for (int j = 0; j < 4; ++j) {
-    const Point &a = tet[facet[j][0]], &b = tet[facet[j][1]], &c = tet[facet[j][2]];
-    const auto inside = CGAL::orientation(a, b, c, tet[j]);
-    if (inside == CGAL::COPLANAR) continue;
-    bool all_out = true;
-    for (int k = 0; k < 3 && all_out; ++k) all_out = CGAL::orientation(a, b, c, tri[k]) == -inside;
-    if (all_out) return true;
-  }
-  const auto s0 = CGAL::orientation(tri[0], tri[1], tri[2], tet[0]);
-  if (s0 == CGAL::COPLANAR) return false;
-  for (int j = 1; j < 4; ++j)
-    if (CGAL::orientation(tri[0], tri[1], tri[2], tet[j]) != s0) return false;
-  return true;
-}
-}  // namespace
-
-namespace {
 // The orientation of point p against a fixed plane through a, b, c, many times: the cross
 // product and the absolute cofactors are computed once, each query is a dot product with a
 // semi-static error bound (Shewchuk's orient3d bound A, (7 + 56 eps) eps times the permanent,
@@ -1107,7 +1083,7 @@ struct PlaneSide {
   }
 };
 
-// strictly_separated with the tet's facet planes and sides prepared once per tet.
+// The separating-plane test below with the tet's facet planes and sides prepared once per tet.
 struct PreparedTet {
   const K::Tetrahedron_3* tet;
   std::array<std::optional<PlaneSide>, 4> facet;  // empty where the facet is flat with tet[j]
@@ -1120,7 +1096,7 @@ struct PreparedTet {
         facet[std::size_t(j)].emplace(t[f[j][0]], t[f[j][1]], t[f[j][2]]);
     }
   }
-  // The same answer as strictly_separated(tri, *tet); `plane` is tri's.
+  // strictly_separated(tri, *tet), below; `plane` is tri's.
   bool separated(const Triangle& tri, const PlaneSide& plane) const {
     for (std::size_t j = 0; j < 4; ++j) {
       if (!facet[j]) continue;
@@ -1135,6 +1111,15 @@ struct PreparedTet {
     return true;
   }
 };
+
+// True if a plane strictly separates the closed triangle from the closed tet: one of the tet's
+// facet planes with all three triangle corners strictly outside, or the triangle's plane with
+// all four tet corners strictly on one side. Exact (filtered orientation predicates); a cheap
+// rejection before CGAL's general triangle-tetrahedron test, which most bounding-box candidates
+// would otherwise pay for in interval arithmetic.
+bool strictly_separated(const Triangle& tri, const K::Tetrahedron_3& tet) {
+  return PreparedTet(tet).separated(tri, PlaneSide(tri[0], tri[1], tri[2]));
+}
 }  // namespace
 
 std::vector<int> InputSurfaceIndex::faces_touching_tets(
