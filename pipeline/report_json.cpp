@@ -181,6 +181,7 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
         {"flips", s.edits.flips},
         {"splits", s.edits.splits},
         {"attempted", s.edits.attempted},
+        {"replayed", s.edits.replayed},
         {"rejected",
          {{"certificate", s.edits.rejected_certificate},
           {"energy", s.edits.rejected_energy},

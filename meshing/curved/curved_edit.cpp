@@ -76,22 +76,82 @@ class CurvedEditMesh : public TetMesh {
     return X;
   }
 
+  // Refused collapses replayed (CurvedEditOptions::replay_refusals). A collapse v -> w reads
+  // the cells around v and w (their corners, nodes, energies and scaled Jacobians) and fixed
+  // data (tags, the frozen surface, the options); every accepted operation stamps the corners of
+  // the cells it removes, creates or reshapes, and a face shared with a cell around v or w has
+  // its corners among theirs. So while no corner of a cell around v or w carries a stamp later
+  // than a refusal, the checks would refuse again for the same reason: the refusal is counted
+  // again and nothing is run. One thread (the edits are sequential).
+  bool replay = false;
+  long replayed = 0;
+  bool collapsing = false;  // the operation under way is a collapse
+  std::uint64_t clock = 0;
+  editing::Attribute<std::uint64_t> changed_at{*this, 0, 0};
+  struct Refusal {
+    Id to = editing::k_no_id;
+    std::uint64_t at = 0;
+    bool certificate = false;  // counted as rejected_certificate (else rejected_energy)
+  };
+  std::vector<std::vector<Refusal>> refusals;  // per removed vertex
+
   bool is_target(Id t, double threshold) const { return energy[t] > threshold; }
   bool is_split_target(Id t, double threshold, double flat) const {
     return energy[t] > threshold && scaled_jacobian[t] < flat;
   }
 
  protected:
-  bool collapse_edge_before(const Tuple& t) override { return !vertex_fixed[t.vid]; }
+  std::uint64_t latest_change_near(Id v) const {
+    std::uint64_t t = changed_at[v];
+    for (Id c : vertex_cells(v))
+      for (Id u : cell(c)) t = std::max(t, changed_at[u]);
+    return t;
+  }
+  bool collapse_edge_before(const Tuple& t) override {
+    collapsing = true;
+    if (vertex_fixed[t.vid]) return false;
+    if (!replay || std::size_t(t.vid) >= refusals.size()) return true;
+    auto& list = refusals[std::size_t(t.vid)];
+    const Id w = other_vertex(t);
+    const auto it =
+        std::find_if(list.begin(), list.end(), [w](const Refusal& x) { return x.to == w; });
+    if (it == list.end()) return true;
+    if (std::max(latest_change_near(t.vid), latest_change_near(w)) > it->at) {
+      list.erase(it);
+      return true;
+    }
+    ++replayed;
+    ++stats->attempted;
+    ++(it->certificate ? stats->rejected_certificate : stats->rejected_energy);
+    return false;
+  }
+  // Counts a refusal of the checks and remembers a collapse's.
+  bool refuse(const OperationRecord& r, bool certificate) {
+    ++(certificate ? stats->rejected_certificate : stats->rejected_energy);
+    if (!replay || !collapsing) return false;
+    if (refusals.size() <= std::size_t(r.v0)) refusals.resize(std::size_t(r.v0) + 1);
+    auto& list = refusals[std::size_t(r.v0)];
+    const Refusal x{r.v1, clock, certificate};
+    const auto it =
+        std::find_if(list.begin(), list.end(), [&](const Refusal& y) { return y.to == r.v1; });
+    if (it != list.end())
+      *it = x;
+    else
+      list.push_back(x);
+    return false;
+  }
   bool swap_face_before(const Tuple& t) override {
+    collapsing = false;
     const auto f = face_vertices(t);
     return !curved_faces.count(sorted_face(f[0], f[1], f[2]));
   }
   bool swap_edge_before(const Tuple& t) override {
+    collapsing = false;
     return !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
   }
   // Splits: interior edges only (neither on a boundary face nor on the frozen surface).
   bool split_edge_before(const Tuple& t) override {
+    collapsing = false;
     return !is_boundary_edge(t) && !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
   }
 
@@ -237,14 +297,14 @@ class CurvedEditMesh : public TetMesh {
     for (std::size_t i = 0; i < nn; ++i) {
       build_cell(r.new_cells[i]);
       new_energy[i] = cell_energy(k, Xs[i]);
-      if (!(new_energy[i] < before * (1.0 - 1e-9))) return ++stats->rejected_energy, false;
+      if (!(new_energy[i] < before * (1.0 - 1e-9))) return refuse(r, false);
     }
     // A split adds cells, so it must also raise the cavity's worst scaled Jacobian.
     const double sj_needed =
         r.new_vertex != editing::k_no_id ? sj_before * (1 + split_sj_gain) : sj_before;
     for (std::size_t i = 0; i < nn; ++i) {
       new_sj[i] = min_scaled_jacobian(k, Xs[i]);
-      if (!(new_sj[i] >= sj_needed)) return ++stats->rejected_energy, false;
+      if (!(new_sj[i] >= sj_needed)) return refuse(r, false);
     }
     // ... and not raise its worst curved MIPS (the quality goal's measure, which the conformal
     // energy above weighs differently: a split that trades a flat cell for a needle passes
@@ -254,11 +314,11 @@ class CurvedEditMesh : public TetMesh {
       for (Id t : r.old_cells)
         mips_before = std::max(mips_before, curved_mips(k, cell_nodes(cell(t))));
       for (const auto& X : Xs) mips_after = std::max(mips_after, curved_mips(k, X));
-      if (!(mips_after <= mips_before)) return ++stats->rejected_energy, false;
+      if (!(mips_after <= mips_before)) return refuse(r, false);
     }
     for (std::size_t i = 0; i < nn; ++i)
       if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive)
-        return ++stats->rejected_certificate, false;
+        return refuse(r, true);
     for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
       energy.set(r.new_cells[i], new_energy[i]);
       scaled_jacobian.set(r.new_cells[i], new_sj[i]);
@@ -267,6 +327,10 @@ class CurvedEditMesh : public TetMesh {
       node_of[key] = int(pos.size());
       pos.push_back(x);
     }
+    ++clock;
+    for (const auto* list : {&r.old_cells, &r.new_cells, &r.affected_cells})
+      for (Id t : *list)
+        for (Id u : cell(t)) changed_at.set(u, clock);
     return true;
   }
 
@@ -407,6 +471,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   m.tri_lattice = &lagrange_lattice(CellKind::triangle, k);
   m.stats = &stats;
   m.mips_guard = options.mips_guard;
+  m.replay = options.replay_refusals;
   m.initialize(node_of_vertex.size(), cells);
   m.pos.resize(std::size_t(mesh.num_nodes()));
   for (int n = 0; n < mesh.num_nodes(); ++n) m.pos[std::size_t(n)] = mesh.nodes.row(n).transpose();
@@ -612,6 +677,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   }
   if (progress) progress("optimize: curved edits", 1.0);
   summarize(stats.mean_energy_after, stats.max_energy_after, stats.targets_after);
+  stats.replayed = m.replayed;
 
   // Back to a LagrangeMesh: the original nodes still used keep their order, new nodes follow.
   const auto live = m.live_cells();

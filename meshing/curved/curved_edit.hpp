@@ -54,6 +54,9 @@ struct CurvedEditOptions {
   // CAD parts a little and doubles the edits' time.
   bool splits = false;
   double split_scaled_jacobian = 0.01;
+  // A refused collapse is replayed while none of the cells it read changed (the same result,
+  // fewer checks; curved_edit.cpp CurvedEditMesh::replay); false runs every check.
+  bool replay_refusals = true;
   // At most this share of the cells at the start of a pass is split in that pass.
   double max_split_share = 0.2;
 };
@@ -65,6 +68,7 @@ struct CurvedEditStats {
   long long rejected_certificate = 0;  // a new cell not certified positive
   long long rejected_energy = 0;       // the worst energy did not drop, or the scaled Jacobian did
   long long rejected_topology = 0;     // link condition, boundary, existing edge or face
+  long long replayed = 0;  // refused collapses replayed (counted in attempted and rejected_*)
   int cells_before = 0, cells_after = 0;
   int targets_before = 0, targets_after = 0;  // cells above `energy`
   double max_energy_before = 0, max_energy_after = 0;

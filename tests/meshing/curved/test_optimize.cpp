@@ -414,6 +414,33 @@ TEST(CurvedEdit, CurvedSphereMeshStaysValidWithItsBoundary) {
   EXPECT_GE(b.min_scaled_jacobian, a.min_scaled_jacobian);
 }
 
+// Replaying refused collapses (CurvedEditOptions::replay_refusals) changes nothing: the same
+// mesh bit for bit and the same counts, with the replays counted in them.
+TEST(CurvedEdit, ReplayedRefusalsGiveTheSameMesh) {
+  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  cv::CurvedMeshOptions o;
+  o.order = 3;
+  o.curved_coarsening = false;
+  o.optimize.edits.passes = 2;
+  o.optimize.edits.energy = 1.5;
+  cv::CurvedMeshStats on, off;
+  const cv::CurvedMesh a = cv::build_curved_mesh(sphere, o, on);
+  o.optimize.edits.replay_refusals = false;
+  const cv::CurvedMesh b = cv::build_curved_mesh(sphere, o, off);
+  const cv::CurvedEditStats &x = on.optimize.edits, &y = off.optimize.edits;
+  EXPECT_GT(x.replayed, 10);
+  EXPECT_EQ(y.replayed, 0);
+  EXPECT_GT(x.collapses, 0);
+  EXPECT_EQ(x.collapses, y.collapses);
+  EXPECT_EQ(x.flips, y.flips);
+  EXPECT_EQ(x.attempted, y.attempted);
+  EXPECT_EQ(x.rejected_energy, y.rejected_energy);
+  EXPECT_EQ(x.rejected_certificate, y.rejected_certificate);
+  EXPECT_EQ(x.rejected_topology, y.rejected_topology);
+  EXPECT_EQ(a.mesh.cells, b.mesh.cells);
+  EXPECT_EQ(a.mesh.nodes, b.mesh.nodes);
+}
+
 TEST(Optimize, TheWorstCellSearchLiftsACornerOffABoundaryFace) {
   // The centre almost on the face x + y + z = 1: the tet on that face is a sliver.
   const Eigen::Vector3d near_face(0.3, 0.33, 0.355);
