@@ -567,8 +567,13 @@ class ShellMesh : public TriMesh {
   // Vertices on a collapsed feature chain are left out (snapped, the reference copy moved them).
   std::vector<int> faces_at_owned(Id f) const {
     std::vector<int> out;
-    if (!vf || !(max_distance > 0) || owned[f].empty()) return out;
-    for (int x : owned[f]) {
+    if (!vf || !(max_distance > 0) || owned[f].empty() || place[f].size() != owned[f].size())
+      return out;
+    for (std::size_t j = 0; j < owned[f].size(); ++j) {
+      const int x = owned[f][j];
+      // Located points only: a resumed shell's points that were not found in their prism are
+      // kept with an infinite distance (simplify_shell's set-up).
+      if (!std::isfinite(place[f][j][2])) continue;
       if (!is_input_vertex(x) || (!on_chain.empty() && on_chain[std::size_t(x)])) continue;
       out.insert(out.end(), (*vf)[std::size_t(x)].begin(), (*vf)[std::size_t(x)].end());
     }
