@@ -17,6 +17,7 @@
 #include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/curved/node_key.hpp"
 #include "meshing/curved/optimize.hpp"
+#include "meshing/editing/refusal_memo.hpp"
 #include "meshing/editing/scheduler.hpp"
 #include "meshing/editing/tet_mesh.hpp"
 
@@ -84,16 +85,11 @@ class CurvedEditMesh : public TetMesh {
   // than a refusal, the checks would refuse again for the same reason: the refusal is counted
   // again and nothing is run. One thread (the edits are sequential).
   bool replay = false;
-  long replayed = 0;
   bool collapsing = false;  // the operation under way is a collapse
-  std::uint64_t clock = 0;
-  editing::Attribute<std::uint64_t> changed_at{*this, 0, 0};
   struct Refusal {
-    Id to = editing::k_no_id;
-    std::uint64_t at = 0;
     bool certificate = false;  // counted as rejected_certificate (else rejected_energy)
   };
-  std::vector<std::vector<Refusal>> refusals;  // per removed vertex
+  editing::RefusalMemo<TetMesh, Refusal> memo{*this};
 
   bool is_target(Id t, double threshold) const { return energy[t] > threshold; }
   bool is_split_target(Id t, double threshold, double flat) const {
@@ -101,43 +97,19 @@ class CurvedEditMesh : public TetMesh {
   }
 
  protected:
-  std::uint64_t latest_change_near(Id v) const {
-    std::uint64_t t = changed_at[v];
-    for (Id c : vertex_cells(v))
-      for (Id u : cell(c)) t = std::max(t, changed_at[u]);
-    return t;
-  }
   bool collapse_edge_before(const Tuple& t) override {
     collapsing = true;
     if (vertex_fixed[t.vid]) return false;
-    if (!replay || std::size_t(t.vid) >= refusals.size()) return true;
-    auto& list = refusals[std::size_t(t.vid)];
-    const Id w = other_vertex(t);
-    const auto it =
-        std::find_if(list.begin(), list.end(), [w](const Refusal& x) { return x.to == w; });
-    if (it == list.end()) return true;
-    if (std::max(latest_change_near(t.vid), latest_change_near(w)) > it->at) {
-      list.erase(it);
-      return true;
-    }
-    ++replayed;
+    const Refusal* x = replay ? memo.replay(t.vid, other_vertex(t)) : nullptr;
+    if (!x) return true;
     ++stats->attempted;
-    ++(it->certificate ? stats->rejected_certificate : stats->rejected_energy);
+    ++(x->certificate ? stats->rejected_certificate : stats->rejected_energy);
     return false;
   }
   // Counts a refusal of the checks and remembers a collapse's.
   bool refuse(const OperationRecord& r, bool certificate) {
     ++(certificate ? stats->rejected_certificate : stats->rejected_energy);
-    if (!replay || !collapsing) return false;
-    if (refusals.size() <= std::size_t(r.v0)) refusals.resize(std::size_t(r.v0) + 1);
-    auto& list = refusals[std::size_t(r.v0)];
-    const Refusal x{r.v1, clock, certificate};
-    const auto it =
-        std::find_if(list.begin(), list.end(), [&](const Refusal& y) { return y.to == r.v1; });
-    if (it != list.end())
-      *it = x;
-    else
-      list.push_back(x);
+    if (replay && collapsing) memo.remember(r.v0, r.v1, Refusal{certificate});
     return false;
   }
   bool swap_face_before(const Tuple& t) override {
@@ -327,10 +299,7 @@ class CurvedEditMesh : public TetMesh {
       node_of[key] = int(pos.size());
       pos.push_back(x);
     }
-    ++clock;
-    for (const auto* list : {&r.old_cells, &r.new_cells, &r.affected_cells})
-      for (Id t : *list)
-        for (Id u : cell(t)) changed_at.set(u, clock);
+    memo.stamp({&r.old_cells, &r.new_cells, &r.affected_cells});
     return true;
   }
 
@@ -677,7 +646,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   }
   if (progress) progress("optimize: curved edits", 1.0);
   summarize(stats.mean_energy_after, stats.max_energy_after, stats.targets_after);
-  stats.replayed = m.replayed;
+  stats.replayed = m.memo.replayed();
 
   // Back to a LagrangeMesh: the original nodes still used keep their order, new nodes follow.
   const auto live = m.live_cells();

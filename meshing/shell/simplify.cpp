@@ -17,6 +17,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/editing/refusal_memo.hpp"
 #include "meshing/editing/thread_slot.hpp"
 #include "meshing/editing/tri_mesh.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
@@ -200,61 +201,34 @@ class ShellMesh : public TriMesh {
   // positions, pillars, owned points and tracks of those cells, the fixed input and the fixed
   // options (an edge's faces are the cells of two vertices of the closed one-rings of v and w).
   // Every accepted operation stamps the vertices of the cells it creates or changes with a
-  // fresh clock value (`changed_at`), so when no vertex of the closed one-rings of v and w has a
-  // stamp later than the refusal, the invariants would refuse again for the same reason and
+  // fresh clock value (editing::RefusalMemo), so when no vertex of the closed one-rings of v and w
+  // has a stamp later than the refusal, the invariants would refuse again for the same reason and
   // the refusal is replayed without running them: the same rejection counted and the same
   // vertices flagged for smoothing. A chain collapse moves the reference copy, which other
   // prisms read, so it forgets every refusal. Used on one thread only (the memo is not locked).
   struct Refusal {
-    Id to = editing::k_no_id;
-    std::uint64_t at = 0;
     bool shape = false;  // Check::shape (else Check::shell)
     Reject why = none;
     std::vector<Id> flagged;  // the vertices of the refused collapse's old cells
   };
   bool memo_active = false;
-  std::atomic<std::uint64_t> clock{0};  // atomic: parallel passes stamp too (memo unused there)
-  Attribute<std::uint64_t> changed_at{*this, 0, 0};
-  std::vector<std::vector<Refusal>> refusals;  // per removed vertex
-  long replayed = 0;
-  void forget_refusals() { refusals.clear(); }
-  std::uint64_t latest_change_near(Id v) const {
-    std::uint64_t t = changed_at[v];
-    for (Id f : vertex_cells(v))
-      for (Id u : cell(f)) t = std::max(t, changed_at[u]);
-    return t;
-  }
+  editing::RefusalMemo<TriMesh, Refusal> memo{*this};
   bool replay_refusal(Id v, Id w) {
-    if (std::size_t(v) >= refusals.size()) return false;
-    auto& list = refusals[std::size_t(v)];
-    const auto it =
-        std::find_if(list.begin(), list.end(), [w](const Refusal& x) { return x.to == w; });
-    if (it == list.end()) return false;
-    if (std::max(latest_change_near(v), latest_change_near(w)) > it->at) {
-      list.erase(it);
-      return false;
-    }
-    ++replayed;
-    note(it->why);
-    for (Id u : it->flagged)
-      if (it->shape)
+    const Refusal* x = memo.replay(v, w);
+    if (!x) return false;
+    note(x->why);
+    for (Id u : x->flagged)
+      if (x->shape)
         revisit[2][u] = 1;
       else
         for (auto& flags : revisit) flags[u] = 1;
     return true;
   }
   void remember_refusal(const OperationRecord& r, bool shape) {
-    Refusal x{r.v1, clock.load(std::memory_order_relaxed), shape, last_reason.local(), {}};
+    Refusal x{shape, last_reason.local(), {}};
     for (Id f : r.old_cells)
       for (Id u : cell(f)) x.flagged.push_back(u);
-    if (refusals.size() <= std::size_t(r.v0)) refusals.resize(std::size_t(r.v0) + 1);
-    auto& list = refusals[std::size_t(r.v0)];
-    const auto it =
-        std::find_if(list.begin(), list.end(), [&](const Refusal& y) { return y.to == r.v1; });
-    if (it != list.end())
-      *it = std::move(x);
-    else
-      list.push_back(std::move(x));
+    memo.remember(r.v0, r.v1, x);
   }
 
   double mips(Id f) const {
@@ -1162,11 +1136,8 @@ class ShellMesh : public TriMesh {
       for (Id f : r.old_cells)
         for (Id v : cell(f)) revisit[2][v] = 1;
     if (c == Check::ok) {
-      const std::uint64_t now = clock.fetch_add(1, std::memory_order_relaxed) + 1;
-      for (const auto* list : {&r.new_cells, &r.old_cells, &r.affected_cells})
-        for (Id f : *list)
-          for (Id v : cell(f)) changed_at.set(v, now);
-      if (chain_mode) forget_refusals();
+      memo.stamp({&r.new_cells, &r.old_cells, &r.affected_cells});
+      if (chain_mode) memo.forget_all();
     } else if (memo_active && !chain_mode && r.v0 != editing::k_no_id && r.v1 != editing::k_no_id &&
                !r.old_cells.empty()) {
       remember_refusal(r, c == Check::shape);
@@ -1620,8 +1591,8 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     if (collapsed == 0 && (round > 0 || changed == 0)) break;
   }
 
-  stats.replayed_refusals = m.replayed;
-  log::debug("simplify: collapse refusals replayed: ", m.replayed);
+  stats.replayed_refusals = m.memo.replayed();
+  log::debug("simplify: collapse refusals replayed: ", stats.replayed_refusals);
   auto& why = stats.collapse_rejections;
   why.shape = m.rejections[ShellMesh::shape];
   why.distance = m.rejections[ShellMesh::distance];
