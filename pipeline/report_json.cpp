@@ -109,6 +109,7 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
            {{"ratio", options.thin_refine_ratio},
             {"refined_input_faces", stats.thin_refined_faces},
             {"bisections", stats.thin_splits},
+            {"shape_refusals", stats.thin_shape_refusals},
             {"thin_edges_before", stats.thin_edges_before},
             {"thin_edges_after", stats.thin_edges_after},
             {"max_ratio_before", stats.thin_max_ratio_before},

@@ -828,6 +828,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
         sh::refine_poor_shapes(input, shape, st.shape_stats, st.surface_features);
     sh::ThinRefineOptions thin;
     thin.max_edge_per_thickness = options.thin_refine_ratio;
+    thin.longest_edge_closure = options.thin_refine_closure;
+    thin.max_child_mips = options.thin_refine_child_mips;
     thin.kept_edges = st.surface_features;
     sh::BeveledSurface refined =
         sh::refine_thin_parts(shaped.refined() ? shaped.mesh : input, thin, st.thin_stats);
@@ -847,6 +849,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.beveled_faces = beveled.stats.beveled_faces;
   stats.thin_refined_faces = st.thin_stats.refined_faces;
   stats.thin_splits = st.thin_stats.splits;
+  stats.thin_shape_refusals = st.thin_stats.shape_refusals;
   stats.thin_edges_before = st.thin_stats.thin_edges_before;
   stats.thin_edges_after = st.thin_stats.thin_edges_after;
   stats.thin_max_ratio_before = st.thin_stats.max_ratio_before;

@@ -117,7 +117,15 @@ struct CurvedMeshOptions {
   // Thin-part refinement of the input before the shell (meshing/shell/thin_refine.hpp; 0: off):
   // input edges longer than this many times the local thickness are bisected (same surface), so
   // the guard above has vertices to keep where the input itself is too coarse (a CAD plate).
-  double thin_refine_ratio = 8;
+  // 3 since 2026-12-05 (was 8), with the closure below: at K = 3 the quality goal is met on 22 of
+  // 36 corpus runs (8: 20) and 15 of 18 dev runs (8: 15); thin_tube_05 1,026 -> 3 tets below
+  // 0.01 (benchmarks/results/robustness_thin_closure.md).
+  double thin_refine_ratio = 3;
+  // Its longest-edge closure and shape check along kept edges (ThinRefineOptions::
+  // longest_edge_closure, max_child_mips); false / 0 give the refinement of before 2026-12-05,
+  // which left slivers along CAD edges (kept for tests of the stages after it).
+  bool thin_refine_closure = true;
+  double thin_refine_child_mips = 20;
   // Shape refinement of the input before the shell (meshing/shell/thin_refine.hpp,
   // refine_poor_shapes; 0: off): input faces with a 2-D MIPS above shape_refine_mips whose
   // longest edge is longer than shape_refine × ε have it bisected, feature edges included (their
@@ -207,6 +215,7 @@ struct CurvedMeshStats {
   // Thin-part refinement (CurvedMeshOptions::thin_refine_ratio): input faces refined, bisections,
   // input edges above the ratio and the worst edge / thickness, before and after.
   int thin_refined_faces = 0, thin_splits = 0, thin_edges_before = 0, thin_edges_after = 0;
+  int thin_shape_refusals = 0;  // bisections the thin refinement left out for a child's shape
   double thin_max_ratio_before = 0, thin_max_ratio_after = 0;
   // Shape refinement (CurvedMeshOptions::shape_refine): faces that qualified before and after
   // (of those before, spike_faces were left alone at cone tips: ShapeRefineOptions::

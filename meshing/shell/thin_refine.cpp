@@ -21,6 +21,13 @@
 namespace curvefem::meshing::shell {
 namespace {
 
+// 2-D MIPS energy of a triangle (2 for the equilateral one; +inf when flat).
+double triangle_mips(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const double area2 = (b - a).cross(c - a).norm();
+  const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return area2 > 0 ? sum / (std::sqrt(3.0) * area2) : HUGE_VAL;
+}
+
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
@@ -122,6 +129,67 @@ struct Refiner {
       touched.push_back(f);
       touched.push_back(g);
     }
+  }
+
+  // The end of the longest-edge path from edge e: while a face of the current edge has a longer
+  // edge (relative tolerance 1e-12: ties count as longest), step to that edge; stop there when
+  // it is kept (kept_end: the edge before it is returned) or after 64 steps.
+  struct Closure {
+    std::array<int, 2> edge;
+    bool kept_end = false;
+  };
+  Closure closure(std::array<int, 2> e, const std::set<std::uint64_t>& kept) const {
+    for (int step = 0; step < 64; ++step) {
+      const double len = (V[std::size_t(e[0])] - V[std::size_t(e[1])]).norm();
+      std::array<int, 2> next{};
+      double next_len = len * (1 + 1e-12);
+      for (int f : faces_of(e[0], e[1])) {
+        const auto [l, l_len] = longest(f);
+        if (l_len > next_len) next = l, next_len = l_len;
+      }
+      if (next_len <= len * (1 + 1e-12)) return {e, false};
+      if (kept.count(edge_key(next[0], next[1]))) return {e, true};
+      e = next;
+    }
+    return {e, false};
+  }
+
+  // Without the closure: e itself, with kept_end where a face of e has a longer kept edge.
+  Closure closure_off(std::array<int, 2> e, const std::set<std::uint64_t>& kept) const {
+    const double len = (V[std::size_t(e[0])] - V[std::size_t(e[1])]).norm();
+    for (int f : faces_of(e[0], e[1])) {
+      const auto [l, l_len] = longest(f);
+      if (l_len > len * (1 + 1e-12) && kept.count(edge_key(l[0], l[1]))) return {e, true};
+    }
+    return {e, false};
+  }
+
+  // Whether bisecting (a, b) keeps the shape of its two faces along kept edges: a face whose
+  // longest edge is a kept one (never bisected) gives the child along it half its height over
+  // it, and repeated splits of the face's other edges (thin, next to a CAD edge, where the
+  // thickness stays small) leave slivers of any aspect along it (shape_occt at ratio 3: a refined
+  // face 90 long and 1.6e-4 high along a CAD edge, kept by the coarse surface; min scaled
+  // Jacobian 2.5e-7). That child must then have a 2-D MIPS of at most max(bound, its parent's).
+  // Elsewhere nothing is checked: a longest edge that is thin is bisected in turn (longest-edge
+  // refinement: a tube's needle strips), and one that is not (a plate's rim strip) is halved
+  // only as often as the thin edges next to it, a few times.
+  bool children_shaped(int a, int b, const std::array<int, 2>& fs, double bound,
+                       const std::set<std::uint64_t>& kept) {
+    const Eigen::Vector3d A = V[std::size_t(a)], B = V[std::size_t(b)], m = 0.5 * (A + B);
+    for (int f : fs) {
+      const auto& t = F[std::size_t(f)];
+      int r = 0;
+      while (t[std::size_t(r)] == a || t[std::size_t(r)] == b) ++r;
+      const int c = t[std::size_t(r)];
+      const Eigen::Vector3d R = V[std::size_t(c)];
+      const auto [p, q] = longest(f).first;
+      const std::uint64_t key = edge_key(p, q);
+      if (key == edge_key(a, b) || !kept.count(key)) continue;
+      // The longest edge is (a, c) or (b, c); its child is (a, m, c) or (m, b, c).
+      const double child = (p == a || q == a) ? triangle_mips(A, m, R) : triangle_mips(m, B, R);
+      if (child > std::max(bound, triangle_mips(A, B, R))) return false;
+    }
+    return true;
   }
 
   // Longest edge of face f as (a, b), and the face's worst thin ratio.
@@ -242,6 +310,30 @@ BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptio
       const double half = 0.5 * len;
       const double after = std::max(t0 > 0 ? half / t0 : HUGE_VAL, t1 > 0 ? half / t1 : HUGE_VAL);
       if (!(after < options.min_gain * before)) continue;  // a wedge: no gain
+      // Longest-edge closure: where a face of e has a longer edge, the end of that longest-edge
+      // path is bisected first (e waits for a later round), so no face is cut across its
+      // longest edge; a path ending at a kept edge lets e's split through only if the child
+      // along the kept edge keeps its shape.
+      const Refiner::Closure c =
+          options.longest_edge_closure ? r.closure(e, kept) : r.closure_off(e, kept);
+      if (c.kept_end) {
+        if (options.max_child_mips > 0 &&
+            !r.children_shaped(c.edge[0], c.edge[1], r.faces_of(c.edge[0], c.edge[1]),
+                               options.max_child_mips, kept)) {
+          ++stats.shape_refusals;
+          continue;
+        }
+      }
+      if (edge_key(c.edge[0], c.edge[1]) != edge_key(e[0], e[1])) {
+        const auto cs = r.faces_of(c.edge[0], c.edge[1]);
+        if (touched_now[std::size_t(cs[0])] || touched_now[std::size_t(cs[1])]) continue;
+        std::vector<int> touched;
+        r.split(c.edge[0], c.edge[1], cs, touched);
+        for (int t : touched) touched_now[std::size_t(t)] = 1;
+        ++stats.closure_splits;
+        ++splits;
+        continue;
+      }
       const int m = int(r.V.size());
       std::vector<int> touched;
       r.split(e[0], e[1], fs, touched);
@@ -262,22 +354,12 @@ BeveledSurface refine_thin_parts(const SurfaceMesh& input, const ThinRefineOptio
     log::info("thin refinement: ", stats.thin_edges_before, " input edges longer than ",
               options.max_edge_per_thickness, " x the local thickness (worst ",
               stats.max_ratio_before, "); ", stats.splits, " bisections in ", stats.rounds,
-              " rounds refined ", stats.refined_faces, " input faces; ", stats.thin_edges_after,
-              " left (worst ", stats.max_ratio_after, ")",
-              stats.budget_reached ? ", face budget reached" : "", ", ", stats.seconds, " s");
+              " rounds refined ", stats.refined_faces, " input faces (", stats.shape_refusals,
+              " left out for a child's shape); ", stats.thin_edges_after, " left (worst ",
+              stats.max_ratio_after, ")", stats.budget_reached ? ", face budget reached" : "", ", ",
+              stats.seconds, " s");
   return out;
 }
-
-namespace {
-
-// 2-D MIPS energy of a triangle (2 for the equilateral one; +inf when flat).
-double triangle_mips(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  const double area2 = (b - a).cross(c - a).norm();
-  const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
-  return area2 > 0 ? sum / (std::sqrt(3.0) * area2) : HUGE_VAL;
-}
-
-}  // namespace
 
 BeveledSurface refine_poor_shapes(const SurfaceMesh& input, const ShapeRefineOptions& options,
                                   ShapeRefineStats& stats,

@@ -15,13 +15,18 @@
 // would ask for edges of length 0 next to it.)
 // Rounds: every face whose longest edge is thin has that edge bisected at the midpoint (both
 // faces of the edge split, so the mesh stays conforming), longest faces first, one split per face
-// per round; the face across a bisected edge is bisected with it, whether or not that edge is its
-// longest. Left alone: a face whose thin edge is not its longest (bisecting a shorter edge would
-// spoil its shape), an edge whose bisection would not lower its ratio by `min_gain` (a wedge —
-// knife edge, needle tip — is as thin at the midpoint as the edge is long, and halving it forever
-// would not help), and the kept edges (input feature edges: the coarsening's feature chains need
-// them whole). Stops at max_rounds, when a round splits nothing, or before the refinement would
-// add more than max_added_faces faces.
+// per round. Longest-edge closure: where the face across has a longer edge, the end of that
+// longest-edge path (Rivara) is bisected instead and the thin edge waits for a later round, so a
+// face is cut across its longest edge only where that edge is kept; such a split must leave the
+// child along the kept edge no worse than max(max_child_mips, its parent) (without it, faces next
+// to a CAD edge were halved again and again along it: refined faces of 2-D MIPS 1e6-1e9, and on
+// shape_occt at ratio 3 a coarse face 90 long and 1.6e-4 high, min scaled Jacobian 2.5e-7).
+// Left alone: a face whose thin edge is not its longest (bisecting a shorter edge would spoil its
+// shape), an edge whose bisection would not lower its ratio by `min_gain` (a wedge — knife edge,
+// needle tip — is as thin at the midpoint as the edge is long, and halving it forever would not
+// help), and the kept edges (input feature edges: the coarsening's feature chains need them
+// whole). Stops at max_rounds, when a round splits nothing, or before the refinement would add
+// more than max_added_faces faces.
 //
 // The result is a BeveledSurface (bevel.hpp): input vertices keep their ids, new vertices are
 // edge midpoints (rounded to double), face_parent / corner_bary give every refined face's place
@@ -43,13 +48,22 @@ struct ThinRefineOptions {
   int max_rounds = 24;
   int max_added_faces = 20000;                 // the refinement adds at most this many faces
   std::vector<std::array<int, 2>> kept_edges;  // input vertex pairs never bisected
+  // A bisection is left out when, in a face of the edge whose longest edge is a kept one, the
+  // child along that kept edge would have a 2-D MIPS above max(this, its parent's)
+  // (thin_refine.cpp children_shaped); <= 0: no check.
+  double max_child_mips = 20;
+  // The longest-edge closure above (false: the face across a thin edge is bisected with it,
+  // whatever its longest edge).
+  bool longest_edge_closure = true;
 };
 
 struct ThinRefineStats {
   int thin_edges_before = 0, thin_edges_after = 0;   // edges above the ratio
   double max_ratio_before = 0, max_ratio_after = 0;  // worst |ab| / min(T(a), T(b))
   int splits = 0, rounds = 0;
-  int refined_faces = 0;  // input faces refined
+  int shape_refusals = 0;  // bisections left out by max_child_mips
+  int closure_splits = 0;  // bisections of longer edges first (longest-edge closure), in `splits`
+  int refined_faces = 0;   // input faces refined
   bool budget_reached = false;
   double seconds = 0;
 };

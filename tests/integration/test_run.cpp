@@ -989,7 +989,7 @@ TEST(Run, AMeshDirIsReusedWithoutMeshingAndAChangedInputIsRefused) {
   const auto a = report(dir / "first"), b = report(dir / "again");
   // The mesher's own report is the one `curvefem mesh` writes (pipeline/report_json.hpp).
   EXPECT_EQ(a["meshing"]["order"], 2);
-  EXPECT_EQ(a["meshing"]["thin_refinement"]["ratio"], 8.0);
+  EXPECT_EQ(a["meshing"]["thin_refinement"]["ratio"], 3.0);
   EXPECT_EQ(a["meshing"]["thin_refinement"]["bisections"], 0);  // a sphere: nothing thin
   EXPECT_GT(a["meshing"]["coarsening"]["collapses"].get<int>(), 0);
   EXPECT_EQ(a["meshing"]["coarse_faces"].get<int>(), a["meshing"]["faces_fully_curved"].get<int>() +

@@ -137,6 +137,60 @@ TEST(ThinRefine, APlateFarThinnerThanItsEdgesIsBisectedUntilNoEdgeIsThin) {
   expect_same_surface(plate, k);
 }
 
+// Worst 2-D MIPS of the faces of s, (|e0|² + |e1|² + |e2|²) / (2√3 area): 2 when equilateral.
+double worst_mips(const SurfaceMesh& s) {
+  double worst = 0;
+  for (int f = 0; f < s.num_faces(); ++f) {
+    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    const double sum = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+    worst = std::max(worst, sum / (4 * std::sqrt(3.0) * area(s, f)));
+  }
+  return worst;
+}
+
+TEST(ThinRefine, NoRefinedFaceBecomesASliver) {
+  // Generated shapes whose refinement, with their sharp edges kept (as the mesher keeps feature
+  // edges), cut faces again and again along an edge that is never bisected: refined faces of
+  // 2-D MIPS 1e6-1e9 (slivers along a CAD edge; shape_occt at ratio 3 kept one, 90 long and
+  // 1.6e-4 high, in its coarse surface: min scaled Jacobian 2.5e-7). With the shape check
+  // (max_child_mips) and the longest-edge closure no refined face is worse than twice the
+  // input's worst or 40; without the check they are the slivers above.
+  struct Case {
+    const char* name;
+    double ratio;
+  };
+  for (const Case c : {Case{"box_thin_long", 3}, Case{"thin_plate_05", 8},
+                       Case{"split_ring_thin", 8}, Case{"noise_sphere_20", 8}}) {
+    const SurfaceMesh m = curvefem::make_adversarial(c.name);
+    sh::ThinRefineOptions o;
+    o.max_edge_per_thickness = c.ratio;
+    o.kept_edges = sharp_edges(m);
+    const double input_worst = worst_mips(m);
+    o.max_child_mips = 0;
+    sh::ThinRefineStats off;
+    const sh::BeveledSurface unchecked = sh::refine_thin_parts(m, o, off);
+    o.max_child_mips = 20;
+    sh::ThinRefineStats on;
+    const sh::BeveledSurface checked = sh::refine_thin_parts(m, o, on);
+    std::printf(
+        "%s, ratio %g: input worst MIPS %.3g; unchecked %d bisections, worst %.3g; "
+        "checked %d bisections (%d closure, %d left out), worst %.3g; thin edges %d -> "
+        "%d\n",
+        c.name, c.ratio, input_worst, off.splits, worst_mips(unchecked.mesh), on.splits,
+        on.closure_splits, on.shape_refusals, worst_mips(checked.mesh), on.thin_edges_before,
+        on.thin_edges_after);
+    SCOPED_TRACE(c.name);
+    EXPECT_GT(worst_mips(unchecked.mesh), 1e6);  // the defect the check prevents
+    ASSERT_TRUE(checked.refined());
+    EXPECT_GT(on.shape_refusals, 0);
+    EXPECT_GT(on.splits, 0);
+    EXPECT_LE(worst_mips(checked.mesh), 2 * std::max(20.0, input_worst));
+    EXPECT_EQ(off.shape_refusals, 0);
+    expect_closed_oriented(checked.mesh);
+    expect_same_surface(m, checked);
+  }
+}
+
 TEST(ThinRefine, ASphereHasNoThinEdgeAndIsReturnedAsItIs) {
   const SurfaceMesh sphere = curvefem::make_icosphere(3);
   sh::ThinRefineStats st;
