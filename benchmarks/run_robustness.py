@@ -10,7 +10,8 @@ layer and the interior too, boundary self-intersections, max distance, wall time
 line of the error output is kept for failed runs.
 
 Usage (from the repository root):
-  /usr/bin/python3 benchmarks/run_robustness.py [--corpus all|none|NAME ...] [--dev] [--orders 3 4]
+  /usr/bin/python3 benchmarks/run_robustness.py [--corpus all|none|NAME ...] [--dev] [--files F ...]
+      [--orders 3 4]
       [--eps 0.01] [--threads 2] [--timeout 600] [--exe build/tools/curvefem/curvefem]
       [--extra 'MORE MESH OPTIONS']
 Writes benchmarks/results/robustness.md; raw JSON lines go to WORK/runs.jsonl.
@@ -31,6 +32,9 @@ ap.add_argument("--corpus", nargs="+", default=["all"])
 ap.add_argument("--skip", nargs="*", default=[], help="corpus or dev names to leave out")
 ap.add_argument("--dev", action="store_true", help="also the dev meshes of --data")
 ap.add_argument("--data", default="/work/shared/data/dev")
+ap.add_argument("--files", nargs="*", default=[], metavar="SURFACE",
+                help="more surfaces (any format `curvefem mesh` reads), named by their file stem, "
+                     "kind 'unseen' (e.g. meshes of Debian packages nobody here tuned for)")
 ap.add_argument("--orders", nargs="+", type=int, default=[3, 4])
 ap.add_argument("--eps", type=float, default=0.01)
 ap.add_argument("--threads", type=int, default=2)
@@ -83,6 +87,11 @@ if args.dev:
                 continue
             inputs.append((cols[0], os.path.join(args.data, cols[1]), "dev"))
 
+for path in args.files:
+    name = os.path.splitext(os.path.basename(path))[0]
+    if name not in args.skip:
+        inputs.append((name, os.path.abspath(path), "unseen"))
+
 records = []
 if args.render_from:
     with open(args.render_from) as f:
@@ -126,8 +135,9 @@ def g(x, fmt="{:.3g}"):
     return fmt.format(x) if isinstance(x, float) else str(x)
 
 
-has_dev = any(r["kind"] == "dev" for r in records)
-lines = [f"# Robustness: the curved mesher on the adversarial corpus{' and the dev meshes' if has_dev else ''}",
+kinds = [k for k in ("corpus", "dev", "unseen") if any(r["kind"] == k for r in records)]
+what = {"corpus": "the adversarial corpus", "dev": "the dev meshes", "unseen": "unseen surfaces"}
+lines = [f"# Robustness: the curved mesher on {' and '.join(what[k] for k in kinds) or 'nothing'}",
          "",
          f"Generated {datetime.datetime.now():%Y-%m-%d %H:%M} by `{command}`; HEAD "
          + subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
