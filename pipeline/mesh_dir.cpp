@@ -130,6 +130,8 @@ void validate_domain(Domain& d, double eps_rel) {
   d.valid = curved_mesh_valid(v, eps_rel, trip);
   j["map_roundtrip_max_error_rel"] = trip.max_error_rel;
   j["map_roundtrip_failures"] = trip.failures;
+  j["map_roundtrip_worst_vertex"] = trip.worst_vertex;
+  j["map_roundtrip_first_failure"] = trip.first_failure;
   j["map_roundtrip_s"] = trip.seconds;
   j["valid"] = d.valid;  // the validation and the round trip (mesh_validity.hpp)
   d.report["validation"] = j;

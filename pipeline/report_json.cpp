@@ -115,6 +115,7 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
             {"max_ratio_before", stats.thin_max_ratio_before},
             {"max_ratio_after", stats.thin_max_ratio_after},
             {"fallback", stats.thin_fallback}}},
+          {"roundtrip_fallback", stats.roundtrip_fallback},
           {"shape_refinement",
            {{"min_edge_eps", options.shape_refine},
             {"spike_angle_deg", options.shape_refine_spike_angle},

@@ -17,6 +17,7 @@
 
 #include "meshing/check/self_intersections.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/fiber_projection.hpp"
 #include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/primitives.hpp"
@@ -28,6 +29,7 @@
 #include "meshing/curved/slab_nodes.hpp"
 #include "meshing/editing/algorithms/tet_flips.hpp"
 #include "meshing/shell/bevel.hpp"
+#include "meshing/shell/fibers_of.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -1733,6 +1735,76 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
   }
 }
 
+// φ of every input vertex pulled back along the coarse shell's fibers (the projection the
+// boundary map's inverse uses): "" when each lands within 1e-6 of the bounding box's longest
+// edge of its vertex, else what missed and where. A φ(v) on an edge or a corner of its boundary
+// triangle is pulled back from every triangle around that edge or corner too: the inverse finds
+// the point from its position and may take any of them (CGAL's spool.off: a chain vertex whose
+// image on a coarse feature edge came back from the other side 7.4e-3 away).
+std::string fiber_roundtrip_miss(const CurvedMesh& m, const SurfaceMesh& input) {
+  const FiberProjection projection(sh::fibers_of(m.shell, input), input);
+  const double unit = bbox_longest_edge(input.V);
+  // Boundary triangle f's corners in the map's order (the shell face rotated to its smallest
+  // id), and the triangles around each vertex.
+  const int nf = int(m.shell.F.rows());
+  std::vector<std::array<int, 3>> corners;
+  corners.resize(std::size_t(nf));
+  std::unordered_map<int, std::vector<int>> around;
+  for (int f = 0; f < nf; ++f) {
+    const Eigen::Vector3i F = m.shell.F.row(f);
+    const int r = min_rotation(F);
+    for (int c = 0; c < 3; ++c) {
+      corners[std::size_t(f)][std::size_t(c)] = F[(r + c) % 3];
+      around[F[c]].push_back(f);
+    }
+  }
+  double worst = 0;
+  int worst_vertex = -1, misses = 0;
+  for (int v = 0; v < m.map.num_input_vertices(); ++v) {
+    const int f = m.map.vertex_face[v];
+    if (f < 0 || f >= nf) continue;
+    const double u = m.map.vertex_uv(v, 0), w = m.map.vertex_uv(v, 1);
+    // The point as weights on shell vertices (zero weights dropped).
+    const std::array<double, 3> bary{1 - u - w, u, w};
+    std::vector<std::pair<int, double>> weights;
+    for (int c = 0; c < 3; ++c)
+      if (bary[std::size_t(c)] != 0)
+        weights.emplace_back(corners[std::size_t(f)][std::size_t(c)], bary[std::size_t(c)]);
+    std::vector<int> faces{f};
+    if (weights.size() < 3)  // on an edge or a corner: every triangle holding all its vertices
+      for (int g : around[weights.front().first]) {
+        bool holds = g != f;
+        for (const auto& [x, unused] : weights)
+          holds = holds &&
+                  std::count(corners[std::size_t(g)].begin(), corners[std::size_t(g)].end(), x) > 0;
+        if (holds) faces.push_back(g);
+      }
+    double error = 0;
+    for (int g : faces) {
+      std::array<double, 3> b{0, 0, 0};
+      for (const auto& [x, weight] : weights)
+        for (int c = 0; c < 3; ++c)
+          if (corners[std::size_t(g)][std::size_t(c)] == x) b[std::size_t(c)] = weight;
+      // Just inside g (1e-9 toward its other corners): the inverse locates points to rounding,
+      // and the fibers must agree on both sides of the edge, not only on it.
+      if (g != f) {
+        double sum = 0;
+        for (double& x : b) sum += (x += 1e-9);
+        for (double& x : b) x /= sum;
+      }
+      const auto p = g == f ? projection.project(f, u, w) : projection.project(g, b[1], b[2]);
+      error =
+          std::max(error, p ? (p->position - input.V.row(v).transpose()).norm() / unit : HUGE_VAL);
+    }
+    if (error > 1e-6) ++misses;
+    if (error > worst || worst_vertex < 0) worst = error, worst_vertex = v;
+  }
+  if (misses == 0) return "";
+  return "the boundary map's round trip misses " + std::to_string(misses) +
+         " input vertices (worst: vertex " + std::to_string(worst_vertex) + " by " +
+         std::to_string(worst) + " of the bounding box)";
+}
+
 }  // namespace
 
 CurvedMesh build_curved_mesh(const SurfaceMesh& input, const CurvedMeshOptions& options,
@@ -1818,7 +1890,36 @@ std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
   };
   CoarseState state;
   try {
-    return note_small(run(pruned, state));
+    std::vector<CurvedMesh> out = run(pruned, state);
+    // A refined input: the round trip of φ along the fibers, which the validator checks
+    // independently (pipeline/mesh_validity.hpp); on a miss, the input refined less.
+    double check_seconds = 0;
+    auto miss_of = [&](const std::vector<CurvedMesh>& meshes) {
+      Stopwatch watch;
+      std::string miss;
+      for (const CurvedMesh& m : meshes)
+        if (miss.empty() && !m.shell.refinement.empty()) miss = fiber_roundtrip_miss(m, input);
+      check_seconds += watch.seconds();
+      return miss;
+    };
+    std::string miss = options.refined_roundtrip_check ? miss_of(out) : "";
+    std::string fallback;
+    for (int step = 0; step < 2 && !miss.empty(); ++step) {
+      CurvedMeshOptions less = pruned;
+      less.shape_refine = 0;
+      if (step == 1) less.thin_refine_ratio = 0;
+      const char* what = step == 0 ? "the shape refinement" : "the shape and thin refinements";
+      log::warn("mesh: on the refined input ", miss, "; meshing again without ", what);
+      fallback += (fallback.empty() ? "" : "; ") + miss + ": meshed again without " + what;
+      state = CoarseState();
+      out = run(less, state);
+      miss = miss_of(out);
+    }
+    for (CurvedMeshStats& s : stats) {
+      s.roundtrip_fallback = fallback;
+      if (check_seconds > 0) s.stage_seconds.emplace_back("refined round trip", check_seconds);
+    }
+    return note_small(std::move(out));
   } catch (const MeshingError& e) {
     const int thin_refined = state.thin_stats.refined_faces,
               shape_refined = state.shape_stats.refined_faces;

@@ -138,6 +138,13 @@ struct CurvedMeshOptions {
   // tip of total face angle below it are spike sides and not bisected. 90 restores the needle
   // spheres and changes none of the 19 dev meshes (meshing/curved/README.md, step 1).
   double shape_refine_spike_angle = 90;
+  // After meshing a refined input (the shape or thin refinement bisected anything), φ of every
+  // input vertex is pulled back along the coarse shell's fibers, as the boundary map's inverse
+  // does. Where that misses the vertex by more than 1e-6 of the bounding box (seen on CGAL's
+  // spool.off, an unseen CAD part: 7.4e-3 next to a feature chain, with 8 shape bisections), the
+  // input is meshed again without the shape refinement, then without the thin refinement too
+  // (CurvedMeshStats::roundtrip_fallback). false: no check (the validator's still runs).
+  bool refined_roundtrip_check = true;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.
@@ -226,6 +233,9 @@ struct CurvedMeshStats {
   // Non-empty: meshing the thin- or shape-refined input failed with this error, and the mesh is
   // that of the unrefined input (the counts above are then 0).
   std::string thin_fallback;
+  // Non-empty: the map of the mesh of the refined input missed its round trip (this message,
+  // then which refinement was dropped), and the mesh is that of the input refined less.
+  std::string roundtrip_fallback;
   int shell_faces = 0, coarse_faces = 0;
   // Coarsening operations that succeeded (simplify.hpp), and the coarse shell's half-thickness
   // (the smaller half-pillar per vertex) relative to the longest bbox edge.

@@ -349,6 +349,7 @@ void register_mesh(CLI::App& app) {
 
     StagedOutputDir out(args->output);
     bool all_ok = true;
+    std::vector<std::string> defects;  // printed to stderr at the end
     nlohmann::ordered_json level_list = nlohmann::ordered_json::array();
     std::vector<std::string> lines;
     for (std::size_t i = 0; i < levels.size(); ++i) {
@@ -372,6 +373,8 @@ void register_mesh(CLI::App& app) {
       const double roundtrip_seconds = roundtrip_watch.seconds();
       const bool ok = pipeline::curved_mesh_valid(check, eps, trip);
       all_ok = all_ok && ok;
+      for (const std::string& defect : pipeline::curved_mesh_defects(check, eps, trip))
+        defects.push_back(prefix + "mesh: not valid: " + defect + "\n");
 
       Stopwatch write;
       MeshFields quality;
@@ -421,6 +424,8 @@ void register_mesh(CLI::App& app) {
           {"boundary_self_intersections", check.boundary_self_intersections},
           {"map_roundtrip_max_error_rel", roundtrip},
           {"map_roundtrip_failures", roundtrip_failures},
+          {"map_roundtrip_worst_vertex", trip.worst_vertex},
+          {"map_roundtrip_first_failure", trip.first_failure},
           {"map_roundtrip_method",
            "every input vertex v: phi(v) located on the curved boundary from its position, "
            "pulled back along the shell fibers saved in boundary_map.json (the shell projection "
@@ -492,6 +497,7 @@ void register_mesh(CLI::App& app) {
     out.commit();
     progress.reset();
     for (const std::string& line : lines) std::fputs(line.c_str(), stdout);
+    for (const std::string& line : defects) std::fputs(line.c_str(), stderr);
     if (several) std::printf("mesh: %zu eps levels in %.1f s\n", levels.size(), total.seconds());
     std::fflush(stdout);
     return all_ok ? 0 : 3;

@@ -88,6 +88,8 @@ void register_validate(CLI::App& app) {
       j["map_roundtrip_checked"] = saved.fibers.has_value();
       j["map_roundtrip_max_error_rel"] = roundtrip;
       j["map_roundtrip_failures"] = roundtrip_failures;
+      j["map_roundtrip_worst_vertex"] = trip.worst_vertex;
+      j["map_roundtrip_first_failure"] = trip.first_failure;
       j["valid"] = ok;
       std::printf("%s\n", j.dump(2).c_str());
     } else {
@@ -134,11 +136,17 @@ void register_validate(CLI::App& app) {
           "non-positive straight (u, v) image\n",
           v.flipped_input_faces, v.input_faces_checked);
       if (saved.fibers)
-        std::printf("  phi roundtrip        max %.3g, %d failures\n", roundtrip,
-                    roundtrip_failures);
+        std::printf(
+            "  phi roundtrip        max %.3g (input vertex %d), %d failures%s\n", roundtrip,
+            trip.worst_vertex, roundtrip_failures,
+            trip.first_failure >= 0
+                ? (" (first: input vertex " + std::to_string(trip.first_failure) + ")").c_str()
+                : "");
       else
         std::printf("  phi roundtrip        not checked (no shell fibers in boundary_map.json)\n");
       std::printf("  result               %s (%.2f s)\n", ok ? "valid" : "INVALID", v.seconds);
+      for (const std::string& defect : pipeline::curved_mesh_defects(v, eps, trip))
+        std::printf("  defect               %s\n", defect.c_str());
     }
     std::fflush(stdout);
     return ok ? 0 : 3;
