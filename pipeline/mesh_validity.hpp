@@ -28,7 +28,8 @@ struct MapRoundtrip {
 };
 
 /// φ⁻¹(φ(v)) for every input vertex: φ(v) is located on the curved boundary from its position
-/// alone (mapping::TriangleLocator) and pulled back along the shell fibers.
+/// alone (mapping::TriangleLocator) and pulled back along the shell fibers; where the map puts
+/// φ(v) on an edge or a corner of its triangle, also from just inside every other triangle there.
 MapRoundtrip map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
                            const SurfaceMesh& input);
 

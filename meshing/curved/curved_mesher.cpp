@@ -1738,9 +1738,9 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
 // φ of every input vertex pulled back along the coarse shell's fibers (the projection the
 // boundary map's inverse uses): "" when each lands within 1e-6 of the bounding box's longest
 // edge of its vertex, else what missed and where. A φ(v) on an edge or a corner of its boundary
-// triangle is pulled back from every triangle around that edge or corner too: the inverse finds
-// the point from its position and may take any of them (CGAL's spool.off: a chain vertex whose
-// image on a coarse feature edge came back from the other side 7.4e-3 away).
+// triangle is pulled back from every triangle around that edge or corner too (1e-13 inside): the
+// inverse finds the point from its position and may take any of them (CGAL's spool.off: a chain
+// vertex whose image on a coarse feature edge came back from the other side 7.4e-3 away).
 std::string fiber_roundtrip_miss(const CurvedMesh& m, const SurfaceMesh& input) {
   const FiberProjection projection(sh::fibers_of(m.shell, input), input);
   const double unit = bbox_longest_edge(input.V);
@@ -1785,11 +1785,11 @@ std::string fiber_roundtrip_miss(const CurvedMesh& m, const SurfaceMesh& input) 
       for (const auto& [x, weight] : weights)
         for (int c = 0; c < 3; ++c)
           if (corners[std::size_t(g)][std::size_t(c)] == x) b[std::size_t(c)] = weight;
-      // Just inside g (1e-9 toward its other corners): the inverse locates points to rounding,
+      // Just inside g (1e-13 toward its other corners): the inverse locates points to rounding,
       // and the fibers must agree on both sides of the edge, not only on it.
       if (g != f) {
         double sum = 0;
-        for (double& x : b) sum += (x += 1e-9);
+        for (double& x : b) sum += (x += 1e-13);
         for (double& x : b) x /= sum;
       }
       const auto p = g == f ? projection.project(f, u, w) : projection.project(g, b[1], b[2]);
