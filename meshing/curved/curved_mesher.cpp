@@ -1893,13 +1893,15 @@ std::vector<CurvedMesh> build_curved_mesh_levels(const SurfaceMesh& input,
     std::vector<CurvedMesh> out = run(pruned, state);
     // A refined input: the round trip of φ along the fibers, which the validator checks
     // independently (pipeline/mesh_validity.hpp); on a miss, the input refined less.
-    double check_seconds = 0;
+    double check_seconds = 0;  // 0: no refined mesh checked
     auto miss_of = [&](const std::vector<CurvedMesh>& meshes) {
-      Stopwatch watch;
       std::string miss;
       for (const CurvedMesh& m : meshes)
-        if (miss.empty() && !m.shell.refinement.empty()) miss = fiber_roundtrip_miss(m, input);
-      check_seconds += watch.seconds();
+        if (miss.empty() && !m.shell.refinement.empty()) {
+          Stopwatch watch;
+          miss = fiber_roundtrip_miss(m, input);
+          check_seconds += watch.seconds();
+        }
       return miss;
     };
     std::string miss = options.refined_roundtrip_check ? miss_of(out) : "";

@@ -671,16 +671,11 @@ TEST(Cli, AnUnseenCadPartWhoseRefinedMapMissesItsRoundTripIsMeshedAgainLessRefin
   // bounding box away. The validator refused the mesh (exit 3, "the map round trip misses input
   // vertex 31"). The mesher now checks the round trip of a refined input itself, on both sides
   // of such edges, and meshes the input again without the shape refinement.
-  const std::filesystem::path tarball = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  if (!std::filesystem::exists(tarball)) GTEST_SKIP() << tarball << " is absent (libcgal-dev)";
   const auto dir = test::scratch_dir("cli_spool");
+  const auto path = test::cgal_data_mesh("spool", dir);
+  if (!path) GTEST_SKIP() << test::k_no_cgal_data_message;
+  const std::string in = path->string();
   std::string out;
-  ASSERT_EQ(
-      test::run_command(
-          "tar xzf " + tarball.string() + " -C " + dir.string() + " data/meshes/spool.off", &out),
-      0)
-      << out;
-  const std::string in = (dir / "data" / "meshes" / "spool.off").string();
   ASSERT_EQ(test::run_command(
                 cli() + " mesh -q " + in + " -o " + (dir / "m").string() + " --order 3 --threads 2",
                 &out),

@@ -24,16 +24,9 @@ using namespace curvefem;
 namespace cv = curvefem::meshing::curved;
 
 TEST(RefinedRoundTrip, AMissAcrossACoarseEdgeIsFoundByTheValidatorAndAvoidedByTheMesher) {
-  const std::filesystem::path tarball = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  if (!std::filesystem::exists(tarball)) GTEST_SKIP() << tarball << " is absent (libcgal-dev)";
-  const auto dir = test::scratch_dir("refined_roundtrip");
-  std::string out;
-  ASSERT_EQ(
-      test::run_command(
-          "tar xzf " + tarball.string() + " -C " + dir.string() + " data/meshes/part.off", &out),
-      0)
-      << out;
-  const SurfaceMesh input = io::read_surface(dir / "data" / "meshes" / "part.off");
+  const auto path = test::cgal_data_mesh("part", test::scratch_dir("refined_roundtrip"));
+  if (!path) GTEST_SKIP() << test::k_no_cgal_data_message;
+  const SurfaceMesh input = io::read_surface(*path);
   cv::CurvedMeshOptions o;
   o.order = 3;
   o.eps_rel = 0.01;

@@ -5,6 +5,8 @@
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
+#include <stdexcept>
 
 namespace curvefem::test {
 
@@ -59,6 +61,17 @@ SurfaceMesh crater_mesh() {
   s.F << 0, 5, 1, 5, 4, 1, 4, 7, 1, 7, 3, 1, 3, 2, 1, 2, 8, 1, 8, 0, 1,  //
       5, 0, 6, 4, 5, 6, 7, 4, 6, 3, 7, 6, 2, 3, 6, 8, 2, 6, 0, 8, 6;
   return s;
+}
+
+std::optional<std::filesystem::path> cgal_data_mesh(const std::string& name,
+                                                    const std::filesystem::path& dir) {
+  const std::filesystem::path tarball = "/usr/share/doc/libcgal-dev/data.tar.gz";
+  if (!std::filesystem::exists(tarball)) return std::nullopt;
+  const std::string member = "data/meshes/" + name + ".off";
+  std::string out;
+  if (run_command("tar xzf " + tarball.string() + " -C " + dir.string() + " " + member, &out) != 0)
+    throw std::runtime_error("cannot extract " + member + " from " + tarball.string() + ": " + out);
+  return dir / member;
 }
 
 }  // namespace curvefem::test

@@ -36,4 +36,12 @@ std::filesystem::path curvefem_executable();
 /// Runs a shell command, returns its exit code; stdout+stderr go to `output` if given.
 int run_command(const std::string& command, std::string* output = nullptr);
 
+/// CGAL's data mesh data/meshes/NAME.off from libcgal-dev's /usr/share/doc/libcgal-dev/data.tar.gz
+/// (a Debian package file, not ../shared), extracted into `dir`; nullopt when the package file is
+/// absent (tests then GTEST_SKIP() with k_no_cgal_data_message). Throws when tar fails.
+std::optional<std::filesystem::path> cgal_data_mesh(const std::string& name,
+                                                    const std::filesystem::path& dir);
+inline constexpr const char* k_no_cgal_data_message =
+    "/usr/share/doc/libcgal-dev/data.tar.gz is absent (libcgal-dev): CGAL data test skipped";
+
 }  // namespace curvefem::test
