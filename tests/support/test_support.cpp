@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
-#include <stdexcept>
 
 namespace curvefem::test {
 
