@@ -82,6 +82,8 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
           {"coarsening",
            {{"start_faces", stats.coarsen_start_faces},
             {"linear_phase_faces", stats.linear_phase_faces},
+            {"linear_phase_seconds", stats.linear_phase_seconds},
+            {"linear_phase_concurrent", stats.linear_phase_concurrent},
             {"collapses", stats.coarsen_collapses},
             {"flips", stats.coarsen_flips},
             {"pillar_rotations", stats.coarsen_rotations},

@@ -1,6 +1,7 @@
 #include "meshing/curved/curved_mesher.hpp"
 
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
@@ -13,6 +14,7 @@
 #include <numeric>
 #include <optional>
 #include <set>
+#include <thread>
 #include <unordered_map>
 
 #include "meshing/check/self_intersections.hpp"
@@ -736,6 +738,40 @@ struct CurvedBoundMissed {
 // distance points, built once, and the coarse shell of the last attempt with the points each of
 // its prisms owns, which the next attempt repairs locally (CurvedMeshOptions::curved_repair)
 // instead of coarsening the input again.
+// The two-phase coarsening's linear phase run on a thread of its own beside the first attempt
+// (CurvedMeshOptions::concurrent_linear_phase). Destroying it cancels and joins the thread.
+struct LinearPhaseRun {
+  std::atomic<bool> cancel{false};
+  std::thread thread;
+  sh::Shell shell;
+  sh::SimplifyStats stats;
+  std::exception_ptr error;
+  bool cancelled = false;
+  double seconds = 0;
+  LinearPhaseRun() = default;
+  LinearPhaseRun(const LinearPhaseRun&) = delete;
+  LinearPhaseRun& operator=(const LinearPhaseRun&) = delete;
+  ~LinearPhaseRun() { stop(); }
+  // Not needed any more: stops it at its next operation.
+  void stop() {
+    cancel.store(true, std::memory_order_relaxed);
+    if (thread.joinable()) thread.join();
+  }
+  void wait() {
+    if (thread.joinable()) thread.join();
+  }
+};
+
+// The options of the linear phase: the attempt's, without the curved-aware bound.
+sh::SimplifyOptions linear_phase_options(const sh::SimplifyOptions& attempt) {
+  sh::SimplifyOptions linear = attempt;
+  linear.curved_order = 0;
+  linear.relaxed_distance = linear.curved_distance = 0;
+  linear.strict_input_vertices.clear();
+  linear.curved_slab_ok = nullptr;
+  return linear;
+}
+
 struct CoarseState {
   bool built = false;   // beveled, points: the input's shell and distance points
   bool coarse = false;  // shell, owned, coarsen_stats: a coarse shell to repair
@@ -764,15 +800,23 @@ struct CoarseState {
   bool resume = false;
   bool linear_phase_done = false;  // CurvedMeshOptions::two_phase
   int linear_phase_faces = 0;
+  double linear_phase_seconds = 0;
+  bool linear_phase_concurrent = false;  // it ran beside the first attempt
   sh::Shell start;
   std::vector<std::vector<int>> start_owned;
   // The input vertices the finer level's attempts kept under the linear bound: where its curved
   // surface missed ε, a coarser level's (larger faces, same thin parts) mostly misses too, so its
   // first attempt starts with them (each miss found again costs a whole attempt).
   std::vector<char> carried_strict;
+  // The linear phase started beside the first attempt (declared last: destroyed, which joins its
+  // thread, before the shell it reads).
+  std::unique_ptr<LinearPhaseRun> linear_run;
   // The next level starts from the coarse shell the last one kept, with a fresh attempt loop.
   void next_level() {
+    linear_run.reset();
     linear_phase_faces = 0;
+    linear_phase_seconds = 0;
+    linear_phase_concurrent = false;
     start = shell;
     start_owned = owned;
     resume = true;
@@ -1039,6 +1083,28 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       simplify_options.collapse_chains = true;
     }
   }
+  // The first curved-aware attempt coarsens the input's shell on one thread; its linear phase,
+  // needed only if the attempt and its repair miss, starts beside it on the idle core.
+  const int cores = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  if (relaxed && options.two_phase && options.concurrent_linear_phase && options.deterministic &&
+      cores > 1 && !st.coarse && !st.resume && !st.linear_phase_done && !st.linear_run) {
+    st.linear_run = std::make_unique<LinearPhaseRun>();
+    LinearPhaseRun* run = st.linear_run.get();
+    sh::SimplifyOptions linear = linear_phase_options(simplify_options);
+    linear.cancel = &run->cancel;
+    run->thread = std::thread([run, linear = std::move(linear), &beveled, &surface] {
+      Stopwatch clock;
+      try {
+        run->shell = sh::simplify_shell(beveled.shell, surface, linear, run->stats);
+      } catch (const sh::SimplifyCancelled&) {
+        run->cancelled = true;
+      } catch (...) {
+        run->error = std::current_exception();
+      }
+      run->seconds = clock.seconds();
+    });
+    st.linear_phase_concurrent = true;
+  }
   sh::SimplifyStats simplify_stats;
   sh::Shell shell;
   bool repaired = false;
@@ -1101,13 +1167,23 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       // everywhere, and every later attempt resumes from it (any strict set holds there, so no
       // attempt coarsens the input again; the last resort, the linear bound, starts there too).
       Stopwatch phase;
-      sh::SimplifyOptions linear = simplify_options;
-      linear.curved_order = 0;
-      linear.relaxed_distance = linear.curved_distance = 0;
-      linear.strict_input_vertices.clear();
-      linear.curved_slab_ok = nullptr;
       sh::SimplifyStats linear_stats;
-      st.start = sh::simplify_shell(beveled.shell, surface, linear, linear_stats);
+      if (st.linear_run) {
+        // Started beside the first attempt: wait for it (the stage's time is the wait).
+        LinearPhaseRun& run = *st.linear_run;
+        run.wait();
+        CF_VERIFY(!run.cancelled, "mesh: the concurrent linear phase was cancelled but is needed");
+        if (run.error) std::rethrow_exception(run.error);
+        st.start = std::move(run.shell);
+        linear_stats = std::move(run.stats);
+        st.linear_phase_seconds = run.seconds;
+        st.linear_phase_concurrent = true;
+        st.linear_run.reset();
+      } else {
+        st.start = sh::simplify_shell(beveled.shell, surface,
+                                      linear_phase_options(simplify_options), linear_stats);
+        st.linear_phase_seconds = phase.seconds();
+      }
       st.start_owned = std::move(linear_stats.owned_points);
       st.resume = st.linear_phase_done = true;
       st.linear_phase_faces = int(st.start.F.rows());
@@ -1400,6 +1476,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       throw missed;
     }
   }
+  // This attempt meets ε: no later one will need the linear phase.
+  st.linear_run.reset();
 
   for (int f = 0; f < nf; ++f) {
     if (b.alpha[f] == 1)
@@ -1683,6 +1761,8 @@ CurvedMesh build_with_attempts(const SurfaceMesh& input, const CurvedMeshOptions
       s.strict_vertices = int(std::count(strict.begin(), strict.end(), 1));
       s.curved_widened = widened;
       s.linear_phase_faces = state.linear_phase_faces;
+      s.linear_phase_seconds = state.linear_phase_seconds;
+      s.linear_phase_concurrent = state.linear_phase_concurrent;
       s.stage_seconds.insert(s.stage_seconds.begin(), discarded.begin(), discarded.end());
       stats = std::move(s);
       state.carried_strict = strict;

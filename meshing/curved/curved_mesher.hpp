@@ -190,6 +190,12 @@ struct CurvedMeshOptions {
   // at ε = 0.5% bunny 1,556 -> 988 faces in 20.3 -> 12.4 s, fertility 1,114 -> 842 in 21.4 ->
   // 10.6 s, rocker_arm 916 -> 868 in 31.8 -> 19.8 s; at most 6% more faces (bunny 1%).
   bool two_phase = true;
+  // With two_phase, deterministic and more than one thread: the first attempt's linear phase is
+  // started beside it, on a thread of its own, before anyone knows whether it will be needed
+  // (the first attempt coarsens on one thread, so the second core is idle). It is cancelled as
+  // soon as an attempt's curved surface meets ε; where the repair fails it is waited for instead
+  // of being run then. The same computations either way: the mesh is bit-identical.
+  bool concurrent_linear_phase = true;
   double curved_linear_factor = 3.0;
   double curved_margin = 0.95;
   int curved_attempts = 4;
@@ -295,6 +301,10 @@ struct CurvedMeshStats {
   // Two-phase coarsening (CurvedMeshOptions::two_phase): the faces of the linear-bound shell the
   // attempts after the first resumed from (0: not run, the first attempt or its repair held).
   int linear_phase_faces = 0;
+  // Its own run time, and whether it ran beside the first attempt (concurrent_linear_phase; the
+  // stage "coarsen (linear phase)" is then only the wait for it).
+  double linear_phase_seconds = 0;
+  bool linear_phase_concurrent = false;
   OptimizeStats optimize;
   std::vector<std::pair<std::string, double>> stage_seconds;
 };

@@ -37,6 +37,11 @@ using editing::TriMesh;
 
 class ShellMesh : public TriMesh {
  public:
+  // SimplifyOptions::cancel, checked before every operation.
+  const std::atomic<bool>* cancel = nullptr;
+  void stop_if_cancelled() const {
+    if (cancel && cancel->load(std::memory_order_relaxed)) throw SimplifyCancelled();
+  }
   Attribute<Eigen::Vector3d> base{*this, 0, Eigen::Vector3d::Zero()};
   Attribute<Eigen::Vector3d> mid{*this, 0, Eigen::Vector3d::Zero()};
   Attribute<Eigen::Vector3d> top{*this, 0, Eigen::Vector3d::Zero()};
@@ -612,6 +617,7 @@ class ShellMesh : public TriMesh {
     return frozen && x >= 0 && std::size_t(x) < frozen->size() && (*frozen)[x];
   }
   bool collapse_edge_before(const Tuple& t) override {
+    stop_if_cancelled();
     if (chain_mode) return chain_before(t);
     if (singular[t.vid] || frozen_vertex(t.vid)) return false;
     return !(memo_active && replay_refusal(t.vid, other_vertex(t)));
@@ -822,6 +828,7 @@ class ShellMesh : public TriMesh {
   // of a short chain segment, a sliver of 0.07° on abc_00000008). Without chains a feature edge is
   // only known as an edge between two frozen vertices, and none of those flips.
   bool swap_edge_before(const Tuple& t) override {
+    stop_if_cancelled();
     const Id a = t.vid, b = other_vertex(t);
     if (chain_vertex.empty() ? frozen_vertex(a) && frozen_vertex(b) : get_edge(chain, t).feature)
       return false;
@@ -848,6 +855,7 @@ class ShellMesh : public TriMesh {
   // Accepted only if the worst MIPS of the new middle triangles is strictly below that of the
   // old ones (a split is a shape repair here) and the invariants hold.
   bool split_edge_before(const Tuple& t) override {
+    stop_if_cancelled();
     return occupied && !singular[t.vid] && !singular[other_vertex(t)] &&
            !get_edge(chain, t).feature && !(repair && repair_feature_edge(t));
   }
@@ -992,7 +1000,10 @@ class ShellMesh : public TriMesh {
   }
 
   // Smoothing is one of two moves of vertex r.v0's pillar, chosen by `smoothing_mode`.
-  bool smooth_before(const Tuple& t) override { return !singular[t.vid]; }
+  bool smooth_before(const Tuple& t) override {
+    stop_if_cancelled();
+    return !singular[t.vid];
+  }
   bool smooth_after(const OperationRecord& r) override {
     const Id v = r.v0;
     const Eigen::Vector3d m = mid[v];
@@ -1158,6 +1169,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   m.section_cos = options.section_cos;
   m.chain_full_recheck = options.chain_full_recheck;
   m.max_distance = options.max_distance;
+  m.cancel = options.cancel;
   if (!options.distance_scale.empty()) {
     const std::size_t np = std::size_t(input.num_vertices()) + options.extra_points.size();
     if (options.distance_scale.size() != np)
@@ -1553,6 +1565,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   log::debug("simplify: set-up and repair ",
              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), " s");
   for (int round = 0; rounds && round < options.rounds; ++round) {
+    m.stop_if_cancelled();
     int changed = 0;
     int collapsed = collapse_pass();
     stats.collapses += collapsed;

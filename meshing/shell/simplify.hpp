@@ -23,7 +23,9 @@
 // vertices never move or disappear. Runs through the parallel scheduler.
 
 #include <array>
+#include <atomic>
 #include <functional>
+#include <stdexcept>
 
 #include "meshing/core/surface_mesh.hpp"
 #include "meshing/editing/scheduler.hpp"
@@ -148,6 +150,15 @@ struct SimplifyOptions {
   // Feature chains resume too: the coarse feature edges are rebuilt from the shell's reference
   // copy (each snapped vertex inside the coarse edge between its two ends).
   bool resume = false;
+  // Optional: a run started speculatively (the curved mesher's concurrent linear phase) is
+  // stopped once *cancel becomes true: the next operation's check throws SimplifyCancelled, and
+  // the partly simplified shell is dropped.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+/// Thrown by simplify_shell when SimplifyOptions::cancel became true.
+struct SimplifyCancelled : std::runtime_error {
+  SimplifyCancelled() : std::runtime_error("simplify: cancelled") {}
 };
 
 struct SimplifyStats {

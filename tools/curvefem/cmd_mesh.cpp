@@ -52,7 +52,8 @@ struct MeshArgs {
   std::vector<double> eps_levels;
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
        low_degree_slabs = false, no_pan = false, no_feature_chains = false,
-       linear_coarsening = false, no_curved_repair = false, no_two_phase = false;
+       linear_coarsening = false, no_curved_repair = false, no_two_phase = false,
+       no_concurrent_linear_phase = false;
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
@@ -257,6 +258,10 @@ void register_mesh(CLI::App& app) {
                 "after a missed curved-aware attempt, coarsen the input again for the next one "
                 "(default: coarsen it once under the linear bound and resume every later attempt "
                 "from that shell)");
+  sub->add_flag("--no-concurrent-linear-phase", args->no_concurrent_linear_phase,
+                "run the two-phase coarsening's linear phase only once it is needed (default, on "
+                "two or more threads: it starts beside the first attempt and is cancelled if not "
+                "needed; the mesh is the same)");
   sub->add_flag("--exterior", args->exterior,
                 "also mesh the space between the surface and a padded box (tags 3, 4)");
   sub->add_option("--padding", args->padding,
@@ -295,6 +300,7 @@ void register_mesh(CLI::App& app) {
     options.curved_coarsening = !args->linear_coarsening;
     options.curved_repair = !args->no_curved_repair;
     options.two_phase = !args->no_two_phase;
+    options.concurrent_linear_phase = !args->no_concurrent_linear_phase;
     options.eps_samples = args->eps_samples;
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);

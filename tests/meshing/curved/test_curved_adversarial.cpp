@@ -187,6 +187,44 @@ TEST(CurvedAdversarial, AMissIsRepairedOnTheCoarseShellWithoutCoarseningAgain) {
   EXPECT_LE(m.stats.coarse_faces, 1.05 * again.coarse_faces);
 }
 
+TEST(CurvedAdversarial, TheLinearPhaseRunBesideTheFirstAttemptGivesTheSameMesh) {
+  // On two threads the two-phase coarsening's linear phase starts beside the first attempt
+  // (CurvedMeshOptions::concurrent_linear_phase). noise_sphere_5's first attempt misses ε once
+  // curved; without the repair the linear phase is needed and is waited for; with it (the
+  // default) the repair holds and the linear phase is cancelled. Either way the mesh must be
+  // bit-identical to the one of the serial order (the linear phase run only once needed).
+  const SurfaceMesh input = make_adversarial("noise_sphere_5");
+  auto same = [](const cv::CurvedMesh& a, const cv::CurvedMesh& b) {
+    return a.mesh.nodes.rows() == b.mesh.nodes.rows() &&
+           a.mesh.cells.rows() == b.mesh.cells.rows() && a.mesh.nodes == b.mesh.nodes &&
+           a.mesh.cells == b.mesh.cells && a.mesh.cell_tags == b.mesh.cell_tags &&
+           a.map.vertex_face == b.map.vertex_face && a.map.vertex_uv == b.map.vertex_uv;
+  };
+  for (const bool repair : {false, true}) {
+    cv::CurvedMeshOptions o = default_options(input, 3);
+    o.threads = 2;
+    o.curved_repair = repair;
+    o.concurrent_linear_phase = true;
+    const Meshed beside =
+        mesh_with(input, o, repair ? "repair, concurrent" : "no repair, concurrent");
+    o.concurrent_linear_phase = false;
+    const Meshed serial = mesh_with(input, o, repair ? "repair, serial" : "no repair, serial");
+    EXPECT_TRUE(beside.stats.linear_phase_concurrent);
+    EXPECT_FALSE(serial.stats.linear_phase_concurrent);
+    EXPECT_GE(beside.stats.curved_attempts, 2) << "the first attempt must miss for this test";
+    EXPECT_TRUE(same(beside.mesh, serial.mesh)) << (repair ? "with" : "without") << " the repair";
+    EXPECT_EQ(beside.stats.coarse_faces, serial.stats.coarse_faces);
+    EXPECT_EQ(beside.stats.linear_phase_faces, serial.stats.linear_phase_faces);
+    if (repair) {
+      EXPECT_EQ(beside.stats.linear_phase_faces, 0) << "the repair held: cancelled, not used";
+    } else {
+      EXPECT_GT(beside.stats.linear_phase_faces, 0) << "used";
+      EXPECT_GT(beside.stats.linear_phase_seconds, 0);
+    }
+    EXPECT_TRUE(beside.v.valid(0.01));
+  }
+}
+
 TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFirst) {
   // A 1 x 0.02 x 0.02 bar, 4 x 4 quads per side: its sides are needle triangles 0.25 long,
   // 12-18 times the bar's thickness, and the thickness guard can only refuse collapses, not add

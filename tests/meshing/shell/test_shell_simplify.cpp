@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -84,6 +85,28 @@ TEST(ShellSimplify, CoarsensASphereShellAndKeepsItValid) {
   sh::simplify_shell(shell, sphere, o, s);
   EXPECT_GT(s.collapse_rejections.distance, 0);
   EXPECT_GT(s.faces_after, unbounded_faces) << "a tight bound coarsens less";
+}
+
+TEST(ShellSimplify, ACancelledRunStopsWithoutAShell) {
+  // SimplifyOptions::cancel (the curved mesher's speculative linear phase): set before the run,
+  // the first operation stops it; never set, the run is the one without a flag.
+  const SurfaceMesh sphere = curvefem::make_icosphere(3);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.01 * curvefem::bbox_longest_edge(sphere.V);
+  std::atomic<bool> cancel{true};
+  o.cancel = &cancel;
+  sh::SimplifyStats s;
+  EXPECT_THROW(sh::simplify_shell(shell, sphere, o, s), sh::SimplifyCancelled);
+  cancel = false;
+  sh::SimplifyStats flagged, plain;
+  const sh::Shell a = sh::simplify_shell(shell, sphere, o, flagged);
+  o.cancel = nullptr;
+  const sh::Shell b = sh::simplify_shell(shell, sphere, o, plain);
+  EXPECT_EQ(a.F, b.F);
+  EXPECT_EQ(a.mid, b.mid);
+  EXPECT_LT(a.F.rows(), 1280);
 }
 
 TEST(ShellSimplify, CoarsensABoxShellAcrossSharpEdges) {
