@@ -1087,7 +1087,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   // needed only if the attempt and its repair miss, starts beside it on the idle core.
   const int cores = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
   if (relaxed && options.two_phase && options.concurrent_linear_phase && options.deterministic &&
-      cores > 1 && !st.coarse && !st.resume && !st.linear_phase_done && !st.linear_run) {
+      cores > 1 && beveled.shell.F.rows() <= options.concurrent_linear_phase_max_faces &&
+      !st.coarse && !st.resume && !st.linear_phase_done && !st.linear_run) {
     st.linear_run = std::make_unique<LinearPhaseRun>();
     LinearPhaseRun* run = st.linear_run.get();
     sh::SimplifyOptions linear = linear_phase_options(simplify_options);

@@ -223,6 +223,13 @@ TEST(CurvedAdversarial, TheLinearPhaseRunBesideTheFirstAttemptGivesTheSameMesh) 
     }
     EXPECT_TRUE(beside.v.valid(0.01));
   }
+  // Above the size limit (memory) it is not started.
+  cv::CurvedMeshOptions o = default_options(input, 3);
+  o.threads = 2;
+  o.concurrent_linear_phase_max_faces = 10;
+  cv::CurvedMeshStats stats;
+  cv::build_curved_mesh(input, o, stats);
+  EXPECT_FALSE(stats.linear_phase_concurrent);
 }
 
 TEST(CurvedAdversarial, ABarWhoseInputEdgesAreFarLongerThanItIsThickIsRefinedFirst) {
