@@ -1178,7 +1178,6 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
         st.start = std::move(run.shell);
         linear_stats = std::move(run.stats);
         st.linear_phase_seconds = run.seconds;
-        st.linear_phase_concurrent = true;
         st.linear_run.reset();
       } else {
         st.start = sh::simplify_shell(beveled.shell, surface,
