@@ -51,6 +51,7 @@ class CurvedEditMesh : public TetMesh {
 
   int k = 1;
   bool mips_guard = false;  // every operation: the cavity's worst curved MIPS may not grow
+  double locked_mips = 0;   // CurvedEditOptions::locked_mips
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
   std::vector<Eigen::Vector3d> pos;                       // node positions (grows)
@@ -288,6 +289,21 @@ class CurvedEditMesh : public TetMesh {
       for (const auto& X : Xs) mips_after = std::max(mips_after, curved_mips(k, X));
       if (!(mips_after <= mips_before)) return refuse(r, false);
     }
+    // ... and not leave a locked cell (its four corners fixed, so no later smoothing moves them)
+    // worse than locked_mips, unless the cavity held a worse locked cell already.
+    if (locked_mips > 0) {
+      auto locked = [&](const Cell& c) {
+        return vertex_fixed[c[0]] && vertex_fixed[c[1]] && vertex_fixed[c[2]] && vertex_fixed[c[3]];
+      };
+      double bound = locked_mips;
+      for (Id t : r.old_cells)
+        if (locked(cell(t))) bound = std::max(bound, curved_mips(k, cell_nodes(cell(t))));
+      for (std::size_t i = 0; i < nn; ++i)
+        if (locked(cell(r.new_cells[i])) && !(curved_mips(k, Xs[i]) <= bound)) {
+          ++stats->rejected_locked;
+          return refuse(r, false);
+        }
+    }
     for (std::size_t i = 0; i < nn; ++i)
       if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive)
         return refuse(r, true);
@@ -396,6 +412,7 @@ void accumulate(CurvedEditStats& total, const CurvedEditStats& next) {
   total.rejected_certificate += next.rejected_certificate;
   total.rejected_energy += next.rejected_energy;
   total.rejected_topology += next.rejected_topology;
+  total.rejected_locked += next.rejected_locked;
   total.cells_after = next.cells_after;
   total.targets_after = next.targets_after;
   total.max_energy_after = next.max_energy_after;
@@ -440,6 +457,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   m.tri_lattice = &lagrange_lattice(CellKind::triangle, k);
   m.stats = &stats;
   m.mips_guard = options.mips_guard;
+  m.locked_mips = options.locked_mips;
   m.replay = options.replay_refusals;
   m.initialize(node_of_vertex.size(), cells);
   m.pos.resize(std::size_t(mesh.num_nodes()));

@@ -41,6 +41,16 @@ struct CurvedEditOptions {
   // Every operation, not only splits, must not raise the cavity's worst curved MIPS (the quality
   // goal's measure; the conformal energy weighs a curved dip less).
   bool mips_guard = true;
+  // > 0: an operation may not create a locked cell — all four corners fixed (on the curved
+  // surface or on a boundary face), so the smoothing after the edits moves none of them — with a
+  // curved MIPS above this, unless a locked cell of the cavity was worse already. Without it
+  // (CGAL's turbine.off, K = 3): the stitched mesh had no locked cell, the edits left 93, 16 of
+  // them above 1e3 and one at 5.0e5 (two boundary faces on a straight feature chain), which the
+  // smoothing could not touch, where the smoothing alone had reached 1.3e4. 1e4 (the quality
+  // goal's bound) rather than 1e3: measured on 92 runs (benchmarks/results/robustness_locked.md),
+  // 1e3 changed 43 of them and met the goal on 78 (79 without); 1e4 changes 20, meets it on 79,
+  // never lowers a min scaled Jacobian. 0: off.
+  double locked_mips = 1e4;
   bool flips = true;
   // Edge splits of flat cells (after the flips of each pass): an edge of a target cell whose
   // sampled scaled Jacobian is below split_scaled_jacobian, not on the mesh boundary nor on the
@@ -68,6 +78,7 @@ struct CurvedEditStats {
   long long rejected_certificate = 0;  // a new cell not certified positive
   long long rejected_energy = 0;       // the worst energy did not drop, or the scaled Jacobian did
   long long rejected_topology = 0;     // link condition, boundary, existing edge or face
+  long long rejected_locked = 0;       // of rejected_energy: a locked cell above locked_mips
   long long replayed = 0;  // refused collapses replayed (counted in attempted and rejected_*)
   int cells_before = 0, cells_after = 0;
   int targets_before = 0, targets_after = 0;  // cells above `energy`

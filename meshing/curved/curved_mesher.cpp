@@ -575,6 +575,7 @@ class Builder {
     if (recurve) raise_alpha(eps);
     raise_smooth(eps);
     if (quality_floor > 0) lower_for_quality(eps);
+    if (embed) embedded = embed_boundary(eps);
     int moved = 0;
     pulled_above.assign(nv, 0);
     for (int v = 0; v < nv; ++v) {
@@ -591,6 +592,8 @@ class Builder {
     return moved;
   }
   int outer_raised = 0, outer_lowered = 0;
+  bool embed = true;     // run embed_boundary at the end of each thickening
+  bool embedded = true;  // embed_boundary's verdict at the last thickening
 
   // Interior dihedral angle (radians, in [0, π]) at edge (a, b) between faces f and g of X.
   double dihedral(const Eigen::MatrixXd& X, int f, int g) const {
@@ -618,6 +621,119 @@ class Builder {
     }
     return out;
   }
+
+  // The curved middle surface (the mesh boundary at the current α) as m × m flat triangles per
+  // face, face f's first at row f·m²; corner and edge points are evaluated once and shared.
+  void sample_middle(int m, Eigen::MatrixXd& V, Eigen::MatrixXi& F) const {
+    std::map<std::array<int, 3>, int> shared;  // (lo vertex, hi vertex, steps from lo)
+    std::vector<Eigen::Vector3d> points;
+    F.resize(Eigen::Index(nf) * m * m, 3);
+    std::vector<int> id(std::size_t((m + 1) * (m + 2) / 2));
+    auto index = [m](int i, int j) { return std::size_t(j * (m + 1) - j * (j - 1) / 2 + i); };
+    for (int f = 0; f < nf; ++f) {
+      const auto d = node_displacements(f);
+      for (int j = 0; j <= m; ++j)
+        for (int i = 0; i + j <= m; ++i) {
+          const int w[3] = {m - i - j, i, j};  // weights on the rotated corners 0, 1, 2
+          const int nz = (w[0] > 0) + (w[1] > 0) + (w[2] > 0);
+          std::array<int, 3> key{-1, -1, -1};
+          if (nz == 1) {
+            const int c = w[0] > 0 ? 0 : (w[1] > 0 ? 1 : 2);
+            key = {rotated(f, c), rotated(f, c), 0};
+          } else if (nz == 2) {
+            const int p = w[0] == 0 ? 1 : 0, q = w[2] == 0 ? 1 : 2;
+            const int vp = rotated(f, p), vq = rotated(f, q);
+            key = vp < vq ? std::array<int, 3>{vp, vq, w[q]} : std::array<int, 3>{vq, vp, w[p]};
+          }
+          int pid = -1;
+          if (key[0] >= 0)
+            if (auto it = shared.find(key); it != shared.end()) pid = it->second;
+          if (pid < 0) {
+            pid = int(points.size());
+            const double u = double(i) / m, v = double(j) / m;
+            points.push_back(
+                nz == 1 ? mid(key[0])
+                        : Eigen::Vector3d(linear_mid(f, u, v) + patch_displacement(d, k, u, v)));
+            if (key[0] >= 0) shared[key] = pid;
+          }
+          id[index(i, j)] = pid;
+        }
+      Eigen::Index row = Eigen::Index(f) * m * m;
+      // Orientation of the face's rotated corners (a rotation keeps it).
+      for (int j = 0; j < m; ++j)
+        for (int i = 0; i + j < m; ++i) {
+          F.row(row++) << id[index(i, j)], id[index(i + 1, j)], id[index(i, j + 1)];
+          if (i + j + 1 < m)
+            F.row(row++) << id[index(i + 1, j)], id[index(i + 1, j + 1)], id[index(i, j + 1)];
+        }
+    }
+    V.resize(Eigen::Index(points.size()), 3);
+    for (std::size_t i = 0; i < points.size(); ++i) V.row(Eigen::Index(i)) = points[i].transpose();
+  }
+  // Pairs of coarse faces (f < g) whose sampled curved patches intersect, or whose samples are
+  // degenerate (a face with a degenerate sample pairs with itself).
+  std::vector<std::pair<int, int>> curved_boundary_intersections(int m) const {
+    Eigen::MatrixXd V;
+    Eigen::MatrixXi F;
+    sample_middle(m, V, F);
+    const std::vector<char> degenerate = check::exactly_degenerate_faces(V, F);
+    const auto si =
+        check::find_self_intersections(V, F, degenerate, true, check::SelfIntersectionEngine::soup);
+    std::set<std::pair<int, int>> out;
+    for (const auto& [a, b] : si.pairs) {
+      const int f = a / (m * m), g = b / (m * m);
+      out.insert({std::min(f, g), std::max(f, g)});
+    }
+    for (std::size_t t = 0; t < degenerate.size(); ++t)
+      if (degenerate[t]) out.insert({int(t) / (m * m), int(t) / (m * m)});
+    return {out.begin(), out.end()};
+  }
+  // Construction-time embedding of the curved boundary (issue 21): the faces of every
+  // intersecting pair of sampled patches (2k per edge, the validator's default) halve their α
+  // (down to 0, their linear triangles, which the shell keeps embedded), and a face across their
+  // edges whose slabs or distance bound then fail follows, until the surface is clean. Faces the
+  // curved-aware coarsening let beyond ε of their linear triangle (needs_full) are not lowered.
+  // Returns false when pairs are left that nothing could lower.
+  bool embed_boundary(double eps) {
+    if (k < 2) return true;
+    const int m = 2 * k;
+    for (int round = 0;; ++round) {
+      const auto pairs = curved_boundary_intersections(m);
+      if (round == 0) embedding_pairs_before = int(pairs.size());
+      embedding_pairs_after = int(pairs.size());
+      if (pairs.empty()) return true;
+      ++embedding_rounds;
+      std::set<int> lowered;
+      for (const auto& [f, g] : pairs)
+        for (int h : {f, g})
+          if (alpha[h] > 0 && (needs_full.empty() || !needs_full[h])) lowered.insert(h);
+      if (lowered.empty() || round >= 64) return false;
+      for (int h : lowered) {
+        lower_alpha(h);
+        embedding_lowered.insert(h);
+      }
+      // The faces across the lowered ones share their edge nodes: re-certify them, lowering
+      // further where they fail (α = 0 meets both by the shell).
+      std::vector<int> work;
+      for (int h : lowered)
+        for (int g : across(h)) work.push_back(g);
+      while (!work.empty()) {
+        std::sort(work.begin(), work.end());
+        work.erase(std::unique(work.begin(), work.end()), work.end());
+        std::vector<int> next;
+        for (int g : work) {
+          if (alpha[g] == 0 || face_check(g, eps) == 0) continue;
+          if (!needs_full.empty() && needs_full[g]) continue;
+          lower_alpha(g);
+          embedding_lowered.insert(g);
+          for (int h : across(g)) next.push_back(h);
+        }
+        work = std::move(next);
+      }
+    }
+  }
+  int embedding_pairs_before = 0, embedding_pairs_after = 0, embedding_rounds = 0;
+  std::set<int> embedding_lowered;
 
   // Curving was decided on slabs down to the shell's base; the deeper inner surface leaves the
   // curved patch room. Each face below α = 1 tries 1, 1/2, ... down to (not including) its α,
@@ -1276,6 +1392,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   Builder b(shell, surface, k);
   b.exterior = options.exterior;
   b.recurve = options.recurve;
+  b.embed = options.embed_boundary;
   b.quality_floor = options.curve_quality_floor;
   b.low_degree = options.low_degree_slabs;
   b.extra = points;
@@ -1420,6 +1537,14 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.outer_lowered_vertices = b.outer_lowered;
     stats.faces_recurved = b.alpha_raised;
     stats.faces_lowered_for_quality = b.alpha_lowered_for_quality;
+    stats.embedding_pairs_before = b.embedding_pairs_before;
+    stats.embedding_pairs_after = b.embedding_pairs_after;
+    stats.embedding_rounds = b.embedding_rounds;
+    stats.faces_lowered_for_embedding = int(b.embedding_lowered.size());
+    if (!b.embedded)
+      log::warn("mesh: ", b.embedding_pairs_after,
+                " pairs of curved boundary faces still intersect where no curving could be lowered"
+                " (faces the curved-aware coarsening needs fully curved)");
     stats.faces_sheared = b.shear_faces();
     stats.stage_seconds.emplace_back(attempt ? "thicken (retry)" : "thicken", watch.seconds());
     watch = Stopwatch();

@@ -145,6 +145,12 @@ struct CurvedMeshOptions {
   // input is meshed again without the shape refinement, then without the thin refinement too
   // (CurvedMeshStats::roundtrip_fallback). false: no check (the validator's still runs).
   bool refined_roundtrip_check = true;
+  // Construction-time embedding of the curved boundary (issue 21): after the recurving, the
+  // curved middle surface is sampled 2K per edge (as the validator does) and the faces of every
+  // intersecting pair lower their curving α, down to their linear triangles if need be
+  // (CurvedMeshStats::embedding_*). Seen on CGAL's femur.off with --feature-end-trim 1: two
+  // neighbouring patches crossing, the validator's 10 intersections and exit 3. false: off.
+  bool embed_boundary = true;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
   // (0: off), so the coarsening is limited by ε rather than by the initial shell.
@@ -275,6 +281,11 @@ struct CurvedMeshStats {
   int faces_recurved = 0;
   // Faces whose α the quality floor lowered after the recurving (curve_quality_floor).
   int faces_lowered_for_quality = 0;
+  // Construction-time embedding of the curved boundary (Builder::embed_boundary): pairs of coarse
+  // faces whose curved patches, sampled 2K per edge, intersect after the recurving (before and
+  // after the repair), repair rounds, and faces whose α the repair lowered.
+  int embedding_pairs_before = 0, embedding_pairs_after = 0, embedding_rounds = 0;
+  int faces_lowered_for_embedding = 0;
   // Faces whose slab keeps the full shear t · d (slab_nodes.hpp): the low-degree slab nodes were
   // not certified there (thin slabs under an inward bulge). 0 at K ≤ 2.
   int faces_sheared = 0;

@@ -53,7 +53,7 @@ struct MeshArgs {
   bool no_features = false, exterior = false, nondeterministic = false, no_recurve = false,
        low_degree_slabs = false, no_pan = false, no_feature_chains = false,
        linear_coarsening = false, no_curved_repair = false, no_two_phase = false,
-       no_concurrent_linear_phase = false;
+       no_concurrent_linear_phase = false, no_embed_boundary = false;
   double split_mips = 0;
   double max_edge_per_thickness = meshing::curved::CurvedMeshOptions{}.max_edge_per_thickness;
   double thin_refine_ratio = meshing::curved::CurvedMeshOptions{}.thin_refine_ratio;
@@ -68,6 +68,7 @@ struct MeshArgs {
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
   double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
+  double optimize_edit_locked_mips = meshing::curved::CurvedEditOptions{}.locked_mips;
   bool optimize_edit_splits = meshing::curved::CurvedEditOptions{}.splits;
   double optimize_node_energy = meshing::curved::OptimizeOptions{}.node_energy;
   double padding = 0.25;
@@ -172,6 +173,11 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--optimize-edit-splits", args->optimize_edit_splits,
                 "the curved edits also split interior edges of cells with a scaled Jacobian below "
                 "0.01 (kept when the cavity's worst scaled Jacobian rises by half)");
+  sub->add_option("--optimize-edit-locked-mips", args->optimize_edit_locked_mips,
+                  "curved edits: no new cell with all four corners fixed (on the curved surface or "
+                  "a boundary face; the smoothing cannot move them) and a curved MIPS above M, "
+                  "unless the cells it replaces held a worse one (default 1e4; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--optimize-edit-energy", args->optimize_edit_energy,
                   "curved edits: only cells whose mean conformal AMIPS energy exceeds E are "
                   "targets (default 4)")
@@ -262,6 +268,10 @@ void register_mesh(CLI::App& app) {
                 "run the two-phase coarsening's linear phase only once it is needed (default, on "
                 "two or more threads: it starts beside the first attempt and is cancelled if not "
                 "needed; the mesh is the same)");
+  sub->add_flag("--no-embed-boundary", args->no_embed_boundary,
+                "do not check the curved boundary for self-intersections while it is built (by "
+                "default the curving of intersecting faces is lowered; the validator checks "
+                "either way)");
   sub->add_flag("--exterior", args->exterior,
                 "also mesh the space between the surface and a padded box (tags 3, 4)");
   sub->add_option("--padding", args->padding,
@@ -291,6 +301,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.node_energy = args->optimize_node_energy;
     options.optimize.edits.passes = args->optimize_edit_passes;
     options.optimize.edits.energy = args->optimize_edit_energy;
+    options.optimize.edits.locked_mips = args->optimize_edit_locked_mips;
     options.optimize.edits.splits = args->optimize_edit_splits;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
@@ -301,6 +312,7 @@ void register_mesh(CLI::App& app) {
     options.curved_repair = !args->no_curved_repair;
     options.two_phase = !args->no_two_phase;
     options.concurrent_linear_phase = !args->no_concurrent_linear_phase;
+    options.embed_boundary = !args->no_embed_boundary;
     options.eps_samples = args->eps_samples;
     if (!args->constraints.empty())
       options.constraint_points = read_constraint_file(args->constraints);

@@ -313,6 +313,48 @@ double mesh_min_scaled_jacobian(const LagrangeMesh& m) {
   return worst;
 }
 
+TEST(CurvedEdit, NoLockedCellWorseThanTheBoundIsCreated) {
+  // Collapsing the near-flat centre leaves four tets whose corners are all on boundary faces:
+  // locked cells, which no later smoothing can move. Measured without the guard
+  // (locked_mips = 0), their worst curved MIPS is L; with the bound at L / 2 every collapse of the
+  // centre (each leaves such cells) is refused and the centre stays for the smoothing; at 2 L the
+  // collapse is taken again.
+  for (int k = 1; k <= 4; ++k) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    auto run = [k](double locked_mips, cv::CurvedEditResult& r) {
+      LagrangeMesh m = octahedron(Eigen::Vector3d(0.32, 0.32, 0.32), k);
+      cv::CurvedEditOptions o;
+      o.energy = 1.5;
+      o.locked_mips = locked_mips;
+      r = cv::edit_curved_mesh(m, std::vector<char>(std::size_t(m.num_nodes()), 0), o);
+      return m;
+    };
+    auto worst_mips = [](const LagrangeMesh& m) {
+      double w = 0;
+      for (int c = 0; c < m.num_cells(); ++c)
+        w = std::max(w, cv::curved_mips(m.order, cell_nodes(m, c)));
+      return w;
+    };
+    cv::CurvedEditResult off, tight, loose;
+    const LagrangeMesh before = octahedron(Eigen::Vector3d(0.32, 0.32, 0.32), k);
+    const LagrangeMesh m_off = run(0, off);
+    ASSERT_EQ(m_off.num_cells(), 4);  // the centre went: only locked cells are left
+    EXPECT_EQ(off.stats.rejected_locked, 0);
+    const double L = worst_mips(m_off);
+    EXPECT_LT(L, worst_mips(before));  // the collapse passed the cavity's MIPS guard
+
+    const LagrangeMesh m_tight = run(L / 2, tight);
+    EXPECT_GT(tight.stats.rejected_locked, 0);
+    EXPECT_GE(tight.node_map[std::size_t(centre_node(before))], 0);  // the centre is kept
+    EXPECT_GT(m_tight.num_cells(), 4);
+    EXPECT_TRUE(all_certified(m_tight));
+
+    const LagrangeMesh m_loose = run(2 * L, loose);
+    EXPECT_EQ(m_loose.num_cells(), 4);
+    EXPECT_EQ(loose.stats.rejected_locked, 0);
+  }
+}
+
 TEST(CurvedEdit, ASplitIsRefusedWhereItCannotUnflattenTheCell) {
   // The centre sits 0.006 from the face x + y + z = 1 and is frozen, so no collapse can take it
   // away (flips and collapses are off here). Any split of its three free edges leaves two
