@@ -281,28 +281,32 @@ class CurvedEditMesh : public TetMesh {
     }
     // ... and not raise its worst curved MIPS (the quality goal's measure, which the conformal
     // energy above weighs differently: a split that trades a flat cell for a needle passes
-    // that one).
-    if (r.new_vertex != editing::k_no_id || mips_guard) {
-      double mips_before = 0, mips_after = 0;
-      for (Id t : r.old_cells)
-        mips_before = std::max(mips_before, curved_mips(k, cell_nodes(cell(t))));
-      for (const auto& X : Xs) mips_after = std::max(mips_after, curved_mips(k, X));
-      if (!(mips_after <= mips_before)) return refuse(r, false);
-    }
-    // ... and not leave a locked cell (its four corners fixed, so no later smoothing moves them)
-    // worse than locked_mips, unless the cavity held a worse locked cell already.
-    if (locked_mips > 0) {
+    // that one) ...
+    const bool guard_mips = r.new_vertex != editing::k_no_id || mips_guard;
+    if (guard_mips || locked_mips > 0) {
       auto locked = [&](const Cell& c) {
         return vertex_fixed[c[0]] && vertex_fixed[c[1]] && vertex_fixed[c[2]] && vertex_fixed[c[3]];
       };
-      double bound = locked_mips;
-      for (Id t : r.old_cells)
-        if (locked(cell(t))) bound = std::max(bound, curved_mips(k, cell_nodes(cell(t))));
-      for (std::size_t i = 0; i < nn; ++i)
-        if (locked(cell(r.new_cells[i])) && !(curved_mips(k, Xs[i]) <= bound)) {
-          ++stats->rejected_locked;
-          return refuse(r, false);
-        }
+      double mips_before = 0, locked_before = 0;
+      for (Id t : r.old_cells) {
+        const double x = curved_mips(k, cell_nodes(cell(t)));
+        mips_before = std::max(mips_before, x);
+        if (locked(cell(t))) locked_before = std::max(locked_before, x);
+      }
+      // ... and not leave a locked cell (its four corners fixed, so no later smoothing moves
+      // them) worse than locked_mips, unless the cavity held a worse locked cell already.
+      const double locked_bound = std::max(locked_mips, locked_before);
+      std::vector<double> new_mips(nn);
+      for (std::size_t i = 0; i < nn; ++i) {
+        new_mips[i] = curved_mips(k, Xs[i]);
+        if (guard_mips && !(new_mips[i] <= mips_before)) return refuse(r, false);
+      }
+      if (locked_mips > 0)
+        for (std::size_t i = 0; i < nn; ++i)
+          if (locked(cell(r.new_cells[i])) && !(new_mips[i] <= locked_bound)) {
+            ++stats->rejected_locked;
+            return refuse(r, false);
+          }
     }
     for (std::size_t i = 0; i < nn; ++i)
       if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive)

@@ -575,7 +575,7 @@ class Builder {
     if (recurve) raise_alpha(eps);
     raise_smooth(eps);
     if (quality_floor > 0) lower_for_quality(eps);
-    if (embed) embedded = embed_boundary(eps);
+    if (embed) embed_boundary(eps);
     int moved = 0;
     pulled_above.assign(nv, 0);
     for (int v = 0; v < nv; ++v) {
@@ -592,8 +592,7 @@ class Builder {
     return moved;
   }
   int outer_raised = 0, outer_lowered = 0;
-  bool embed = true;     // run embed_boundary at the end of each thickening
-  bool embedded = true;  // embed_boundary's verdict at the last thickening
+  bool embed = true;  // run embed_boundary at the end of each thickening
 
   // Interior dihedral angle (radians, in [0, π]) at edge (a, b) between faces f and g of X.
   double dihedral(const Eigen::MatrixXd& X, int f, int g) const {
@@ -693,21 +692,21 @@ class Builder {
   // (down to 0, their linear triangles, which the shell keeps embedded), and a face across their
   // edges whose slabs or distance bound then fail follows, until the surface is clean. Faces the
   // curved-aware coarsening let beyond ε of their linear triangle (needs_full) are not lowered.
-  // Returns false when pairs are left that nothing could lower.
-  bool embed_boundary(double eps) {
-    if (k < 2) return true;
+  // Pairs left that nothing could lower stay in embedding_pairs_after.
+  void embed_boundary(double eps) {
+    if (k < 2) return;
     const int m = 2 * k;
     for (int round = 0;; ++round) {
       const auto pairs = curved_boundary_intersections(m);
       if (round == 0) embedding_pairs_before = int(pairs.size());
       embedding_pairs_after = int(pairs.size());
-      if (pairs.empty()) return true;
+      if (pairs.empty()) return;
       ++embedding_rounds;
       std::set<int> lowered;
       for (const auto& [f, g] : pairs)
         for (int h : {f, g})
           if (alpha[h] > 0 && (needs_full.empty() || !needs_full[h])) lowered.insert(h);
-      if (lowered.empty() || round >= 64) return false;
+      if (lowered.empty() || round >= 64) return;
       for (int h : lowered) {
         lower_alpha(h);
         embedding_lowered.insert(h);
@@ -1541,7 +1540,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.embedding_pairs_after = b.embedding_pairs_after;
     stats.embedding_rounds = b.embedding_rounds;
     stats.faces_lowered_for_embedding = int(b.embedding_lowered.size());
-    if (!b.embedded)
+    if (b.embedding_pairs_after > 0)
       log::warn("mesh: ", b.embedding_pairs_after,
                 " pairs of curved boundary faces still intersect where no curving could be lowered"
                 " (faces the curved-aware coarsening needs fully curved)");

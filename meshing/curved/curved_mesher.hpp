@@ -282,8 +282,9 @@ struct CurvedMeshStats {
   // Faces whose α the quality floor lowered after the recurving (curve_quality_floor).
   int faces_lowered_for_quality = 0;
   // Construction-time embedding of the curved boundary (Builder::embed_boundary): pairs of coarse
-  // faces whose curved patches, sampled 2K per edge, intersect after the recurving (before and
-  // after the repair), repair rounds, and faces whose α the repair lowered.
+  // faces whose curved patches, sampled 2K per edge, intersect after the recurving, before and
+  // after the repair at the last thickening; repair rounds and faces whose α the repair lowered,
+  // over every thickening (a failed interior fill thickens again).
   int embedding_pairs_before = 0, embedding_pairs_after = 0, embedding_rounds = 0;
   int faces_lowered_for_embedding = 0;
   // Faces whose slab keeps the full shear t · d (slab_nodes.hpp): the low-degree slab nodes were
