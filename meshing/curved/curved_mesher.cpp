@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -99,7 +101,8 @@ class Builder {
         tri_lattice(lagrange_lattice(CellKind::triangle, order)),
         tet_lattice(lagrange_lattice(CellKind::tetrahedron, order)),
         inner(shell.base),
-        outer(shell.top) {
+        outer(shell.top),
+        certified_slabs(std::make_unique<CertifiedSlab[]>(2 * std::size_t(nf))) {
     for (int f = 0; f < nf; ++f)
       for (int e = 0; e < 3; ++e) {
         const int a = s.F(f, e), b = s.F(f, (e + 1) % 3);
@@ -390,10 +393,47 @@ class Builder {
 
   // Every tet of face f's bottom (upper = false) or top half-prism slab certified positive.
   bool layer_certified(int f, bool upper) const {
-    for (const auto& t : slab_tets(f, node_displacements(f), upper))
-      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) return false;
-    return true;
+    const auto d = node_displacements(f);
+    // The verdict is a function of the slab's corners, d and the blend (everything else slab_tets
+    // reads is fixed for the builder): the thickening, the recurving and the embedding repair
+    // re-check every face in every round, most of them unchanged since their last check.
+    std::vector<double> key;
+    key.reserve(18 + 3 * d.size() + 4);
+    for (int c = 0; c < 3; ++c) {
+      const int v = rotated(f, c);
+      for (const Eigen::Vector3d& p : {upper ? mid(v) : base(v), upper ? top(v) : mid(v)})
+        key.insert(key.end(), p.data(), p.data() + 3);
+    }
+    for (const Eigen::Vector3d& x : d) key.insert(key.end(), x.data(), x.data() + 3);
+    const SlabBlend blend = blend_of(f);
+    key.push_back(blend.face);
+    for (const bool e : blend.edge) key.push_back(e);
+    CertifiedSlab& memo = certified_slabs[std::size_t(2 * f + (upper ? 1 : 0))];
+    {
+      const std::lock_guard<std::mutex> lock(memo.mutex);
+      if (memo.key.size() == key.size() &&
+          std::memcmp(memo.key.data(), key.data(), sizeof(double) * key.size()) == 0)
+        return memo.verdict;
+    }
+    bool verdict = true;
+    for (const auto& t : slab_tets(f, d, upper))
+      if (certify_tet_jacobian(k, t.nodes).verdict != JacobianVerdict::positive) {
+        verdict = false;
+        break;
+      }
+    const std::lock_guard<std::mutex> lock(memo.mutex);
+    memo.key = std::move(key);
+    memo.verdict = verdict;
+    return verdict;
   }
+  // layer_certified's last verdict per face and layer with what it was computed from (a face can
+  // be checked on two threads at once: the curving's work list may hold it twice).
+  struct CertifiedSlab {
+    std::mutex mutex;
+    std::vector<double> key;
+    bool verdict = false;
+  };
+  mutable std::unique_ptr<CertifiedSlab[]> certified_slabs;
   bool slabs_certified(int f) const {
     return layer_certified(f, false) && (!exterior || layer_certified(f, true));
   }

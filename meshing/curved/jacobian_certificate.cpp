@@ -103,6 +103,7 @@ struct Prepared {
   double den = 1.0;                         // D: gradients = D · ∂N/∂ξ
   double den3 = 1.0;                        // D³ (exact)
   std::vector<double> gt;                   // [c][i][j]: D ∂N_i/∂ξ_c at lattice point j
+  std::vector<double> gs;                   // gt / D (the same layout), for the plain J
   std::vector<double> sg;                   // [c][j]: Σ_i |gt[c][i][j]| (exact integers)
   std::vector<double> l2b;                  // column-major lower enclosure: [j][alpha]
   double abs_row_sum = 1.0, width_row_sum = 0.0;
@@ -225,6 +226,8 @@ Prepared prepare(int order) {
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < m; ++j)
         t.sg[c * m + j] += std::abs(t.gt[(static_cast<std::size_t>(c) * n + i) * m + j]);
+  t.gs.resize(t.gt.size());
+  for (std::size_t i = 0; i < t.gt.size(); ++i) t.gs[i] = t.gt[i] / t.den;
   return t;
 }
 
@@ -541,19 +544,60 @@ JacobianCertificate certify(const Prepared& t, const Eigen::Ref<const Eigen::Mat
   return out;
 }
 
-// Plain floating-point J at every lattice point (k = 1: one point): 9 × m, [c*3 + r][j].
+// Plain floating-point J at every lattice point (k = 1: one point): out[c][r][j] = J(r, c) at
+// lattice point j, accumulated over the nodes i = 1..N-1 in order (d_i · ∂N_i/∂ξ_c, the tables
+// divided by D once in prepare()).
 template <int K>
 void lattice_jacobians(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
-                       std::vector<Eigen::Matrix3d>& out) {
+                       std::array<std::array<std::array<double, num_lattice(K)>, 3>, 3>& out) {
   constexpr int N = num_nodes(K), M = num_lattice(K);
-  out.assign(M, Eigen::Matrix3d::Zero());
+  for (auto& c : out)
+    for (auto& r : c) r.fill(0.0);
   for (int i = 1; i < N; ++i) {
-    const Eigen::Vector3d d = (nodes.row(i) - nodes.row(0)).transpose();
+    const double d[3] = {nodes(i, 0) - nodes(0, 0), nodes(i, 1) - nodes(0, 1),
+                         nodes(i, 2) - nodes(0, 2)};
     for (int c = 0; c < 3; ++c) {
-      const double* g = t.gt.data() + (static_cast<std::size_t>(c) * N + i) * M;
-      for (int j = 0; j < M; ++j) out[j].col(c) += d * (g[j] / t.den);
+      const double* g = t.gs.data() + (static_cast<std::size_t>(c) * N + i) * M;
+      for (int r = 0; r < 3; ++r) {
+        double* o = out[std::size_t(c)][std::size_t(r)].data();
+        const double x = d[r];
+        for (int j = 0; j < M; ++j) o[j] += x * g[j];
+      }
     }
   }
+}
+
+// min over the lattice points and the four corner frames of √2 det J / (product of the frame's
+// edge lengths). The frames' edges are J's columns and their differences (J T with T of 0 and ±1
+// entries, which is exact), so the six lengths are computed once per point.
+template <int K>
+double min_scaled_jacobian_k(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
+  constexpr int M = num_lattice(K);
+  std::array<std::array<std::array<double, M>, 3>, 3> jac;
+  lattice_jacobians<K>(t, nodes, jac);
+  const double sqrt2 = std::sqrt(2.0);
+  double best = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < M; ++j) {
+    Eigen::Matrix3d J;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) J(r, c) = jac[std::size_t(c)][std::size_t(r)][std::size_t(j)];
+    const double det = J.determinant();
+    const Eigen::Vector3d c0 = J.col(0), c1 = J.col(1), c2 = J.col(2);
+    const double n0 = c0.norm(), n1 = c1.norm(), n2 = c2.norm();
+    const double n10 = Eigen::Vector3d(c1 - c0).norm(), n20 = Eigen::Vector3d(c2 - c0).norm(),
+                 n21 = Eigen::Vector3d(c2 - c1).norm();
+    // Corner 0: (e1, e2, e3); 1: (e2-e1, -e1, e3-e1); 2: (-e2, e1-e2, e3-e2); 3: (e1-e3, -e3,
+    // e2-e3) — each with det +1 (corners 1 and 3 with their first two edges swapped).
+    const double len[4] = {n0 * n1 * n2, n10 * n0 * n20, n1 * n10 * n21, n20 * n2 * n21};
+    const double x = sqrt2 * det;
+    const double shortest = std::min(std::min(len[0], len[1]), std::min(len[2], len[3]));
+    if (x > 0.0 && shortest > 0.0) {  // x / l falls as l grows: one division, the same value
+      best = std::min(best, x / std::max(std::max(len[0], len[1]), std::max(len[2], len[3])));
+      continue;
+    }
+    for (const double l : len) best = std::min(best, l > 0.0 ? x / l : 0.0);
+  }
+  return best;
 }
 
 // Gradients of the order-k basis at the 56 points of the level-5 lattice (for curved_mips).
@@ -673,45 +717,16 @@ Eigen::VectorXd jacobian_bernstein_coefficients(int order,
 double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
   check_input(order, nodes);
   const Prepared& t = tables(order);
-  std::vector<Eigen::Matrix3d> jac;
   switch (order) {
     case 1:
-      lattice_jacobians<1>(t, nodes, jac);
-      break;
+      return min_scaled_jacobian_k<1>(t, nodes);
     case 2:
-      lattice_jacobians<2>(t, nodes, jac);
-      break;
+      return min_scaled_jacobian_k<2>(t, nodes);
     case 3:
-      lattice_jacobians<3>(t, nodes, jac);
-      break;
+      return min_scaled_jacobian_k<3>(t, nodes);
     default:
-      lattice_jacobians<4>(t, nodes, jac);
-      break;
+      return min_scaled_jacobian_k<4>(t, nodes);
   }
-  // Corner frames of the reference tet, det = +1.
-  static const std::array<Eigen::Matrix3d, 4> frames = [] {
-    const Eigen::Vector3d v[4] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
-                                  Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
-    std::array<Eigen::Matrix3d, 4> f;
-    for (int a = 0; a < 4; ++a) {
-      int col = 0;
-      for (int b = 0; b < 4; ++b)
-        if (b != a) f[a].col(col++) = v[b] - v[a];
-      if (f[a].determinant() < 0.0) f[a].col(0).swap(f[a].col(1));
-    }
-    return f;
-  }();
-  double best = std::numeric_limits<double>::infinity();
-  for (const Eigen::Matrix3d& J : jac) {
-    const double det = J.determinant();
-    for (const Eigen::Matrix3d& T : frames) {
-      const Eigen::Matrix3d E = J * T;
-      const double len = E.col(0).norm() * E.col(1).norm() * E.col(2).norm();
-      const double q = len > 0.0 ? std::sqrt(2.0) * det / len : 0.0;
-      best = std::min(best, q);
-    }
-  }
-  return best;
 }
 
 double curved_mips(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
@@ -719,7 +734,7 @@ double curved_mips(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
   const MipsTable& mt = mips_table(order);
   double sum = 0.0;
   for (const Eigen::MatrixXd& g : mt.grads) {
-    const Eigen::Matrix3d J = nodes.transpose() * g;  // J(r, c) = Σ_i x_i,r ∂N_i/∂ξ_c
+    const Eigen::Matrix3d J = jacobian_at(nodes, g);  // J(r, c) = Σ_i x_i,r ∂N_i/∂ξ_c
     const double det = J.determinant();
     if (!(det > 0.0)) return std::numeric_limits<double>::infinity();
     // ‖J⁻¹‖²_F = ‖adj J‖²_F / det²; adj J = det · J⁻¹ computed via the cofactors.

@@ -126,6 +126,21 @@ Eigen::VectorXd jacobian_bernstein_coefficients(int order,
 /// ≤ 0 iff inverted or flat. A zero tangent counts as 0.
 double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
 
+/// J(r, c) = Σ_i X(i, r) G(i, c): the Jacobian at a point of the map with nodes X (n × 3) and
+/// shape gradients G (n × 3) there. For n ≥ 14 (orders 3, 4) a plain loop over i in order: the
+/// order in which Eigen's general product kernel, which Xᵀ G used there, sums (the same bits with
+/// Debian's Eigen 3.4 on 400,000 random tets), without its packing, 2-3× faster. Below, Eigen's
+/// coefficient-based product as before (it sums in another order).
+inline Eigen::Matrix3d jacobian_at(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                   const Eigen::MatrixXd& G) {
+  if (X.rows() < 14) return X.transpose() * G;
+  Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+  for (Eigen::Index i = 0; i < X.rows(); ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) J(r, c) += X(i, r) * G(i, c);
+  return J;
+}
+
 /// Curved MIPS in the thesis convention (reference-notes §3.9): the mean over the 56 points of the
 /// uniform level-5 lattice of ‖J‖²_F ‖J⁻¹‖²_F, J taken with respect to the RIGHT reference tet, so
 /// the reference tet itself scores 9 (a regular tet scores more; the thesis threshold 100 refers

@@ -123,11 +123,12 @@ Eigen::MatrixXd cell_nodes(const LagrangeMesh& mesh, int c) {
 }
 
 // Energy over the order-k lattice (the mean; optionally the worst sample).
-double energy_of(const Reference& ref, const Eigen::MatrixXd& X, double* point_max = nullptr) {
+double energy_of(const Reference& ref, const Eigen::Ref<const Eigen::MatrixXd>& X,
+                 double* point_max = nullptr) {
   double e = 0;
   if (point_max) *point_max = 0;
   for (const Eigen::MatrixXd& G : ref.grads) {
-    const Eigen::Matrix3d J = X.transpose() * G;
+    const Eigen::Matrix3d J = jacobian_at(X, G);
     const double v = amips(J * ref.Winv, nullptr);
     if (point_max) *point_max = std::max(*point_max, v);
     if (v == k_inf) return k_inf;

@@ -842,4 +842,72 @@ TEST(JacobianQuality, ScaledJacobianAndMips) {
   EXPECT_GT(curved_mips(3, x), 13.5);
 }
 
+// The definitions, evaluated the plain way (shape gradients at each point, the four corner frames
+// as matrix products, a division per frame), against the library's tabulated and shortened
+// evaluation, on curved tets from mild to folded.
+TEST(JacobianQuality, ScaledJacobianAndMipsMatchTheirDefinitions) {
+  const std::array<Eigen::Vector3d, 4> v = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
+                                            Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+  std::array<Eigen::Matrix3d, 4> frames;  // edges from corner a, det +1
+  for (int a = 0; a < 4; ++a) {
+    int col = 0;
+    for (int b = 0; b < 4; ++b)
+      if (b != a) frames[a].col(col++) = v[b] - v[a];
+    if (frames[a].determinant() < 0) frames[a].col(0).swap(frames[a].col(1));
+  }
+  std::mt19937 rng(11);
+  int inverted = 0, compared = 0;
+  for (int k = 1; k <= 4; ++k) {
+    const Eigen::MatrixXd ref = curvefem::lagrange_reference_nodes(CellKind::tetrahedron, k);
+    // det J has degree 3(k − 1): the library samples J on that lattice (one point for k = 1).
+    const Eigen::MatrixXd sj_points =
+        k == 1 ? Eigen::MatrixXd(Eigen::RowVector3d(0.25, 0.25, 0.25))
+               : curvefem::lagrange_reference_nodes(CellKind::tetrahedron, 3 * (k - 1));
+    const Eigen::MatrixXd mips_points =
+        curvefem::lagrange_reference_nodes(CellKind::tetrahedron, 5);
+    for (int trial = 0; trial < 300; ++trial) {
+      const double amp = std::pow(10.0, -3.0 + 2.5 * (trial % 30) / 30.0);
+      std::uniform_real_distribution<double> shape(-2, 2), bump(-amp, amp);
+      Eigen::Matrix3d A;
+      for (int i = 0; i < 9; ++i) A(i / 3, i % 3) = shape(rng);
+      Eigen::MatrixXd x = ref * A.transpose();
+      for (Eigen::Index r = 0; r < x.rows(); ++r)
+        for (int c = 0; c < 3; ++c) x(r, c) += bump(rng);
+      double sj = std::numeric_limits<double>::infinity();
+      for (Eigen::Index p = 0; p < sj_points.rows(); ++p) {
+        const Eigen::Matrix3d J =
+            x.transpose() * curvefem::lagrange_shape_gradients(CellKind::tetrahedron, k,
+                                                               Eigen::Vector3d(sj_points.row(p)));
+        for (const Eigen::Matrix3d& T : frames) {
+          const Eigen::Matrix3d E = J * T;
+          const double len = E.col(0).norm() * E.col(1).norm() * E.col(2).norm();
+          sj = std::min(sj, len > 0 ? std::sqrt(2.0) * J.determinant() / len : 0.0);
+        }
+      }
+      double mips = 0;
+      for (Eigen::Index p = 0; p < mips_points.rows() && std::isfinite(mips); ++p) {
+        const Eigen::Matrix3d J =
+            x.transpose() * curvefem::lagrange_shape_gradients(CellKind::tetrahedron, k,
+                                                               Eigen::Vector3d(mips_points.row(p)));
+        mips = J.determinant() > 0
+                   ? mips + J.squaredNorm() * J.inverse().squaredNorm() / double(mips_points.rows())
+                   : std::numeric_limits<double>::infinity();
+      }
+      const std::string at = "k=" + std::to_string(k) + " trial " + std::to_string(trial);
+      EXPECT_NEAR(min_scaled_jacobian(k, x), sj, 1e-11 * std::max(1.0, std::abs(sj))) << at;
+      if (std::isfinite(mips)) {
+        EXPECT_NEAR(curved_mips(k, x), mips, 1e-9 * mips) << at;
+      } else {
+        EXPECT_TRUE(std::isinf(curved_mips(k, x))) << at;
+      }
+      inverted += sj < 0;
+      ++compared;
+    }
+  }
+  // Both kinds were compared.
+  EXPECT_GT(inverted, 50);
+  EXPECT_GT(compared - inverted, 300);
+  RecordProperty("inverted", std::to_string(inverted));
+}
+
 }  // namespace
