@@ -84,12 +84,18 @@ class CurvedEditMesh : public TetMesh {
   // the cells it removes, creates or reshapes, and a face shared with a cell around v or w has
   // its corners among theirs. So while no corner of a cell around v or w carries a stamp later
   // than a refusal, the checks would refuse again for the same reason: the refusal is counted
-  // again and nothing is run. One thread (the edits are sequential).
+  // again and nothing is run. One thread (the edits are sequential). A collapse the editing
+  // engine refused for its topology (the link condition of v w, or no cell left) read only the
+  // cells around v: it is replayed the same way (`remember_topology`).
   bool replay = false;
   bool collapsing = false;  // the operation under way is a collapse
   struct Refusal {
     bool certificate = false;  // counted as rejected_certificate (else rejected_energy)
+    bool topology = false;     // counted as rejected_topology
   };
+  void remember_topology(Id v, Id w) {
+    if (replay) memo.remember(v, w, Refusal{false, true});
+  }
   editing::RefusalMemo<TetMesh, Refusal> memo{*this};
 
   bool is_target(Id t, double threshold) const { return energy[t] > threshold; }
@@ -103,6 +109,10 @@ class CurvedEditMesh : public TetMesh {
     if (vertex_fixed[t.vid]) return false;
     const Refusal* x = replay ? memo.replay(t.vid, other_vertex(t)) : nullptr;
     if (!x) return true;
+    if (x->topology) {
+      ++stats->rejected_topology;  // (the engine counts this refusal as its user's)
+      return false;
+    }
     ++stats->attempted;
     ++(x->certificate ? stats->rejected_certificate : stats->rejected_energy);
     return false;
@@ -600,8 +610,12 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
         return done;
       };
     } else if (mode == Mode::collapse) {
-      pass.operations["collapse"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
-        return mm.collapse_edge(t);
+      pass.operations["collapse"] = [&m](TetMesh& mm, const TetMesh::Tuple& t) {
+        auto done = mm.collapse_edge(t);
+        // (A topology refusal comes before any change: t is still valid.)
+        if (!done && mm.last_rejection() == editing::Rejection::topology)
+          m.remember_topology(t.vid, mm.other_vertex(t));
+        return done;
       };
     } else {
       pass.operations["swap23"] = [](TetMesh& mm, const TetMesh::Tuple& t) {

@@ -79,7 +79,9 @@ struct CurvedEditStats {
   long long rejected_energy = 0;       // the worst energy did not drop, or the scaled Jacobian did
   long long rejected_topology = 0;     // link condition, boundary, existing edge or face
   long long rejected_locked = 0;       // of rejected_energy: a locked cell above locked_mips
-  long long replayed = 0;  // refused collapses replayed (counted in attempted and rejected_*)
+  // Refused collapses replayed, counted again in rejected_* (and in attempted, except those
+  // refused for their topology, which the engine refuses before the checks).
+  long long replayed = 0;
   int cells_before = 0, cells_after = 0;
   int targets_before = 0, targets_after = 0;  // cells above `energy`
   double max_energy_before = 0, max_energy_after = 0;
