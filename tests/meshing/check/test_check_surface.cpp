@@ -176,6 +176,30 @@ TEST(CheckSurface, OverlappingSpheresSelfIntersect) {
   }
 }
 
+// Two triangles with one common vertex intersect when an edge of either, opposite that vertex,
+// meets the other triangle: the soup rule tests both ways (each side alone decides one case).
+TEST(CheckSurface, SoupRuleOnTrianglesSharingOneVertex) {
+  auto pairs = [](const std::vector<Eigen::Vector3d>& g_corners) {
+    Eigen::MatrixXd V(5, 3);
+    V << 0, 0, 0, 1, 0, 0, 0, 1, 0, g_corners[0].transpose(), g_corners[1].transpose();
+    Eigen::MatrixXi F(2, 3);
+    F << 0, 1, 2, 0, 3, 4;
+    return find_self_intersections(V, F, exactly_degenerate_faces(V, F), true,
+                                   SelfIntersectionEngine::soup)
+        .pairs.size();
+  };
+  // g's far edge pierces f.
+  EXPECT_EQ(pairs({{0.3, 0.3, -1}, {0.3, 0.3, 1}}), 1u);
+  // g's far edge passes beside f (disjoint boxes), but g cuts f's far edge at (½, ½, 0).
+  EXPECT_EQ(pairs({{2, 2, -1}, {2, 2, 1}}), 1u);
+  // The same, g turned away from f: only the common vertex.
+  EXPECT_EQ(pairs({{-2, -2, -1}, {-2, -2, 1}}), 0u);
+  // A flat fan: f and g meet at the vertex only.
+  EXPECT_EQ(pairs({{-1, 0, 0}, {0, -1, 0}}), 0u);
+  // Flat and overlapping: g covers part of f.
+  EXPECT_EQ(pairs({{1, 1, 0}, {0.2, 1, 0}}), 1u);
+}
+
 TEST(CheckSurface, TetsSharingOneVertexArePinched) {
   SurfaceMesh m = tetrahedron();
   // Second tetrahedron: the first one mirrored through vertex 0 (orientation restored).
