@@ -48,6 +48,9 @@ class CurvedEditMesh : public TetMesh {
   editing::Attribute<int> tag{*this, 3, 0};
   editing::Attribute<double> energy{*this, 3, 0.0};
   editing::Attribute<double> scaled_jacobian{*this, 3, 0.0};  // min_scaled_jacobian
+  // curved_mips of the cell, NaN where not computed (the guards below are off): a cell's nodes
+  // never move during the edits, so the value of its creation holds while it lives.
+  editing::Attribute<double> mips{*this, 3, std::numeric_limits<double>::quiet_NaN()};
 
   int k = 1;
   bool mips_guard = false;  // every operation: the cavity's worst curved MIPS may not grow
@@ -293,20 +296,21 @@ class CurvedEditMesh : public TetMesh {
     // energy above weighs differently: a split that trades a flat cell for a needle passes
     // that one) ...
     const bool guard_mips = r.new_vertex != editing::k_no_id || mips_guard;
+    std::vector<double> new_mips(nn, std::numeric_limits<double>::quiet_NaN());
     if (guard_mips || locked_mips > 0) {
       auto locked = [&](const Cell& c) {
         return vertex_fixed[c[0]] && vertex_fixed[c[1]] && vertex_fixed[c[2]] && vertex_fixed[c[3]];
       };
       double mips_before = 0, locked_before = 0;
       for (Id t : r.old_cells) {
-        const double x = curved_mips(k, cell_nodes(cell(t)));
+        const double x = std::isnan(mips[t]) ? curved_mips(k, cell_nodes(cell(t))) : mips[t];
         mips_before = std::max(mips_before, x);
         if (locked(cell(t))) locked_before = std::max(locked_before, x);
       }
       // ... and not leave a locked cell (its four corners fixed, so no later smoothing moves
       // them) worse than locked_mips, unless the cavity held a worse locked cell already.
       const double locked_bound = std::max(locked_mips, locked_before);
-      std::vector<double> new_mips(nn);
+      new_mips.assign(nn, 0.0);
       for (std::size_t i = 0; i < nn; ++i) {
         new_mips[i] = curved_mips(k, Xs[i]);
         if (guard_mips && !(new_mips[i] <= mips_before)) return refuse(r, false);
@@ -324,6 +328,7 @@ class CurvedEditMesh : public TetMesh {
     for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
       energy.set(r.new_cells[i], new_energy[i]);
       scaled_jacobian.set(r.new_cells[i], new_sj[i]);
+      mips.set(r.new_cells[i], new_mips[i]);
     }
     for (const auto& [key, x] : staged) {
       node_of[key] = int(pos.size());
@@ -525,6 +530,8 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     const Eigen::MatrixXd X = m.cell_nodes(cells[std::size_t(c)]);
     m.energy.set(Id(c), cell_energy(k, X));
     m.scaled_jacobian.set(Id(c), min_scaled_jacobian(k, X));
+    if (options.mips_guard || options.locked_mips > 0 || options.splits)
+      m.mips.set(Id(c), curved_mips(k, X));
   }
   auto summarize = [&](double& mean, double& max, int& targets) {
     mean = max = 0;
