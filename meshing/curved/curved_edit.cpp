@@ -310,7 +310,6 @@ class CurvedEditMesh : public TetMesh {
       // ... and not leave a locked cell (its four corners fixed, so no later smoothing moves
       // them) worse than locked_mips, unless the cavity held a worse locked cell already.
       const double locked_bound = std::max(locked_mips, locked_before);
-      new_mips.assign(nn, 0.0);
       for (std::size_t i = 0; i < nn; ++i) {
         new_mips[i] = curved_mips(k, Xs[i]);
         if (guard_mips && !(new_mips[i] <= mips_before)) return refuse(r, false);
