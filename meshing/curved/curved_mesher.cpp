@@ -426,8 +426,8 @@ class Builder {
     memo.verdict = verdict;
     return verdict;
   }
-  // layer_certified's last verdict per face and layer with what it was computed from (a face can
-  // be checked on two threads at once: the curving's work list may hold it twice).
+  // layer_certified's last verdict per face and layer with what it was computed from. The face
+  // checks run in parallel over distinct faces; the lock keeps the memo safe for any caller.
   struct CertifiedSlab {
     std::mutex mutex;
     std::vector<double> key;
