@@ -17,6 +17,7 @@ import filecmp
 import json
 import os
 import shlex
+import shutil
 import statistics
 import subprocess
 import sys
@@ -43,6 +44,7 @@ started = datetime.datetime.now()
 
 
 def run(binary, surface, order, out):
+    shutil.rmtree(out, ignore_errors=True)  # no earlier run's files can stand in for this one's
     cmd = [binary, "mesh", surface, "-o", out, "--order", str(order), "-q",
            "--threads", str(args.threads)] + shlex.split(args.extra)
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
@@ -52,7 +54,7 @@ def run(binary, surface, order, out):
     with open(report) as f:
         rep = json.load(f)
     return {"exit": 0, "time": rep.get("time_s", {}), "faces": rep.get("coarse_faces"),
-            "tets": rep.get("output_tets"), "valid": rep.get("valid")}
+            "tets": rep.get("output_tets")}
 
 
 def identical(da, db):
@@ -83,7 +85,8 @@ for surface in args.files:
                 binary = args.a if side == "a" else args.b
                 outs[side] = os.path.join(args.work, "%s_k%d_%s" % (name, order, side))
                 res[side].append(run(binary, surface, order, outs[side]))
-            same = same and identical(outs["a"], outs["b"])
+            ok = res["a"][-1]["exit"] == 0 and res["b"][-1]["exit"] == 0
+            same = same and ok and identical(outs["a"], outs["b"])
         rows.append((name, order, res, same))
         ta, tb = med(res["a"], "total"), med(res["b"], "total")
         print("%s K=%d: %s -> %s s, same %s" % (name, order, fmt(ta), fmt(tb), same),
