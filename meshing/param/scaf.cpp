@@ -215,6 +215,53 @@ Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_
   return target;
 }
 
+// The projected Newton direction at p.X: H d = −∇E over the free coordinates, H = Σ c_f Bᵀ
+// proj(∂²D/∂J²) B with B the map from the triangle's 6 coordinates to vec(J) (fixed rows held).
+// `gradient_norm` receives ‖∇E‖.
+Eigen::MatrixXd newton_direction(const Problem& p, double& assemble_s, double& solve_s,
+                                 double& regularisation, double& gradient_norm) {
+  Stopwatch watch;
+  const int n = 2 * p.n_free;
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(p.tri.size() * 36);
+  Eigen::VectorXd grad = Eigen::VectorXd::Zero(n);
+  for (int t = 0; t < int(p.tri.size()); ++t) {
+    const Eigen::Matrix2d J = p.jacobian(t, p.X);
+    const Eigen::Matrix2d dJ = symmetric_dirichlet_gradient(J);
+    const Eigen::Vector4d gJ(dJ(0, 0), dJ(0, 1), dJ(1, 0), dJ(1, 1));
+    const Eigen::Matrix4d HJ = symmetric_dirichlet_hessian(J, true);
+    // vec(J)[2r + c] = Σ_k X(tri[k], r) G(k, c): coordinate l (vertex l % 3, axis l / 3).
+    Eigen::Matrix<double, 4, 6> B = Eigen::Matrix<double, 4, 6>::Zero();
+    for (int l = 0; l < 6; ++l)
+      for (int c = 0; c < 2; ++c) B(2 * (l / 3) + c, l) = p.G[t](l % 3, c);
+    const Eigen::Matrix<double, 6, 6> H = p.weight[t] * B.transpose() * HJ * B;
+    const Eigen::Matrix<double, 6, 1> g = p.weight[t] * B.transpose() * gJ;
+    int row[6];
+    for (int l = 0; l < 6; ++l) {
+      const int v = p.tri[t][l % 3];
+      row[l] = p.dof[v] >= 0 ? 2 * p.dof[v] + l / 3 : -1;
+    }
+    for (int l = 0; l < 6; ++l) {
+      if (row[l] < 0) continue;
+      grad[row[l]] += g[l];
+      for (int m = 0; m < 6; ++m)
+        if (row[m] >= 0) trip.emplace_back(row[l], row[m], H(l, m));
+    }
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(trip.begin(), trip.end());
+  gradient_norm = grad.norm();
+  assemble_s += watch.seconds();
+  watch.reset();
+  const Eigen::VectorXd d =
+      solve_slim_system(A, -grad, Eigen::VectorXd::Zero(n), regularisation, "param (Newton)");
+  solve_s += watch.seconds();
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(p.X.rows(), 2);
+  for (int v = 0; v < int(p.dof.size()); ++v)
+    if (p.dof[v] >= 0) D.row(v) << d[2 * p.dof[v]], d[2 * p.dof[v] + 1];
+  return D;
+}
+
 }  // namespace
 
 double chart_energy(const CutMesh& cut, const Eigen::MatrixXd& uv) {
@@ -348,11 +395,74 @@ ScafResult scaf_optimize(const CutMesh& cut, const Eigen::MatrixXd& uv0,
       break;
     }
   }
+  // The projected Newton phase from the SLIM result (ScafOptions::newton_iterations).
+  if (options.newton_iterations > 0) result.newton_stop_reason = "iterations";
+  for (int k = 0; k < options.newton_iterations; ++k) {
+    Stopwatch iteration;
+    IterationStats st;
+    st.iteration = result.history.back().iteration + 1;
+    st.newton = true;
+    watch.reset();
+    scaffold = build_scaffold(result.uv, cut.boundary_loops, options.scaffold);
+    st.scaffold_s = watch.seconds();
+    const double e_prev = result.history.back().energy;
+    const Problem p =
+        make_problem(cut, rest, result.uv, scaffold, e_prev, options.scaffold_weight, false);
+    const Eigen::MatrixXd D =
+        newton_direction(p, st.assemble_s, st.solve_s, st.regularisation, st.gradient_norm);
+    watch.reset();
+    double em0 = 0, em = 0, e = 0;
+    const double e0 = evaluate(p, p.X, em0);
+    const double slope = directional_derivative(p, p.X, D);
+    st.max_step = std::min(1.0, 0.8 * flip_free_bound(p, p.X, D));
+    double t = st.max_step;
+    bool accepted = false;
+    if (slope < 0)
+      for (int b = 0; b < 60 && t >= 1e-12 * st.max_step; ++b, t *= 0.5) {
+        e = evaluate(p, p.X + t * D, em);
+        if (std::isfinite(e) && e <= e0 + options.armijo * t * slope && em <= em0) {
+          accepted = true;
+          break;
+        }
+        ++st.backtracks;
+      }
+    st.line_search_s += watch.seconds();
+    if (!accepted) {
+      result.newton_stop_reason = "line search";
+      log::debug("param: Newton iteration ", k + 1, " stops: no acceptable step");
+      break;
+    }
+    const Eigen::MatrixXd moved = p.X + t * D;
+    result.uv = moved.topRows(nu);
+    st.step = t;
+    st.energy = em;
+    st.objective = e;
+    st.lambda = p.weight.size() > std::size_t(p.n_chart_faces) ? p.weight.back() : 0.0;
+    st.scaffold_vertices = int(scaffold.V.rows());
+    st.scaffold_faces = int(scaffold.F.rows());
+    const SingularRange sv = chart_singular_values(cut, rest, result.uv);
+    st.min_singular = sv.lo;
+    st.max_singular = sv.hi;
+    st.seconds = iteration.seconds();
+    scaffold.V = moved.bottomRows(moved.rows() - nu);
+    ++result.newton_iterations;
+    report(st, scaffold);
+    log::debug("param: Newton iteration ", k + 1, " energy ", st.energy, " step ", t, " gradient ",
+               st.gradient_norm);
+    if ((e_prev - em) / e_prev < options.newton_tolerance) {
+      result.newton_stop_reason = "tolerance";
+      break;
+    }
+  }
   result.seconds = total.seconds() - callback_s;
   const IterationStats& last = result.history.back();
   log::info("param: ", cut.num_charts, " chart(s), ", cut.num_faces(), " faces: energy ",
             result.history.front().energy, " -> ", last.energy, " in ", last.iteration,
-            " iterations (", result.stop_reason, "), ", result.seconds, " s");
+            " iterations (", result.stop_reason,
+            options.newton_iterations > 0 ? "; " + std::to_string(result.newton_iterations) +
+                                                " Newton, " + result.newton_stop_reason
+                                          : std::string(),
+            "), ", result.seconds, " s");
   return result;
 }
 

@@ -19,6 +19,14 @@
 //      redone with no sliver replacement (then E_S(x_k) = 0, ∇E_S(x_k) = 0 and d is a descent
 //      direction of E_M); if that fails too, the optimisation stops ("line search").
 // Stops when the relative decrease of E_M is below `tolerance` or after `max_iterations`.
+// Then, optionally (`newton_iterations` > 0), the SLIM result is the warm start of a projected
+// Newton phase (thesis §3.3: "a few iterations minimizing the quadratic proxy and then switch to
+// a traditional Newton method until numerical convergence", after Rabinovich et al. 2017): the
+// same scaffold rebuild (no sliver replacement, so E_S(x_k) = 0), the exact gradient of E and its
+// Hessian with each triangle's 4 × 4 Hessian in J projected onto the positive semi-definite
+// cone (symmetric_dirichlet_hessian), the same CHOLMOD solve, flip-free bound and line search
+// (from t = min(1, 0.8 × the first root)). It stops when the relative decrease of E_M is below
+// `newton_tolerance`, when no step lowers E, or after `newton_iterations`.
 #pragma once
 
 #include <Eigen/Core>
@@ -48,12 +56,16 @@ struct IterationStats {
   int scaffold_vertices = 0, scaffold_faces = 0;
   double seconds = 0;  ///< wall time of this iteration (scaffold + assembly + solve + search)
   double scaffold_s = 0, assemble_s = 0, solve_s = 0, line_search_s = 0;
+  bool newton = false;       ///< a projected Newton iteration (else SLIM)
+  double gradient_norm = 0;  ///< Newton: ‖∇E‖ over the free coordinates before the step
 };
 
 struct ScafOptions {
   int max_iterations = 50;
-  double tolerance = 1e-6;        ///< stop when (E_M(k−1) − E_M(k)) / E_M(k−1) < tolerance
-  double scaffold_weight = 0.01;  ///< λ = scaffold_weight · E_M / |S|
+  double tolerance = 1e-6;          ///< stop when (E_M(k−1) − E_M(k)) / E_M(k−1) < tolerance
+  int newton_iterations = 0;        ///< projected Newton iterations after SLIM (0: none)
+  double newton_tolerance = 1e-12;  ///< the Newton phase's stop on the relative decrease of E_M
+  double scaffold_weight = 0.01;    ///< λ = scaffold_weight · E_M / |S|
   double armijo = 1e-4;
   ScaffoldOptions scaffold;
   /// Called after every iteration (and for iteration 0) with the chart UV positions (#U × 2) and
@@ -66,8 +78,10 @@ struct ScafResult {
   Eigen::MatrixXd uv;                   ///< #U × 2
   std::vector<IterationStats> history;  ///< iteration 0 .. n
   bool converged = false;
-  std::string stop_reason;  ///< "tolerance", "iterations", "line search"
-  double seconds = 0;       ///< total, excluding on_iteration callbacks
+  std::string stop_reason;         ///< "tolerance", "iterations", "line search"
+  int newton_iterations = 0;       ///< Newton iterations taken (accepted steps)
+  std::string newton_stop_reason;  ///< "tolerance", "iterations", "line search"; "" without
+  double seconds = 0;              ///< total, excluding on_iteration callbacks
   std::string solver = "cholmod-supernodal-llt";
 };
 

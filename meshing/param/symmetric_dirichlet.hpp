@@ -28,6 +28,13 @@ inline Eigen::Matrix2d symmetric_dirichlet_gradient(const Eigen::Matrix2d& J) {
   return 2.0 * J - 2.0 * Jit * Jit.transpose() * Jit;
 }
 
+/// Hessian of D in vec(J) = (J₀₀, J₀₁, J₁₀, J₁₁) (det J > 0). With N = ‖J‖²_F, δ = det J and
+/// g = ∂δ/∂vec(J) = (J₁₁, −J₁₀, −J₀₁, J₀₀), D = N (1 + δ⁻²) gives
+///   H = 2 (1 + δ⁻²) I − 4 δ⁻³ (vec(J) gᵀ + g vec(J)ᵀ) + 6 N δ⁻⁴ g gᵀ − 2 N δ⁻³ ∂²δ,
+/// ∂²δ having 1 at (0, 3), (3, 0) and −1 at (1, 2), (2, 1). `project`: its eigenvalues clamped
+/// at 0 (the nearest positive semi-definite matrix), for a Newton step that descends.
+Eigen::Matrix4d symmetric_dirichlet_hessian(const Eigen::Matrix2d& J, bool project);
+
 /// Singular values σ₁ ≥ σ₂ > 0 (det J > 0) in closed form.
 inline Eigen::Vector2d singular_values(const Eigen::Matrix2d& J) {
   const double e = 0.5 * (J(0, 0) + J(1, 1)), f = 0.5 * (J(0, 0) - J(1, 1));

@@ -35,6 +35,7 @@ struct ParamArgs {
   std::string input, output, seams, report, weights = "mean-value";
   int iterations = 50;
   double tolerance = 1e-6;
+  int newton = 0;
   bool no_check_iterations = false;
   bool init_uv = false;
   GlobalOptions global;
@@ -63,6 +64,10 @@ void register_param(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--tolerance", args->tolerance,
                   "stop when the relative energy decrease of an iteration is below this")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--newton", args->newton,
+                  "then at most this many projected Newton iterations from the SLIM result, "
+                  "until the relative energy decrease is below 1e-12 (0: none)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--weights", args->weights, "Tutte weights: mean-value or uniform")
       ->check(CLI::IsMember({"mean-value", "uniform"}));
@@ -102,6 +107,7 @@ void register_param(CLI::App& app) {
     pa::ScafOptions options;
     options.max_iterations = args->iterations;
     options.tolerance = args->tolerance;
+    options.newton_iterations = args->newton;
     nlohmann::ordered_json iterations = nlohmann::ordered_json::array();
     double check_s = 0;
     long long worst_flips = 0, worst_overlaps = 0, worst_nested = 0;
@@ -109,6 +115,9 @@ void register_param(CLI::App& app) {
     options.on_iteration = [&](const pa::IterationStats& st, const Eigen::MatrixXd& uv,
                                const pa::Scaffold&) {
       nlohmann::ordered_json j = {{"iteration", st.iteration},
+                                  {"method", st.iteration == 0 ? "initial"
+                                             : st.newton       ? "newton"
+                                                               : "slim"},
                                   {"energy", st.energy},
                                   {"objective", st.objective},
                                   {"lambda", st.lambda},
@@ -138,9 +147,12 @@ void register_param(CLI::App& app) {
         j["overlaps"] = check.overlaps;
         j["nested_charts"] = check.nested_charts;
       }
+      if (st.newton) j["gradient_norm"] = st.gradient_norm;
       iterations.push_back(j);
       if (report_progress)
-        report_progress("scaf", double(st.iteration) / std::max(1, args->iterations));
+        report_progress(st.newton ? "newton" : "scaf",
+                        st.newton ? double(st.iteration) / (st.iteration + args->newton)
+                                  : double(st.iteration) / std::max(1, args->iterations));
     };
     const pa::ScafResult result = pa::scaf_optimize(cut, uv0, options);
     stage.reset();
@@ -169,6 +181,10 @@ void register_param(CLI::App& app) {
           {"solver", result.solver},
           {"iterations", done},
           {"stop_reason", result.stop_reason},
+          {"newton_iterations", result.newton_iterations},
+          {"newton_stop_reason", args->newton > 0
+                                     ? nlohmann::ordered_json(result.newton_stop_reason)
+                                     : nlohmann::ordered_json(nullptr)},
           {"initial_energy", h.front().energy},
           {"energy", h.back().energy},
           {"min_singular_value", h.back().min_singular},
@@ -196,13 +212,15 @@ void register_param(CLI::App& app) {
       write_text_file_atomic(args->report, report.dump(2) + "\n");
     }
     std::printf(
-        "param: %d chart(s), %d faces: energy %.6g -> %.6g in %d iterations (%s), %.3g "
-        "s/iteration; "
+        "param: %d chart(s), %d faces: energy %.10g -> %.10g in %d iterations (%s; %d Newton%s%s), "
+        "%.3g s/iteration; "
         "flips %lld, overlaps %lld, nested %lld: %s; %.2f s\n",
         cut.num_charts, mesh.num_faces(), h.front().energy, h.back().energy, done,
-        result.stop_reason.c_str(), done > 0 ? iteration_s / done : 0.0, final_check.flips,
-        final_check.overlaps, final_check.nested_charts,
-        final_check.bijective() ? "bijective" : "NOT BIJECTIVE", total.seconds());
+        result.stop_reason.c_str(), result.newton_iterations,
+        result.newton_stop_reason.empty() ? "" : ", ", result.newton_stop_reason.c_str(),
+        done > 0 ? iteration_s / done : 0.0, final_check.flips, final_check.overlaps,
+        final_check.nested_charts, final_check.bijective() ? "bijective" : "NOT BIJECTIVE",
+        total.seconds());
     std::fflush(stdout);
     return final_check.bijective() ? 0 : 3;
   });

@@ -152,6 +152,26 @@ TEST(ParamCli, TorusNeedsSeams) {
   EXPECT_EQ(r["flips"], 0);
   EXPECT_EQ(r["overlaps"], 0);
   EXPECT_LT(r["energy"].get<double>(), 4.3);
+  EXPECT_EQ(r["newton_iterations"], 0);
+  EXPECT_TRUE(r["newton_stop_reason"].is_null());
+  // --newton: the SLIM iterations, then Newton ones, each named in the history and checked.
+  ASSERT_EQ(test::run_command(cli() + " param -q " + (dir / "torus.obj").string() + " -o " +
+                                  (dir / "uv_newton.obj").string() + " --seams " +
+                                  (dir / "seams.txt").string() + " --iterations 15 --newton 10 " +
+                                  "--report " + (dir / "newton.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto n = read_json(dir / "newton.json");
+  const int newton = n["newton_iterations"].get<int>();
+  EXPECT_GT(newton, 0);
+  EXPECT_LE(newton, 10);
+  EXPECT_EQ(n["iterations"].get<int>(), r["iterations"].get<int>() + newton);
+  EXPECT_EQ(n["history"].back()["method"], "newton");
+  EXPECT_TRUE(n["history"].back().contains("gradient_norm"));
+  EXPECT_EQ(n["max_flips_over_iterations"], 0);
+  EXPECT_EQ(n["max_overlaps_over_iterations"], 0);
+  EXPECT_LT(n["energy"].get<double>(), r["energy"].get<double>());
 }
 
 // --init-uv: the output of one run restarts the next from its own vt (same energy: the vt are

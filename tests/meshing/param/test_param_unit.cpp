@@ -3,6 +3,7 @@
 // on hand-made flips, overlaps and nesting (it must be able to fail).
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "meshing/core/error.hpp"
@@ -40,6 +41,46 @@ TEST(ParamEnergy, SymmetricDirichletValues) {
   const double h = 1e-6;
   const double fd = (symmetric_dirichlet(J + h * dJ) - symmetric_dirichlet(J - h * dJ)) / (2 * h);
   EXPECT_NEAR(symmetric_dirichlet_gradient(J).cwiseProduct(dJ).sum(), fd, 1e-7);
+}
+
+// The Hessian of the Newton phase: against central differences of the gradient, symmetric, and
+// its projection positive semi-definite, equal to it where it is already (near a rotation), and
+// different where it is not (a strongly stretched J, where D is not convex in J).
+TEST(ParamEnergy, SymmetricDirichletHessian) {
+  auto vec = [](const Eigen::Matrix2d& M) {
+    return Eigen::Vector4d(M(0, 0), M(0, 1), M(1, 0), M(1, 1));
+  };
+  int indefinite = 0;
+  for (const Eigen::Matrix2d& J :
+       {Eigen::Matrix2d{{1.3, 0.4}, {-0.2, 0.7}}, Eigen::Matrix2d{{1.02, 0.01}, {-0.03, 0.99}},
+        Eigen::Matrix2d{{6.0, 0.5}, {0.3, 0.2}}, Eigen::Matrix2d{{0.1, -0.05}, {0.02, 0.15}}}) {
+    const Eigen::Matrix4d H = symmetric_dirichlet_hessian(J, false);
+    EXPECT_NEAR((H - H.transpose()).norm(), 0, 1e-12 * H.norm());
+    const double h = 1e-6 * J.norm();
+    for (int i = 0; i < 4; ++i) {
+      Eigen::Matrix2d dJ = Eigen::Matrix2d::Zero();
+      dJ(i / 2, i % 2) = h;
+      const Eigen::Vector4d fd =
+          (vec(symmetric_dirichlet_gradient(J + dJ)) - vec(symmetric_dirichlet_gradient(J - dJ))) /
+          (2 * h);
+      EXPECT_LT((H.col(i) - fd).norm(), 1e-6 * H.norm()) << "column " << i << " of\n" << J;
+    }
+    const Eigen::Matrix4d P = symmetric_dirichlet_hessian(J, true);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eh(H), ep(P);
+    EXPECT_GE(ep.eigenvalues().minCoeff(), -1e-12 * H.norm());
+    if (eh.eigenvalues().minCoeff() > 0) {
+      EXPECT_NEAR((P - H).norm(), 0, 1e-10 * H.norm());
+    } else {
+      ++indefinite;
+      EXPECT_GT((P - H).norm(), 1e-6 * H.norm());
+    }
+  }
+  EXPECT_GE(indefinite, 1);  // the stretched J: the projection is exercised
+  // At a rotation D's Hessian is 8 in the stretch directions and 0 along the rotation.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> at_identity(
+      symmetric_dirichlet_hessian(Eigen::Matrix2d::Identity(), false));
+  EXPECT_NEAR(at_identity.eigenvalues()[0], 0.0, 1e-12);
+  EXPECT_NEAR(at_identity.eigenvalues()[3], 8.0, 1e-12);
 }
 
 TEST(ParamCut, TorusNeedsSeamsAndBadSeamsAreRejected) {

@@ -25,11 +25,12 @@ struct CheckedRun {
 };
 
 // Optimises and checks the charts (and the charts + scaffold together) after every iteration.
-CheckedRun run_checked(const CutMesh& cut, int iterations, double tolerance = 0) {
+CheckedRun run_checked(const CutMesh& cut, int iterations, double tolerance = 0, int newton = 0) {
   CheckedRun run;
   ScafOptions options;
   options.max_iterations = iterations;
   options.tolerance = tolerance;
+  options.newton_iterations = newton;
   options.on_iteration = [&](const IterationStats&, const Eigen::MatrixXd& uv, const Scaffold& s) {
     const UvCheck c = check_uv_map(uv, cut.F);
     run.worst_flips = std::max(run.worst_flips, c.flips);
@@ -143,4 +144,35 @@ TEST(ParamScaf, SphereCutAlongAPath) {
   EXPECT_LT(h.back().energy, 0.75 * h.front().energy);
   EXPECT_GT(h.back().min_singular, 0);
   EXPECT_TRUE(check_uv_map(run.result.uv, cut.F).bijective());
+}
+
+// The Newton phase (thesis §3.3, after Rabinovich et al.): from SLIM stopped at a relative
+// decrease of 1e-6, projected Newton goes on to numerical convergence. Checked like every SCAF
+// run after each iteration (no flip, no overlap, charts + scaffold a tiling, E_M monotone); it
+// must end below the SLIM result of the same tolerance and below a 200-iteration SLIM reference
+// at 1e-10, take full steps at the end, and shrink the gradient of E.
+TEST(ParamScaf, NewtonPhaseConvergesFromTheSlimResult) {
+  auto [torus, seams] = test::cut_torus(2, 0.8, 40, 16);
+  const CutMesh cut = cut_into_charts(torus, seams);
+  const CheckedRun slim = run_checked(cut, 100, 1e-6);
+  const CheckedRun newton = run_checked(cut, 100, 1e-6, 40);
+  const double reference = reference_energy(cut, 200);
+  expect_valid(cut, newton, reference);
+  const auto& h = newton.result.history;
+  ASSERT_GT(newton.result.newton_iterations, 2);
+  EXPECT_EQ(newton.result.history.size(),
+            slim.result.history.size() + std::size_t(newton.result.newton_iterations));
+  const IterationStats& first = h[h.size() - std::size_t(newton.result.newton_iterations)];
+  ASSERT_TRUE(first.newton);
+  EXPECT_FALSE(h[h.size() - std::size_t(newton.result.newton_iterations) - 1].newton);
+  std::printf(
+      "SLIM %.12f in %d iterations; + %d Newton (%s) %.12f; reference %.12f; gradient "
+      "%.3g -> %.3g\n",
+      slim.result.history.back().energy, slim.result.history.back().iteration,
+      newton.result.newton_iterations, newton.result.newton_stop_reason.c_str(), h.back().energy,
+      reference, first.gradient_norm, h.back().gradient_norm);
+  EXPECT_LT(h.back().energy, slim.result.history.back().energy);
+  EXPECT_LE(h.back().energy, reference + 1e-12);
+  EXPECT_EQ(h.back().step, 1.0);
+  EXPECT_LT(h.back().gradient_norm, 0.1 * first.gradient_norm);
 }
