@@ -102,6 +102,9 @@ with tempfile.TemporaryDirectory() as work:
         for t in F:
             f.write("f %d %d %d\n" % (t[0] + 1, t[1] + 1, t[2] + 1))
     rows.append(run("split_ring_tangled", tangled, ["--untangle"], work))
+    # The thesis' way back (Fig. 3.9): no positional targets, the surface ARAP term alone.
+    rows.append(run("split_ring_tangled_arap", tangled,
+                    ["--untangle", "--arap", "1000", "--no-way-back-targets"], work))
     for name in args.dev:
         path = os.path.join(args.data, name + ".obj")
         if not os.path.exists(path):
@@ -154,17 +157,25 @@ lines.append("")
 unt = [row for row in rows if row["report"].get("untangle")]
 if unt:
     lines.append("With --untangle (naive = the input's own self-intersecting pairs): the flow, and "
-                 "the distance of the result to the input (/ the input's bounding box diagonal).")
+                 "the distance of the result to the input (/ the input's bounding box diagonal). "
+                 "Way back: positional targets at every vertex (the default), or the surface ARAP "
+                 "term alone (`--arap W --no-way-back-targets`, the thesis' way). Edge length "
+                 "error: |l - l0| / l0 over the surface edges against the input (its shape).")
     lines.append("")
-    lines.append("| input | input pairs | flow steps | pairs after each flow step | flow s | max "
-                 "distance | mean distance |")
-    lines.append("|---|---|---|---|---|---|---|")
+    lines.append("| input | way back | input pairs | flow steps | pairs after each flow step | "
+                 "flow s | max distance | mean distance | edge length error mean / max |")
+    lines.append("|---|---|---|---|---|---|---|---|---|")
     for row in unt:
         u = row["report"]["untangle"]
-        lines.append("| %s | %d | %d | %s | %.3f | %.3g | %.3g |" %
-                     (row["name"], u["input_self_intersecting_pairs"], u["flow_steps"],
+        way = ("targets" if u.get("way_back_targets", True) else "ARAP") + (
+            " + ARAP %g" % row["report"]["arap_weight"]
+            if u.get("way_back_targets", True) and row["report"].get("arap_weight", 0) > 0 else
+            " %g" % row["report"]["arap_weight"] if not u.get("way_back_targets", True) else "")
+        lines.append("| %s | %s | %d | %d | %s | %.3f | %.3g | %.3g | %.3g / %.3g |" %
+                     (row["name"], way, u["input_self_intersecting_pairs"], u["flow_steps"],
                       ", ".join(map(str, u["pairs_after_each_flow_step"])), u["flow_s"],
-                      u["max_distance_to_input_rel"], u["mean_distance_to_input_rel"]))
+                      u["max_distance_to_input_rel"], u["mean_distance_to_input_rel"],
+                      u["edge_length_error_mean"], u["edge_length_error_max"]))
     lines.append("")
 lines.append("Commands (paths relative to the temporary work folder):")
 lines.append("")

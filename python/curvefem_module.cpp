@@ -419,7 +419,7 @@ PYBIND11_MODULE(_curvefem, m) {
       "deform",
       [](const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const Eigen::VectorXi& target_vertices,
          const Eigen::MatrixXd& target_positions, double grow, double box, int iterations,
-         double tolerance, bool untangle, int threads) {
+         double tolerance, bool untangle, double arap, bool way_back_targets, int threads) {
         namespace pa = meshing::param;
         if (target_vertices.size() != target_positions.rows() ||
             (target_positions.size() > 0 && target_positions.cols() != 3))
@@ -437,6 +437,8 @@ PYBIND11_MODULE(_curvefem, m) {
         request.options.max_iterations = iterations;
         request.options.tolerance = tolerance;
         request.untangle = untangle;
+        request.options.arap_weight = arap;
+        request.untangle_options.way_back_targets = way_back_targets;
         py::gil_scoped_release release;
         const auto limit = limit_threads(threads);
         // The same validation and exact checks as `curvefem deform` (meshing/param/deform.hpp).
@@ -449,7 +451,10 @@ PYBIND11_MODULE(_curvefem, m) {
               {"genus", outcome.untangle->genus},
               {"flow_steps", outcome.untangle->flow_pairs.size()},
               {"max_distance_to_input_rel", outcome.untangle->max_distance_rel},
-              {"mean_distance_to_input_rel", outcome.untangle->mean_distance_rel}};
+              {"mean_distance_to_input_rel", outcome.untangle->mean_distance_rel},
+              {"way_back_targets", way_back_targets},
+              {"edge_length_error_mean", outcome.untangle->edge_length_error_mean},
+              {"edge_length_error_max", outcome.untangle->edge_length_error_max}};
         nlohmann::ordered_json energy = nlohmann::ordered_json::array();
         for (const auto& st : result.history) energy.push_back(st.energy);
         report["iterations"] = result.history.back().iteration;
@@ -468,8 +473,11 @@ PYBIND11_MODULE(_curvefem, m) {
       },
       py::arg("V"), py::arg("F"), py::arg("target_vertices"), py::arg("target_positions"),
       py::arg("grow") = 1.0, py::arg("box") = 2.0, py::arg("iterations") = 50,
-      py::arg("tolerance") = 1e-5, py::arg("untangle") = false, py::arg("threads") = 0,
-      "SCAF with a tet scaffold (meshing/param/scaf3d.hpp); returns (V, report JSON text).");
+      py::arg("tolerance") = 1e-5, py::arg("untangle") = false, py::arg("arap") = 0.0,
+      py::arg("way_back_targets") = true, py::arg("threads") = 0,
+      "SCAF with a tet scaffold (meshing/param/scaf3d.hpp); returns (V, report JSON text). arap: "
+      "weight of a surface ARAP term toward the input's shape; way_back_targets=False with "
+      "untangle: the ARAP term alone brings the surface back (thesis Fig. 3.9).");
 
   m.def(
       "run_study",

@@ -14,6 +14,8 @@ DeformOutcome deform_checked(const SurfaceMesh& surface, DeformRequest request) 
   if (request.untangle && (!request.targets.empty() || request.options.grow != 1.0))
     throw InputError(
         "deform: untangle takes no targets or grow (its targets are the input's vertices)");
+  if (!request.untangle && !request.untangle_options.way_back_targets)
+    throw InputError("deform: the way back without targets is an untangle option");
   if (!request.untangle && request.targets.empty() && request.options.grow == 1.0)
     throw InputError("deform: nothing to do: give targets, grow (!= 1) or untangle");
   DeformOutcome out;

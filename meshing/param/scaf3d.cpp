@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
@@ -56,6 +57,39 @@ struct Problem {
   std::vector<double> weight;  // V_t / V_M on the object, λ on the scaffold
   std::vector<PositionTarget> targets;
   double target_weight = 0;  // w / L² per target
+  // Surface ARAP (Deform3dOptions::arap_weight): directed surface edges (i, j) by vertex i, their
+  // rest vectors y_i − y_j, and w_A / Σ ‖y_i − y_j‖².
+  const std::vector<std::vector<std::pair<int, Eigen::Vector3d>>>* arap_out = nullptr;
+  double arap_scale = 0;
+
+  // The rotation closest to vertex i's covariance Σ_j e0 (x_i − x_j)ᵀ at P (Sorkine and Alexa).
+  Eigen::Matrix3d arap_rotation(int i, const Eigen::MatrixXd& P) const {
+    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+    for (const auto& [j, e0] : (*arap_out)[std::size_t(i)]) S += e0 * (P.row(i) - P.row(j));
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(S, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d V = svd.matrixV();
+    Eigen::Matrix3d R = V * svd.matrixU().transpose();
+    if (R.determinant() < 0) {
+      V.col(2) *= -1;
+      R = V * svd.matrixU().transpose();
+    }
+    return R;
+  }
+  // The ARAP term at P (its rotations optimal at P) and, with D, its derivative along D.
+  double arap_energy(const Eigen::MatrixXd& P, const Eigen::MatrixXd* D, double* slope) const {
+    if (!arap_out || !(arap_scale > 0)) return 0;
+    double e = 0, g = 0;
+    for (int i = 0; i < int(arap_out->size()); ++i) {
+      const Eigen::Matrix3d R = arap_rotation(i, P);
+      for (const auto& [j, e0] : (*arap_out)[std::size_t(i)]) {
+        const Eigen::Vector3d r = (P.row(i) - P.row(j)).transpose() - R * e0;
+        e += r.squaredNorm();
+        if (D) g += 2 * r.dot((D->row(i) - D->row(j)).transpose());
+      }
+    }
+    if (slope) *slope = arap_scale * g;
+    return arap_scale * e;
+  }
 
   Eigen::Matrix3d jacobian(int t, const Eigen::MatrixXd& P) const {
     Mat43 Q;
@@ -80,7 +114,7 @@ double evaluate(const Problem& p, const Eigen::MatrixXd& P, double& object) {
   for (const PositionTarget& c : p.targets)
     ec += p.target_weight * (P.row(c.vertex).transpose() - c.target).squaredNorm();
   object = em;
-  return em + es + ec;
+  return em + es + ec + p.arap_energy(P, nullptr, nullptr);
 }
 
 double directional_derivative(const Problem& p, const Eigen::MatrixXd& P,
@@ -91,7 +125,9 @@ double directional_derivative(const Problem& p, const Eigen::MatrixXd& P,
          symmetric_dirichlet_gradient_3d(p.jacobian(t, P)).cwiseProduct(p.jacobian(t, D)).sum();
   for (const PositionTarget& c : p.targets)
     g += 2 * p.target_weight * (P.row(c.vertex).transpose() - c.target).dot(D.row(c.vertex));
-  return g;
+  double arap = 0;
+  p.arap_energy(P, &D, &arap);
+  return g + arap;
 }
 
 // First root in (0, T] of the cubic c3 t³ + c2 t² + c1 t + c0 with c0 > 0 (T if none): the
@@ -193,6 +229,25 @@ Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_
       trip.emplace_back(r, r, p.target_weight);
       rhs[r] += p.target_weight * c.target[i];
     }
+  // ARAP's global step with the rotations of x_k: s ‖(x_i − x_j) − R_i e0‖² per directed edge
+  // (surface vertices are never fixed).
+  if (p.arap_out && p.arap_scale > 0)
+    for (int i = 0; i < int(p.arap_out->size()); ++i) {
+      const Eigen::Matrix3d R = p.arap_rotation(i, p.X);
+      for (const auto& [j, e0] : (*p.arap_out)[std::size_t(i)]) {
+        const Eigen::Vector3d r = R * e0;
+        const double s = p.arap_scale;
+        for (int k = 0; k < 3; ++k) {
+          const int a = 3 * p.dof[std::size_t(i)] + k, b = 3 * p.dof[std::size_t(j)] + k;
+          trip.emplace_back(a, a, s);
+          trip.emplace_back(b, b, s);
+          trip.emplace_back(a, b, -s);
+          trip.emplace_back(b, a, -s);
+          rhs[a] += s * r[k];
+          rhs[b] -= s * r[k];
+        }
+      }
+    }
   Eigen::SparseMatrix<double> A(n, n);
   A.setFromTriplets(trip.begin(), trip.end());
   assemble_s += watch.seconds();
@@ -293,6 +348,35 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
       make_box(centre - half, centre + half, std::max(1, options.box_divisions));
   L.nb = int(box.V.rows());
   const double diag = (2 * half).norm();
+  // Surface ARAP's directed edges and rest vectors (Deform3dOptions::arap_weight).
+  std::vector<std::vector<std::pair<int, Eigen::Vector3d>>> arap_out;
+  double arap_scale = 0;
+  if (!(options.arap_weight >= 0) || !std::isfinite(options.arap_weight))
+    throw InputError("scaf3d: the ARAP weight must be finite and >= 0");
+  if (options.arap_weight > 0) {
+    const Eigen::MatrixXd rest = options.arap_rest.size() > 0
+                                     ? options.arap_rest
+                                     : Eigen::MatrixXd(options.grow * surface.V);
+    if (rest.rows() != ns || rest.cols() != 3 || !rest.allFinite())
+      throw InputError("scaf3d: the ARAP rest positions need one finite row (x, y, z) per vertex");
+    arap_out.resize(std::size_t(ns));
+    std::vector<std::vector<int>> seen(static_cast<std::size_t>(ns));
+    double total = 0;
+    for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = surface.F(f, k), b = surface.F(f, (k + 1) % 3);
+        for (const auto& [i, j] : {std::pair{a, b}, std::pair{b, a}}) {
+          auto& s = seen[std::size_t(i)];
+          if (std::find(s.begin(), s.end(), j) != s.end()) continue;
+          s.push_back(j);
+          const Eigen::Vector3d e0 = (rest.row(i) - rest.row(j)).transpose();
+          arap_out[std::size_t(i)].emplace_back(j, e0);
+          total += e0.squaredNorm();
+        }
+      }
+    if (!(total > 0)) throw InputError("scaf3d: the ARAP rest shape has no edge length");
+    arap_scale = options.arap_weight / total;
+  }
 
   std::vector<Mat43> object_G(std::size_t(object.T.rows()));
   std::vector<double> object_w(std::size_t(object.T.rows()));
@@ -341,6 +425,10 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     }
     p.targets = targets;
     p.target_weight = options.target_weight / (diag * diag);
+    if (arap_scale > 0) {
+      p.arap_out = &arap_out;
+      p.arap_scale = arap_scale;
+    }
     return p;
   };
   auto measure = [&](const Problem& p, const Eigen::MatrixXd& P, Deform3dIteration& st) {
@@ -369,6 +457,7 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
       st.target_error =
           std::max(st.target_error, (P.row(c.vertex).transpose() - c.target).norm() / diag);
     st.scaffold_tets = int(scaffold.T.rows());
+    st.arap = arap_scale > 0 ? p.arap_energy(P, nullptr, nullptr) / options.arap_weight : 0.0;
   };
   auto report = [&](const Deform3dIteration& st) {
     result.history.push_back(st);

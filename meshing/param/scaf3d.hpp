@@ -11,11 +11,13 @@
 //   1. rebuild the scaffold between the box and the current surface (meshing/tetfill, Gmsh);
 //      where Gmsh fails (surfaces closer than its boundary recovery handles) the previous
 //      scaffold, moved with the last step and still positive, is kept;
-//   2. objective E = E_M + λ Σ_S (D(J_t) − 6) + w Σ_c ‖x_c − y_c‖² / L², with E_M the
+//   2. objective E = E_M + λ Σ_S (D(J_t) − 6) + w Σ_c ‖x_c − y_c‖² / L² (+ the surface ARAP term
+//      of `arap_weight`), with E_M the
 //      volume-weighted mean symmetric Dirichlet energy of the object (≥ 6, 6 for a rigid motion
 //      of the rest shape), λ = scaffold_weight · E_M / |S|, y_c the positional targets, L the
 //      box diagonal;
-//   3. SLIM proxy Σ c_t ‖W_t (J_t(x) − R_t)‖²_F + the constraint term: a sparse SPD system in the
+//   3. SLIM proxy Σ c_t ‖W_t (J_t(x) − R_t)‖²_F + the constraint term (+ ARAP's global step, its
+//      rotations those of x_k): a sparse SPD system in the
 //      free coordinates (box corners fixed), CHOLMOD supernodal Cholesky;
 //   4. flip-free line search along d = x* − x: t ≤ 0.8 × the first root in (0, 1.25] of every
 //      tet's volume (a cubic in t), t ≤ 1, then halving until Armijo holds on E.
@@ -46,6 +48,7 @@ struct Deform3dIteration {
   double energy = 0;        ///< E_M (≥ 6)
   double objective = 0;     ///< E at the accepted step
   double target_error = 0;  ///< max ‖x_c − y_c‖ / L over the targets
+  double arap = 0;          ///< the ARAP term / w_A (relative; 0 at a rigid motion of the rest)
   double step = 0, max_step = 0;
   int backtracks = 0;
   double min_singular = 0, max_singular = 0;  ///< over object tets
@@ -60,6 +63,14 @@ struct Deform3dOptions {
   double tolerance = 1e-5;        ///< on the relative decrease of the objective E
   double scaffold_weight = 0.01;  ///< λ = scaffold_weight · E_M / |S|
   double target_weight = 1e4;     ///< w of the positional targets (per target, distances / L)
+  /// w_A of the surface ARAP term toward the rest pose (Sorkine and Alexa 2007; thesis Fig. 3.9's
+  /// way back): w_A Σ_i Σ_{j ∈ N(i)} ‖(x_i − x_j) − R_i (y_i − y_j)‖² / Σ_i Σ_j ‖y_i − y_j‖², over
+  /// the surface's directed edges with uniform weights, R_i the rotation closest to the vertex's
+  /// edge covariance. Rotation-invariant per vertex: a part that cannot return to its rest
+  /// position keeps its rest shape. 0: off.
+  double arap_weight = 0;
+  /// The ARAP rest positions y (#V × 3); empty: the input surface scaled by `grow`.
+  Eigen::MatrixXd arap_rest;
   double grow = 1.0;  ///< rest shape = the input scaled by this (no centre: E is rigid-invariant)
   /// box: the bounding box of the input and the targets, widened on every side by
   /// (box_scale − 1) / 2 × its longest extent

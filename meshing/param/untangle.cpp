@@ -102,6 +102,9 @@ UntangleResult untangle_surface(const SurfaceMesh& input, const UntangleOptions&
   UntangleResult result;
   const Eigen::MatrixXd& V0 = input.V;
   const Eigen::MatrixXi& F = input.F;
+  if (!options.way_back_targets && !(options.deform.arap_weight > 0))
+    throw InputError(
+        "untangle: without targets the way back needs the ARAP term (an ARAP weight > 0)");
   result.input_pairs = check::count_self_intersecting_pairs(V0, F);
   if (result.input_pairs == 0)
     throw InputError("untangle: the surface has no self-intersection: nothing to do");
@@ -151,16 +154,34 @@ UntangleResult untangle_surface(const SurfaceMesh& input, const UntangleOptions&
             result.flow_pairs.size(), " flow steps in ", result.flow_seconds, " s");
   // The way back: every vertex pulled toward its input position inside the scaffold.
   std::vector<PositionTarget> targets;
-  targets.reserve(std::size_t(V0.rows()));
-  for (Eigen::Index v = 0; v < V0.rows(); ++v) targets.push_back({int(v), V0.row(v).transpose()});
+  if (options.way_back_targets) {
+    targets.reserve(std::size_t(V0.rows()));
+    for (Eigen::Index v = 0; v < V0.rows(); ++v) targets.push_back({int(v), V0.row(v).transpose()});
+  }
   SurfaceMesh flowed = input;
   flowed.V = X;
-  result.back = scaf3d_deform(flowed, targets, options.deform);
+  Deform3dOptions back = options.deform;
+  if (back.arap_weight > 0 && back.arap_rest.size() == 0) back.arap_rest = V0;  // the input's shape
+  result.back = scaf3d_deform(flowed, targets, back);
   result.V = result.back.V;
   const double diag = (V0.colwise().maxCoeff() - V0.colwise().minCoeff()).norm();
   const Eigen::VectorXd d = (result.V - V0).rowwise().norm();
   result.max_distance_rel = d.maxCoeff() / diag;
   result.mean_distance_rel = d.mean() / diag;
+  double sum = 0;
+  int edges = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      if (a > b) continue;  // each edge of a closed surface once (from the face with a < b)
+      const double l0 = (V0.row(a) - V0.row(b)).norm(),
+                   l = (result.V.row(a) - result.V.row(b)).norm();
+      const double e = std::abs(l - l0) / l0;
+      sum += e;
+      result.edge_length_error_max = std::max(result.edge_length_error_max, e);
+      ++edges;
+    }
+  result.edge_length_error_mean = edges > 0 ? sum / edges : 0.0;
   return result;
 }
 

@@ -62,3 +62,13 @@ def test_untangle_and_bad_input(tmp_path):
         curvefem.deform(crossed, F, {0: V[0]})
     with pytest.raises(curvefem.InputError, match="not a vertex"):
         curvefem.deform(V, F, {len(V) + 5: (0, 0, 0)})
+    # the thesis' way back: the ARAP term alone (no positional targets); without it, refused
+    W2, report2 = curvefem.deform(crossed, F, untangle=True, iterations=10, arap=1000.0,
+                                  way_back_targets=False)
+    assert report2["valid"] is True
+    assert report2["untangle"]["way_back_targets"] is False
+    assert report2["untangle"]["edge_length_error_mean"] < 0.1
+    with pytest.raises(curvefem.InputError, match="ARAP"):
+        curvefem.deform(crossed, F, untangle=True, way_back_targets=False)
+    with pytest.raises(curvefem.InputError, match="untangle option"):
+        curvefem.deform(V, F, {0: V[0]}, way_back_targets=False)

@@ -30,6 +30,7 @@ struct DeformArgs {
   std::string input, output, targets, report;
   pa::Deform3dOptions options;
   bool untangle = false;
+  bool no_way_back_targets = false;
   pa::UntangleOptions untangle_options;
   GlobalOptions global;
 };
@@ -61,6 +62,10 @@ void register_deform(CLI::App& app) {
   sub->add_option("--target-weight", args->options.target_weight,
                   "weight of the targets (squared distances relative to the box diagonal)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--arap", args->options.arap_weight,
+                  "weight of a surface ARAP term toward the input's shape (rotation-invariant per "
+                  "vertex; with --untangle the thesis' way back); 0: none")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--untangle", args->untangle,
                 "remove the input's self-intersections (genus 0): a conformalized mean curvature "
                 "flow until embedded, then every vertex pulled back toward its input position "
@@ -71,6 +76,9 @@ void register_deform(CLI::App& app) {
   sub->add_option("--flow-steps", args->untangle_options.max_flow_steps,
                   "--untangle: at most this many flow steps")
       ->check(CLI::PositiveNumber);
+  sub->add_flag("--no-way-back-targets", args->no_way_back_targets,
+                "--untangle: no positional targets on the way back, only the ARAP term (needs "
+                "--arap)");
   sub->add_option("--report", args->report, "write report.json here");
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
@@ -87,11 +95,13 @@ void register_deform(CLI::App& app) {
     request.options = args->options;
     request.untangle = args->untangle;
     request.untangle_options = args->untangle_options;
+    request.untangle_options.way_back_targets = !args->no_way_back_targets;
     request.observe = [&](const pa::Deform3dIteration& st, const Eigen::MatrixXd&, int pairs) {
       iterations.push_back({{"iteration", st.iteration},
                             {"energy", st.energy},
                             {"objective", st.objective},
                             {"target_error_rel", st.target_error},
+                            {"arap", st.arap},
                             {"step", st.step},
                             {"max_step", st.max_step},
                             {"backtracks", st.backtracks},
@@ -122,7 +132,10 @@ void register_deform(CLI::App& app) {
                        {"pairs_after_each_flow_step", u.flow_pairs},
                        {"flow_s", u.flow_seconds},
                        {"max_distance_to_input_rel", u.max_distance_rel},
-                       {"mean_distance_to_input_rel", u.mean_distance_rel}};
+                       {"mean_distance_to_input_rel", u.mean_distance_rel},
+                       {"way_back_targets", !args->no_way_back_targets},
+                       {"edge_length_error_mean", u.edge_length_error_mean},
+                       {"edge_length_error_max", u.edge_length_error_max}};
     }
     const bool ok = outcome.valid();
     // A surface that failed a check is not written (exit 3); the report says why.
@@ -143,6 +156,7 @@ void register_deform(CLI::App& app) {
           {"untangle", untangle_json},
           {"grow", args->options.grow},
           {"box_scale", args->options.box_scale},
+          {"arap_weight", args->options.arap_weight},
           {"vertices", mesh.num_vertices()},
           {"faces", mesh.num_faces()},
           {"object_tets", result.object_tets.rows()},

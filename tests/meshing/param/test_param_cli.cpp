@@ -314,5 +314,19 @@ TEST(DeformCli, EndsOfASplitRingPulledAcrossStayApartAndBadInputIsRefused) {
                               &out),
             2)
       << out;
+  // The ARAP way back: without --arap nothing would pull the surface back; without --untangle
+  // the flag means nothing. Both refused with exit 2 and no output.
+  EXPECT_EQ(test::run_command(cli() + " deform " + (dir / "tangled.obj").string() + " -o " +
+                                  (dir / "x.obj").string() + " --untangle --no-way-back-targets",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("ARAP"), std::string::npos) << out;
+  EXPECT_EQ(test::run_command(cli() + " deform " + in + " -o " + (dir / "x.obj").string() +
+                                  " --grow 1.5 --no-way-back-targets",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("untangle option"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir / "x.obj"));
 }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -186,6 +187,41 @@ TEST(Untangle, ASplitRingWhoseEndsCrossIsSeparatedThenPulledBackUntilTheEndsMeet
   EXPECT_GT(r.max_distance_rel * diag, 0.1);
   // An embedded surface is refused: nothing to do.
   EXPECT_THROW(untangle_surface(c.ring, options), InputError);
+}
+
+// The thesis' way back (Fig. 3.9): no positional targets, a surface ARAP term toward the input's
+// shape. The ring comes back embedded (exact count, valid tiling) with its shape closer to the
+// input's than the targets' way back gives (edge lengths), though not at the input's position
+// (ARAP is rotation- and translation-invariant). Without targets and without ARAP nothing would
+// pull it back: refused.
+TEST(Untangle, TheArapWayBackKeepsTheInputsShape) {
+  const RingCase c = split_ring_case();
+  SurfaceMesh tangled = c.ring;
+  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  UntangleOptions targets;
+  targets.deform.max_iterations = 25;
+  const UntangleResult by_targets = untangle_surface(tangled, targets);
+  UntangleOptions arap = targets;
+  arap.way_back_targets = false;
+  arap.deform.arap_weight = 1000;
+  const UntangleResult by_arap = untangle_surface(tangled, arap);
+  std::printf(
+      "edge length error mean / max: targets %.4f / %.4f, ARAP %.4f / %.4f; mean distance "
+      "to the input %.4f, %.4f; ARAP term %.3g -> %.3g\n",
+      by_targets.edge_length_error_mean, by_targets.edge_length_error_max,
+      by_arap.edge_length_error_mean, by_arap.edge_length_error_max, by_targets.mean_distance_rel,
+      by_arap.mean_distance_rel, by_arap.back.history.front().arap,
+      by_arap.back.history.back().arap);
+  EXPECT_EQ(check::count_self_intersecting_pairs(by_arap.V, tangled.F), 0);
+  EXPECT_TRUE(verify_scaf3d(tangled, by_arap.back).ok());
+  EXPECT_LT(by_arap.edge_length_error_mean, 0.7 * by_targets.edge_length_error_mean);
+  EXPECT_LT(by_arap.edge_length_error_max, by_targets.edge_length_error_max);
+  EXPECT_LT(by_arap.back.history.back().arap, 0.2 * by_arap.back.history.front().arap);
+  EXPECT_EQ(by_targets.back.history.back().arap, 0.0);  // off: not computed
+  for (const Deform3dIteration& st : by_arap.back.history) EXPECT_GT(st.min_volume_rel, 0);
+  UntangleOptions neither = targets;
+  neither.way_back_targets = false;
+  EXPECT_THROW(untangle_surface(tangled, neither), InputError);
 }
 
 TEST(Untangle, TheGenusIsReportedAndTheRingIsGenusZero) {
