@@ -419,7 +419,8 @@ PYBIND11_MODULE(_curvefem, m) {
       "deform",
       [](const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const Eigen::VectorXi& target_vertices,
          const Eigen::MatrixXd& target_positions, double grow, double box, int iterations,
-         double tolerance, bool untangle, double arap, bool way_back_targets, int threads) {
+         double tolerance, bool untangle, double arap, bool way_back_targets,
+         double rebuild_quality, int threads) {
         namespace pa = meshing::param;
         if (target_vertices.size() != target_positions.rows() ||
             (target_positions.size() > 0 && target_positions.cols() != 3))
@@ -438,6 +439,7 @@ PYBIND11_MODULE(_curvefem, m) {
         request.options.tolerance = tolerance;
         request.untangle = untangle;
         request.options.arap_weight = arap;
+        request.options.rebuild_quality = rebuild_quality;
         request.untangle_options.way_back_targets = way_back_targets;
         py::gil_scoped_release release;
         const auto limit = limit_threads(threads);
@@ -469,15 +471,18 @@ PYBIND11_MODULE(_curvefem, m) {
         report["tiling_boundary_mismatches"] = outcome.tiling.boundary_mismatches;
         report["valid"] = outcome.valid();
         report["seconds"] = result.seconds;
+        report["scaffold_kept"] = result.scaffold_kept;
         return std::make_tuple(result.V, report.dump());
       },
       py::arg("V"), py::arg("F"), py::arg("target_vertices"), py::arg("target_positions"),
       py::arg("grow") = 1.0, py::arg("box") = 2.0, py::arg("iterations") = 50,
       py::arg("tolerance") = 1e-5, py::arg("untangle") = false, py::arg("arap") = 0.0,
-      py::arg("way_back_targets") = true, py::arg("threads") = 0,
+      py::arg("way_back_targets") = true, py::arg("rebuild_quality") = 0.5, py::arg("threads") = 0,
       "SCAF with a tet scaffold (meshing/param/scaf3d.hpp); returns (V, report JSON text). arap: "
       "weight of a surface ARAP term toward the input's shape; way_back_targets=False with "
-      "untangle: the ARAP term alone brings the surface back (thesis Fig. 3.9).");
+      "untangle: the ARAP term alone brings the surface back (thesis Fig. 3.9); rebuild_quality: "
+      "the scaffold is rebuilt when its worst tet fell below this x the last rebuild's (0: every "
+      "iteration).");
 
   m.def(
       "run_study",

@@ -431,6 +431,19 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     }
     return p;
   };
+  // The worst scaffold tet shape at P: min of 6√2 V / ℓ_rms³ (0 without scaffold tets).
+  auto scaffold_quality = [](const Problem& p, const Eigen::MatrixXd& P) {
+    double worst = k_inf;
+    for (int t = p.n_object; t < int(p.tet.size()); ++t) {
+      const Eigen::Vector4i& c = p.tet[std::size_t(t)];
+      double l2 = 0;
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) l2 += (P.row(c[a]) - P.row(c[b])).squaredNorm();
+      const double rms = std::sqrt(l2 / 6);
+      worst = std::min(worst, std::sqrt(2.0) * edge_matrix(P, c).determinant() / (rms * rms * rms));
+    }
+    return worst < k_inf ? worst : 0.0;
+  };
   auto measure = [&](const Problem& p, const Eigen::MatrixXd& P, Deform3dIteration& st) {
     SingularRange r;
     double vmin = k_inf;
@@ -457,6 +470,7 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
       st.target_error =
           std::max(st.target_error, (P.row(c.vertex).transpose() - c.target).norm() / diag);
     st.scaffold_tets = int(scaffold.T.rows());
+    st.scaffold_min_quality = scaffold_quality(p, P);
     st.arap = arap_scale > 0 ? p.arap_energy(P, nullptr, nullptr) / options.arap_weight : 0.0;
   };
   auto report = [&](const Deform3dIteration& st) {
@@ -477,16 +491,22 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     st0.scaffold_s = first_scaffold_s;
     st0.scaffold_rebuilt = true;
     measure(p, X, st0);
+    st0.scaffold_reference_quality = st0.scaffold_min_quality;
     if (!std::isfinite(st0.objective))
       throw MeshingError("scaf3d: the initial object or scaffold has a non-positive tet");
     report(st0);
   }
   result.stop_reason = "iterations";
+  // The worst scaffold tet shape of the last rebuild (Deform3dOptions::rebuild_quality).
+  double rebuilt_quality = result.history.back().scaffold_min_quality;
   for (int it = 1; it <= options.max_iterations; ++it) {
     Stopwatch iteration;
     Deform3dIteration st;
     st.iteration = it;
-    if (it > 1) {
+    if (it > 1 && options.rebuild_quality > 0 &&
+        result.history.back().scaffold_min_quality >= options.rebuild_quality * rebuilt_quality) {
+      ++result.scaffold_kept;  // the moved scaffold is still about as good as a rebuild: kept
+    } else if (it > 1) {
       watch.reset();
       try {
         Scaffold fresh = build_scaffold(X.topRows(ns), surface.F, box, L);
@@ -495,6 +515,7 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
         X << kept, fresh.steiner;
         scaffold = std::move(fresh);
         st.scaffold_rebuilt = true;
+        rebuilt_quality = -1;  // measured after this iteration's make_problem, below
       } catch (const MeshingError& e) {
         // The moved scaffold is still a positive tiling: keep it.
         ++result.scaffold_failures;
@@ -506,6 +527,8 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     }
     const double e_prev = result.history.back().objective;
     const Problem p = make_problem(result.history.back().energy);
+    if (rebuilt_quality < 0) rebuilt_quality = scaffold_quality(p, p.X);
+    st.scaffold_reference_quality = rebuilt_quality;
     const Eigen::MatrixXd target = solve_proxy(p, st.assemble_s, st.solve_s);
     watch.reset();
     const Eigen::MatrixXd D = target - p.X;

@@ -46,6 +46,11 @@ def test_pulling_the_ends_of_a_split_ring_across_keeps_it_embedded(tmp_path):
     assert report["iterations"] >= 1
     # the ends moved toward each other: at least a quarter of the way
     assert np.linalg.norm(W[0] - V[last]) < 0.75 * np.linalg.norm(V[0] - V[last])
+    # the scaffold rebuilt every iteration (the thesis) gives a valid result too, with no kept one
+    W0, report0 = curvefem.deform(V, F, targets, iterations=20, rebuild_quality=0.0)
+    assert report0["valid"] is True
+    assert report0["scaffold_kept"] == 0
+    assert report["scaffold_kept"] > 0
 
 
 def test_untangle_and_bad_input(tmp_path):

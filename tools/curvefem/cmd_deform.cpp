@@ -62,6 +62,11 @@ void register_deform(CLI::App& app) {
   sub->add_option("--target-weight", args->options.target_weight,
                   "weight of the targets (squared distances relative to the box diagonal)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--rebuild-quality", args->options.rebuild_quality,
+                  "rebuild the scaffold only when its worst tet shape (6 sqrt2 V / l_rms^3) fell "
+                  "below this x that of the last rebuild (default 0.5); 0: every iteration (the "
+                  "thesis)")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--arap", args->options.arap_weight,
                   "weight of a surface ARAP term toward the input's shape (rotation-invariant per "
                   "vertex; with --untangle the thesis' way back); 0: none")
@@ -110,6 +115,7 @@ void register_deform(CLI::App& app) {
                             {"min_tet_volume_rel", st.min_volume_rel},
                             {"scaffold_tets", st.scaffold_tets},
                             {"scaffold_rebuilt", st.scaffold_rebuilt},
+                            {"scaffold_min_quality", st.scaffold_min_quality},
                             {"self_intersecting_pairs", pairs},
                             {"time_s",
                              {{"iteration", st.seconds},
@@ -164,6 +170,8 @@ void register_deform(CLI::App& app) {
           {"iterations", h.back().iteration},
           {"stop_reason", result.stop_reason},
           {"scaffold_rebuild_failures", result.scaffold_failures},
+          {"scaffold_kept", result.scaffold_kept},
+          {"rebuild_quality", args->options.rebuild_quality},
           {"initial_objective", h.front().objective},
           {"objective", h.back().objective},
           {"initial_energy", h.front().energy},

@@ -89,6 +89,50 @@ TEST(Scaf3d, PullingTheEndsOfASplitRingAcrossEachOtherNeverCrossesThem) {
   EXPECT_GT(r.history.back().min_volume_rel, 0);
 }
 
+// The moved scaffold is kept while its worst tet stays at least half as good as the last
+// rebuild's (Deform3dOptions::rebuild_quality, the default 0.5), rebuilt otherwise. On the grown
+// sphere, against a rebuild every iteration (0, the thesis): most rebuilds are skipped, the
+// decision follows the measured shapes, and the result is as valid and about as good.
+TEST(Scaf3d, TheMovedScaffoldIsKeptWhileItStaysWellShaped) {
+  const SurfaceMesh sphere = make_icosphere(2);
+  Deform3dOptions options;
+  options.grow = 2.0;
+  options.box_scale = 1.5;
+  options.max_iterations = 20;
+  options.tolerance = 0;
+  options.rebuild_quality = 0;
+  const Deform3dResult every = scaf3d_deform(sphere, {}, options);
+  options.rebuild_quality = 0.5;
+  int worst_pairs = 0;
+  options.on_iteration = [&](const Deform3dIteration&, const Eigen::MatrixXd& V) {
+    worst_pairs = std::max(worst_pairs, check::count_self_intersecting_pairs(V, sphere.F));
+  };
+  const Deform3dResult lazy = scaf3d_deform(sphere, {}, options);
+  EXPECT_EQ(every.scaffold_kept, 0);
+  for (const Deform3dIteration& st : every.history) EXPECT_TRUE(st.scaffold_rebuilt);
+  ASSERT_EQ(lazy.history.size(), every.history.size());
+  EXPECT_GT(lazy.scaffold_kept, int(lazy.history.size()) / 3);
+  // Each iteration after the first rebuilt exactly when the scaffold left by the one before had
+  // fallen below half the quality of the last rebuild; a kept scaffold keeps its reference.
+  for (std::size_t i = 1; i < lazy.history.size(); ++i) {
+    const Deform3dIteration& st = lazy.history[i];
+    const Deform3dIteration& before = lazy.history[i - 1];
+    if (i > 1) {
+      EXPECT_EQ(st.scaffold_rebuilt,
+                before.scaffold_min_quality < 0.5 * before.scaffold_reference_quality)
+          << "iteration " << i;
+      if (!st.scaffold_rebuilt)
+        EXPECT_EQ(st.scaffold_reference_quality, before.scaffold_reference_quality);
+    }
+    EXPECT_GT(st.scaffold_min_quality, 0) << "iteration " << i;
+    EXPECT_LE(st.objective, before.objective);
+  }
+  EXPECT_EQ(worst_pairs, 0);
+  EXPECT_TRUE(verify_scaf3d(sphere, lazy).ok());
+  EXPECT_NEAR(lazy.history.back().energy, every.history.back().energy,
+              0.02 * every.history.back().energy);
+}
+
 TEST(Scaf3d, ASphereGrownInsideItsBoxFillsItWithoutLeavingIt) {
   const SurfaceMesh sphere = make_icosphere(2);
   Deform3dOptions options;
