@@ -570,34 +570,64 @@ void lattice_jacobians(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd
 // min over the lattice points and the four corner frames of √2 det J / (product of the frame's
 // edge lengths). The frames' edges are J's columns and their differences (J T with T of 0 and ±1
 // entries, which is exact), so the six lengths are computed once per point.
+// The scaled Jacobian of one lattice point's J: min over the four corner frames.
+inline double scaled_jacobian_of(const Eigen::Matrix3d& J) {
+  const double sqrt2 = std::sqrt(2.0);
+  const double det = J.determinant();
+  const Eigen::Vector3d c0 = J.col(0), c1 = J.col(1), c2 = J.col(2);
+  const double n0 = c0.norm(), n1 = c1.norm(), n2 = c2.norm();
+  const double n10 = Eigen::Vector3d(c1 - c0).norm(), n20 = Eigen::Vector3d(c2 - c0).norm(),
+               n21 = Eigen::Vector3d(c2 - c1).norm();
+  // Corner 0: (e1, e2, e3); 1: (e2-e1, -e1, e3-e1); 2: (-e2, e1-e2, e3-e2); 3: (e1-e3, -e3,
+  // e2-e3) — each with det +1 (corners 1 and 3 with their first two edges swapped).
+  const double len[4] = {n0 * n1 * n2, n10 * n0 * n20, n1 * n10 * n21, n20 * n2 * n21};
+  const double x = sqrt2 * det;
+  const double shortest = std::min(std::min(len[0], len[1]), std::min(len[2], len[3]));
+  if (x > 0.0 && shortest > 0.0)  // x / l falls as l grows: one division, the same value
+    return x / std::max(std::max(len[0], len[1]), std::max(len[2], len[3]));
+  double best = std::numeric_limits<double>::infinity();
+  for (const double l : len) best = std::min(best, l > 0.0 ? x / l : 0.0);
+  return best;
+}
+
 template <int K>
-double min_scaled_jacobian_k(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
+double min_scaled_jacobian_k(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
+                             int* argmin) {
   constexpr int M = num_lattice(K);
   std::array<std::array<std::array<double, M>, 3>, 3> jac;
   lattice_jacobians<K>(t, nodes, jac);
-  const double sqrt2 = std::sqrt(2.0);
   double best = std::numeric_limits<double>::infinity();
+  int at = 0;
   for (int j = 0; j < M; ++j) {
     Eigen::Matrix3d J;
     for (int c = 0; c < 3; ++c)
       for (int r = 0; r < 3; ++r) J(r, c) = jac[std::size_t(c)][std::size_t(r)][std::size_t(j)];
-    const double det = J.determinant();
-    const Eigen::Vector3d c0 = J.col(0), c1 = J.col(1), c2 = J.col(2);
-    const double n0 = c0.norm(), n1 = c1.norm(), n2 = c2.norm();
-    const double n10 = Eigen::Vector3d(c1 - c0).norm(), n20 = Eigen::Vector3d(c2 - c0).norm(),
-                 n21 = Eigen::Vector3d(c2 - c1).norm();
-    // Corner 0: (e1, e2, e3); 1: (e2-e1, -e1, e3-e1); 2: (-e2, e1-e2, e3-e2); 3: (e1-e3, -e3,
-    // e2-e3) — each with det +1 (corners 1 and 3 with their first two edges swapped).
-    const double len[4] = {n0 * n1 * n2, n10 * n0 * n20, n1 * n10 * n21, n20 * n2 * n21};
-    const double x = sqrt2 * det;
-    const double shortest = std::min(std::min(len[0], len[1]), std::min(len[2], len[3]));
-    if (x > 0.0 && shortest > 0.0) {  // x / l falls as l grows: one division, the same value
-      best = std::min(best, x / std::max(std::max(len[0], len[1]), std::max(len[2], len[3])));
-      continue;
+    const double v = scaled_jacobian_of(J);
+    if (v < best) {
+      best = v;
+      at = j;
     }
-    for (const double l : len) best = std::min(best, l > 0.0 ? x / l : 0.0);
   }
+  if (argmin) *argmin = at;
   return best;
+}
+
+// The same at lattice point j alone: J summed over the nodes in the order lattice_jacobians
+// sums them.
+template <int K>
+double scaled_jacobian_at_k(const Prepared& t, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
+                            int j) {
+  constexpr int N = num_nodes(K), M = num_lattice(K);
+  Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+  for (int i = 1; i < N; ++i) {
+    const double d[3] = {nodes(i, 0) - nodes(0, 0), nodes(i, 1) - nodes(0, 1),
+                         nodes(i, 2) - nodes(0, 2)};
+    for (int c = 0; c < 3; ++c) {
+      const double g = t.gs[(static_cast<std::size_t>(c) * N + i) * M + std::size_t(j)];
+      for (int r = 0; r < 3; ++r) J(r, c) += d[r] * g;
+    }
+  }
+  return scaled_jacobian_of(J);
 }
 
 // Gradients of the order-k basis at the 56 points of the level-5 lattice (for curved_mips).
@@ -714,18 +744,34 @@ Eigen::VectorXd jacobian_bernstein_coefficients(int order,
   }
 }
 
-double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
+double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes, int* argmin) {
   check_input(order, nodes);
   const Prepared& t = tables(order);
   switch (order) {
     case 1:
-      return min_scaled_jacobian_k<1>(t, nodes);
+      return min_scaled_jacobian_k<1>(t, nodes, argmin);
     case 2:
-      return min_scaled_jacobian_k<2>(t, nodes);
+      return min_scaled_jacobian_k<2>(t, nodes, argmin);
     case 3:
-      return min_scaled_jacobian_k<3>(t, nodes);
+      return min_scaled_jacobian_k<3>(t, nodes, argmin);
     default:
-      return min_scaled_jacobian_k<4>(t, nodes);
+      return min_scaled_jacobian_k<4>(t, nodes, argmin);
+  }
+}
+
+double scaled_jacobian_at(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes, int point) {
+  check_input(order, nodes);
+  const Prepared& t = tables(order);
+  CF_VERIFY(point >= 0 && point < t.m, "scaled_jacobian_at: no such lattice point");
+  switch (order) {
+    case 1:
+      return scaled_jacobian_at_k<1>(t, nodes, point);
+    case 2:
+      return scaled_jacobian_at_k<2>(t, nodes, point);
+    case 3:
+      return scaled_jacobian_at_k<3>(t, nodes, point);
+    default:
+      return scaled_jacobian_at_k<4>(t, nodes, point);
   }
 }
 

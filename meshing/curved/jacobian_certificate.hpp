@@ -124,7 +124,14 @@ Eigen::VectorXd jacobian_bernstein_coefficients(int order,
 /// T_v = (t_v1, t_v2, t_v3) the reference edge vectors leaving vertex v, ordered so det T_v = 1.
 /// For a straight tet this is Knupp's minimum corner scaled Jacobian: 1 for the regular tet,
 /// ≤ 0 iff inverted or flat. A zero tangent counts as 0.
-double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
+/// `argmin`, if given, receives the index of a lattice point where the minimum is reached.
+double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
+                           int* argmin = nullptr);
+/// The value min_scaled_jacobian takes at one point of its lattice (index as from `argmin`),
+/// computed alone: equal to it up to rounding (the same terms, summed in the same order, but
+/// not necessarily with the same instructions). For a quick rejection: a value clearly at or
+/// below a bar there means the minimum is too.
+double scaled_jacobian_at(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes, int point);
 
 /// J(r, c) = Σ_i X(i, r) G(i, c): the Jacobian at a point of the map with nodes X (n × 3) and
 /// shape gradients G (n × 3) there. For n ≥ 14 (orders 3, 4) a plain loop over i in order: the

@@ -377,6 +377,10 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
   // The search for the worst cells (OptimizeOptions::worst_sweeps): one corner moves its star's
   // nodes by their barycentric weight, as in visit(), to raise the star's minimum sampled scaled
   // Jacobian. A straight cell stays straight under such a move, so its corners alone give it.
+  // Per curved cell, the lattice points of its last four distinct minima (worst_visit's quick
+  // rejection; stars of one colour class share no cell, so parallel visits write disjoint
+  // entries).
+  std::vector<std::array<int, 4>> cell_hint(std::size_t(nc), std::array<int, 4>{-1, -1, -1, -1});
   auto cell_sj_now = [&](int c) {
     if (curved_cell[c] || k == 1) return min_scaled_jacobian(k, cell_nodes(mesh, c));
     Eigen::Matrix<double, 4, 3> X;
@@ -424,13 +428,42 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         mesh.nodes.row(moved[i].first) = saved[i] + (moved[i].second / k) * d.transpose();
     };
     // The star's minimum at d, or -inf as soon as a cell is at or below `bar`: worst cells are
-    // evaluated first, so most failing trials stop after one or two.
+    // evaluated first, so most failing trials stop after one or two. Before that, every curved
+    // cell is tried at the lattice points where its last full evaluations found their minima
+    // (cell_hint): a value there below the bar (by more than rounding; scaled_jacobian_at sums
+    // the same terms in the same order) means the cell's minimum is below too, and the trial
+    // fails as the full evaluations would have made it fail, at a few 220ths of a cell's cost
+    // at K = 4. tr12j_occt K = 4 (1 thread): the worst-cell search 48.5 -> 15 s, 1.3 of its
+    // 1.8 million trials rejected that way, the same mesh.
     std::vector<double> trial_sj(cells.size());
     auto value = [&](const Eigen::Vector3d& d, double bar) {
       place(d);
+      // Any cell clearly below the bar at its hint fails the trial, whichever cell the full
+      // evaluations below would have stopped at.
+      const double clearly_below = bar - 1e-12 * std::abs(bar) - 1e-300;
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        const int c = cells[i].second;
+        const std::array<int, 4>& h = cell_hint[std::size_t(c)];
+        if (h[0] >= 0 && curved_cell[c] && k > 1 && [&] {
+              const Eigen::MatrixXd X = cell_nodes(mesh, c);
+              for (int j : h)
+                if (j >= 0 && scaled_jacobian_at(k, X, j) < clearly_below) return true;
+              return false;
+            }()) {
+          return -k_inf;
+        }
+      }
       double m = k_inf;
       for (std::size_t i = 0; i < cells.size(); ++i) {
-        trial_sj[i] = cell_sj_now(cells[i].second);
+        const int c = cells[i].second;
+        if (curved_cell[c] && k > 1) {
+          int at = -1;
+          trial_sj[i] = min_scaled_jacobian(k, cell_nodes(mesh, c), &at);
+          std::array<int, 4>& h = cell_hint[std::size_t(c)];
+          if (std::find(h.begin(), h.end(), at) == h.end()) h = {at, h[0], h[1], h[2]};
+        } else {
+          trial_sj[i] = cell_sj_now(c);
+        }
         if (!(trial_sj[i] > bar)) return -k_inf;
         m = std::min(m, trial_sj[i]);
       }

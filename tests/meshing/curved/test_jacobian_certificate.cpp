@@ -895,6 +895,19 @@ TEST(JacobianQuality, ScaledJacobianAndMipsMatchTheirDefinitions) {
       }
       const std::string at = "k=" + std::to_string(k) + " trial " + std::to_string(trial);
       EXPECT_NEAR(min_scaled_jacobian(k, x), sj, 1e-11 * std::max(1.0, std::abs(sj))) << at;
+      // The single-point evaluation (the worst-cell search's quick rejection): at the argmin it
+      // gives the minimum up to rounding, and nowhere less.
+      int argmin = -1;
+      const double minimum = min_scaled_jacobian(k, x, &argmin);
+      ASSERT_GE(argmin, 0) << at;
+      ASSERT_LT(argmin, sj_points.rows()) << at;
+      EXPECT_NEAR(scaled_jacobian_at(k, x, argmin), minimum,
+                  1e-14 * std::max(1.0, std::abs(minimum)))
+          << at;
+      for (Eigen::Index p = 0; p < sj_points.rows(); ++p)
+        EXPECT_GE(scaled_jacobian_at(k, x, int(p)),
+                  minimum - 1e-14 * std::max(1.0, std::abs(minimum)))
+            << at << " point " << p;
       if (std::isfinite(mips)) {
         EXPECT_NEAR(curved_mips(k, x), mips, 1e-9 * mips) << at;
       } else {
