@@ -3,6 +3,7 @@
 
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -36,6 +37,16 @@ struct Problem {
   std::vector<Mat32> G;
   std::vector<double> weight;  // A_f / A_M on charts, λ on the scaffold
   int slivers = 0;             // scaffold triangles whose rest is the ε equilateral
+
+  // Unknown of triangle t's coordinate l (vertex l % 3, axis l / 3), −1 where fixed.
+  std::array<int, 6> unknowns(int t) const {
+    std::array<int, 6> row;
+    for (int l = 0; l < 6; ++l) {
+      const int v = tri[std::size_t(t)][l % 3];
+      row[std::size_t(l)] = dof[std::size_t(v)] >= 0 ? 2 * dof[std::size_t(v)] + l / 3 : -1;
+    }
+    return row;
+  }
 
   Eigen::Matrix2d jacobian(int t, const Eigen::MatrixXd& P) const {
     Eigen::Matrix<double, 3, 2> Q;
@@ -163,6 +174,26 @@ Problem make_problem(const CutMesh& cut, const RestShapes& rest, const Eigen::Ma
   return p;
 }
 
+// The step along D: t from min(1, 0.8 × the flip-free bound) (IterationStats::max_step), halved
+// (counted in backtracks) until Armijo holds on E and E_M did not increase, down to
+// t_min_factor × max_step. Returns t, or 0 when no step qualifies; e and em receive E and E_M
+// there.
+double line_search(const Problem& p, const Eigen::MatrixXd& D, double armijo, double t_min_factor,
+                   IterationStats& st, double& e, double& em) {
+  double em0 = 0;
+  const double e0 = evaluate(p, p.X, em0);
+  const double slope = directional_derivative(p, p.X, D);
+  st.max_step = std::min(1.0, 0.8 * flip_free_bound(p, p.X, D));
+  if (!(slope < 0)) return 0;
+  double t = st.max_step;
+  for (int k = 0; k < 60 && t >= t_min_factor * st.max_step; ++k, t *= 0.5) {
+    e = evaluate(p, p.X + t * D, em);
+    if (std::isfinite(e) && e <= e0 + armijo * t * slope && em <= em0) return t;
+    ++st.backtracks;
+  }
+  return 0;
+}
+
 // Minimiser x* of the SLIM proxy Σ c_f ‖W_f (J_f(x) − R_f)‖² with the fixed rows held.
 Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_s,
                             double& regularisation) {
@@ -184,11 +215,7 @@ Eigen::MatrixXd solve_proxy(const Problem& p, double& assemble_s, double& solve_
         M.noalias() += p.weight[t] * a * a.transpose();
         b += p.weight[t] * WR(i, c) * a;
       }
-    int row[6];
-    for (int l = 0; l < 6; ++l) {
-      const int v = p.tri[t][l % 3];
-      row[l] = p.dof[v] >= 0 ? 2 * p.dof[v] + l / 3 : -1;
-    }
+    const std::array<int, 6> row = p.unknowns(t);
     for (int l = 0; l < 6; ++l) {
       if (row[l] < 0) continue;
       rhs[row[l]] += b[l];
@@ -236,11 +263,7 @@ Eigen::MatrixXd newton_direction(const Problem& p, double& assemble_s, double& s
       for (int c = 0; c < 2; ++c) B(2 * (l / 3) + c, l) = p.G[t](l % 3, c);
     const Eigen::Matrix<double, 6, 6> H = p.weight[t] * B.transpose() * HJ * B;
     const Eigen::Matrix<double, 6, 1> g = p.weight[t] * B.transpose() * gJ;
-    int row[6];
-    for (int l = 0; l < 6; ++l) {
-      const int v = p.tri[t][l % 3];
-      row[l] = p.dof[v] >= 0 ? 2 * p.dof[v] + l / 3 : -1;
-    }
+    const std::array<int, 6> row = p.unknowns(t);
     for (int l = 0; l < 6; ++l) {
       if (row[l] < 0) continue;
       grad[row[l]] += g[l];
@@ -346,24 +369,10 @@ ScafResult scaf_optimize(const CutMesh& cut, const Eigen::MatrixXd& uv0,
       const Eigen::MatrixXd target = solve_proxy(p, st.assemble_s, st.solve_s, st.regularisation);
       watch.reset();
       D = target - p.X;
-      double em0 = 0;
-      const double e0 = evaluate(p, p.X, em0);
-      const double slope = directional_derivative(p, p.X, D);
-      st.max_step = std::min(1.0, 0.8 * flip_free_bound(p, p.X, D));
-      t = st.max_step;
-      if (slope < 0) {
-        // The first attempt gives up after 14 halvings (t < 1e-4 t_max: the sliver terms are
-        // fighting E_M), the fallback goes on to 1e-12 t_max.
-        const double t_min = (attempt == 0 ? 1e-4 : 1e-12) * st.max_step;
-        for (int k = 0; k < 60 && t >= t_min; ++k, t *= 0.5) {
-          e = evaluate(p, p.X + t * D, em);
-          if (std::isfinite(e) && e <= e0 + options.armijo * t * slope && em <= em0) {
-            accepted = true;
-            break;
-          }
-          ++st.backtracks;
-        }
-      }
+      // The first attempt gives up after 14 halvings (t < 1e-4 t_max: the sliver terms are
+      // fighting E_M), the fallback goes on to 1e-12 t_max.
+      t = line_search(p, D, options.armijo, attempt == 0 ? 1e-4 : 1e-12, st, e, em);
+      accepted = t > 0;
       st.line_search_s += watch.seconds();
     }
     st.lambda = p.weight.size() > std::size_t(p.n_chart_faces) ? p.weight.back() : 0.0;
@@ -411,23 +420,10 @@ ScafResult scaf_optimize(const CutMesh& cut, const Eigen::MatrixXd& uv0,
     const Eigen::MatrixXd D =
         newton_direction(p, st.assemble_s, st.solve_s, st.regularisation, st.gradient_norm);
     watch.reset();
-    double em0 = 0, em = 0, e = 0;
-    const double e0 = evaluate(p, p.X, em0);
-    const double slope = directional_derivative(p, p.X, D);
-    st.max_step = std::min(1.0, 0.8 * flip_free_bound(p, p.X, D));
-    double t = st.max_step;
-    bool accepted = false;
-    if (slope < 0)
-      for (int b = 0; b < 60 && t >= 1e-12 * st.max_step; ++b, t *= 0.5) {
-        e = evaluate(p, p.X + t * D, em);
-        if (std::isfinite(e) && e <= e0 + options.armijo * t * slope && em <= em0) {
-          accepted = true;
-          break;
-        }
-        ++st.backtracks;
-      }
+    double em = 0, e = 0;
+    const double t = line_search(p, D, options.armijo, 1e-12, st, e, em);
     st.line_search_s += watch.seconds();
-    if (!accepted) {
+    if (!(t > 0)) {
       result.newton_stop_reason = "line search";
       log::debug("param: Newton iteration ", k + 1, " stops: no acceptable step");
       break;

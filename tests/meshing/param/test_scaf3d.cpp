@@ -52,6 +52,15 @@ double end_distance(const Eigen::MatrixXd& V, int n) {
   return d;
 }
 
+// A sphere whose rest shape is twice its size, in a box 1.5 × its extent.
+Deform3dOptions grown_sphere_options(int iterations) {
+  Deform3dOptions options;
+  options.grow = 2.0;
+  options.box_scale = 1.5;
+  options.max_iterations = iterations;
+  return options;
+}
+
 }  // namespace
 
 TEST(Scaf3d, PullingTheEndsOfASplitRingAcrossEachOtherNeverCrossesThem) {
@@ -95,10 +104,7 @@ TEST(Scaf3d, PullingTheEndsOfASplitRingAcrossEachOtherNeverCrossesThem) {
 // decision follows the measured shapes, and the result is as valid and about as good.
 TEST(Scaf3d, TheMovedScaffoldIsKeptWhileItStaysWellShaped) {
   const SurfaceMesh sphere = make_icosphere(2);
-  Deform3dOptions options;
-  options.grow = 2.0;
-  options.box_scale = 1.5;
-  options.max_iterations = 20;
+  Deform3dOptions options = grown_sphere_options(20);
   options.tolerance = 0;
   options.rebuild_quality = 0;
   const Deform3dResult every = scaf3d_deform(sphere, {}, options);
@@ -135,10 +141,7 @@ TEST(Scaf3d, TheMovedScaffoldIsKeptWhileItStaysWellShaped) {
 
 TEST(Scaf3d, ASphereGrownInsideItsBoxFillsItWithoutLeavingIt) {
   const SurfaceMesh sphere = make_icosphere(2);
-  Deform3dOptions options;
-  options.grow = 2.0;
-  options.box_scale = 1.5;
-  options.max_iterations = 25;
+  const Deform3dOptions options = grown_sphere_options(25);
   const Deform3dResult r = scaf3d_deform(sphere, {}, options);
   ASSERT_GE(r.history.size(), 2u);
   for (std::size_t i = 1; i < r.history.size(); ++i)
