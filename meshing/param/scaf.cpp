@@ -324,9 +324,24 @@ ScafResult scaf_optimize(const CutMesh& cut, const Eigen::MatrixXd& uv0,
       callback_s += cb.seconds();
     }
   };
+  // An accepted step t along D: the charts move, the iteration's numbers are set, and the
+  // scaffold reported with it is the one it optimised, moved with it.
+  Scaffold scaffold;
+  auto take_step = [&](const Problem& p, const Eigen::MatrixXd& D, double t, double e, double em,
+                       IterationStats& st) {
+    const Eigen::MatrixXd moved = p.X + t * D;
+    result.uv = moved.topRows(nu);
+    st.step = t;
+    st.energy = em;
+    st.objective = e;
+    const SingularRange sv = chart_singular_values(cut, rest, result.uv);
+    st.min_singular = sv.lo;
+    st.max_singular = sv.hi;
+    scaffold.V = moved.bottomRows(moved.rows() - nu);
+  };
   IterationStats st0;
   Stopwatch watch;
-  Scaffold scaffold = build_scaffold(result.uv, cut.boundary_loops, options.scaffold);
+  scaffold = build_scaffold(result.uv, cut.boundary_loops, options.scaffold);
   st0.scaffold_s = watch.seconds();
   st0.energy = chart_energy(cut, result.uv);
   st0.objective = st0.energy;
@@ -384,17 +399,8 @@ ScafResult scaf_optimize(const CutMesh& cut, const Eigen::MatrixXd& uv0,
       log::debug("param: iteration ", it, " stops: no acceptable step");
       break;
     }
-    const Eigen::MatrixXd moved = p.X + t * D;
-    result.uv = moved.topRows(nu);
-    st.step = t;
-    st.energy = em;
-    st.objective = e;
-    const SingularRange sv = chart_singular_values(cut, rest, result.uv);
-    st.min_singular = sv.lo;
-    st.max_singular = sv.hi;
+    take_step(p, D, t, e, em, st);
     st.seconds = iteration.seconds() + (it == 1 ? st0.scaffold_s : 0.0);
-    // The scaffold reported with the iteration is the one it optimised, moved with it.
-    scaffold.V = moved.bottomRows(moved.rows() - nu);
     report(st, scaffold);
     log::debug("param: iteration ", it, " energy ", st.energy, " step ", t, " (max ", st.max_step,
                ") scaffold ", st.scaffold_faces, " faces, ", st.seconds, " s");
@@ -428,19 +434,11 @@ ScafResult scaf_optimize(const CutMesh& cut, const Eigen::MatrixXd& uv0,
       log::debug("param: Newton iteration ", k + 1, " stops: no acceptable step");
       break;
     }
-    const Eigen::MatrixXd moved = p.X + t * D;
-    result.uv = moved.topRows(nu);
-    st.step = t;
-    st.energy = em;
-    st.objective = e;
     st.lambda = p.weight.size() > std::size_t(p.n_chart_faces) ? p.weight.back() : 0.0;
     st.scaffold_vertices = int(scaffold.V.rows());
     st.scaffold_faces = int(scaffold.F.rows());
-    const SingularRange sv = chart_singular_values(cut, rest, result.uv);
-    st.min_singular = sv.lo;
-    st.max_singular = sv.hi;
+    take_step(p, D, t, e, em, st);
     st.seconds = iteration.seconds();
-    scaffold.V = moved.bottomRows(moved.rows() - nu);
     ++result.newton_iterations;
     report(st, scaffold);
     log::debug("param: Newton iteration ", k + 1, " energy ", st.energy, " step ", t, " gradient ",
