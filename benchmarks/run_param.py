@@ -170,8 +170,7 @@ def run(name, obj, seams_file, iterations, tolerance, work, newton=0):
     report = os.path.join(work, name + "_%d_%d.json" % (iterations, newton))
     cmd = [args.exe, "param", "-q", obj, "-o", os.path.join(work, name + "_uv.obj"),
            "--iterations", str(iterations), "--tolerance", str(tolerance), "--report", report]
-    if newton > 0:
-        cmd += ["--newton", str(newton)]
+    cmd += ["--newton", str(newton)]  # 0: SLIM alone (the CLI's default adds 10 Newton iterations)
     if seams_file:
         cmd += ["--seams", seams_file]
     t0 = time.time()

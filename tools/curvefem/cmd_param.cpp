@@ -35,7 +35,7 @@ struct ParamArgs {
   std::string input, output, seams, report, weights = "mean-value";
   int iterations = 50;
   double tolerance = 1e-6;
-  int newton = 0;
+  int newton = pa::ScafOptions{}.newton_iterations;
   bool no_check_iterations = false;
   bool init_uv = false;
   GlobalOptions global;
@@ -67,7 +67,7 @@ void register_param(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--newton", args->newton,
                   "then at most this many projected Newton iterations from the SLIM result, "
-                  "until the relative energy decrease is below 1e-12 (0: none)")
+                  "until the relative energy decrease is below 1e-12 (default 10; 0: none)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--weights", args->weights, "Tutte weights: mean-value or uniform")
       ->check(CLI::IsMember({"mean-value", "uniform"}));

@@ -25,12 +25,13 @@ struct CheckedRun {
 };
 
 // Optimises and checks the charts (and the charts + scaffold together) after every iteration.
-CheckedRun run_checked(const CutMesh& cut, int iterations, double tolerance = 0, int newton = 0) {
+// newton < 0: the default Newton phase.
+CheckedRun run_checked(const CutMesh& cut, int iterations, double tolerance = 0, int newton = -1) {
   CheckedRun run;
   ScafOptions options;
   options.max_iterations = iterations;
   options.tolerance = tolerance;
-  options.newton_iterations = newton;
+  if (newton >= 0) options.newton_iterations = newton;
   options.on_iteration = [&](const IterationStats&, const Eigen::MatrixXd& uv, const Scaffold& s) {
     const UvCheck c = check_uv_map(uv, cut.F);
     run.worst_flips = std::max(run.worst_flips, c.flips);
@@ -48,10 +49,13 @@ CheckedRun run_checked(const CutMesh& cut, int iterations, double tolerance = 0,
   return run;
 }
 
+// SLIM to `iterations` at tolerance 1e-10, then 50 Newton iterations: the SLIM reference alone
+// was 0.4% above the minimum on the spiral strip (benchmarks/results/param.md).
 double reference_energy(const CutMesh& cut, int iterations) {
   ScafOptions options;
   options.max_iterations = iterations;
   options.tolerance = 1e-10;
+  options.newton_iterations = 50;
   return scaf_optimize(cut, tutte_layout(cut), options).history.back().energy;
 }
 
@@ -149,12 +153,13 @@ TEST(ParamScaf, SphereCutAlongAPath) {
 // The Newton phase (thesis §3.3, after Rabinovich et al.): from SLIM stopped at a relative
 // decrease of 1e-6, projected Newton goes on to numerical convergence. Checked like every SCAF
 // run after each iteration (no flip, no overlap, charts + scaffold a tiling, E_M monotone); it
-// must end below the SLIM result of the same tolerance and below a 200-iteration SLIM reference
-// at 1e-10, take full steps at the end, and shrink the gradient of E.
+// must end below the SLIM result of the same tolerance and at the converged reference (200 SLIM
+// iterations at 1e-10, then 50 Newton ones) to 1e-9, take full steps at the end, and shrink the
+// gradient of E.
 TEST(ParamScaf, NewtonPhaseConvergesFromTheSlimResult) {
   auto [torus, seams] = test::cut_torus(2, 0.8, 40, 16);
   const CutMesh cut = cut_into_charts(torus, seams);
-  const CheckedRun slim = run_checked(cut, 100, 1e-6);
+  const CheckedRun slim = run_checked(cut, 100, 1e-6, 0);
   const CheckedRun newton = run_checked(cut, 100, 1e-6, 40);
   const double reference = reference_energy(cut, 200);
   expect_valid(cut, newton, reference);
@@ -172,7 +177,7 @@ TEST(ParamScaf, NewtonPhaseConvergesFromTheSlimResult) {
       newton.result.newton_iterations, newton.result.newton_stop_reason.c_str(), h.back().energy,
       reference, first.gradient_norm, h.back().gradient_norm);
   EXPECT_LT(h.back().energy, slim.result.history.back().energy);
-  EXPECT_LE(h.back().energy, reference + 1e-12);
+  EXPECT_LE(h.back().energy, reference * (1 + 1e-9));
   EXPECT_EQ(h.back().step, 1.0);
   EXPECT_LT(h.back().gradient_norm, 0.1 * first.gradient_norm);
 }
