@@ -112,6 +112,7 @@ void register_param(CLI::App& app) {
     double check_s = 0;
     long long worst_flips = 0, worst_overlaps = 0, worst_nested = 0;
     const ProgressFn report_progress = progress->callback();
+    int newton_done = 0;
     options.on_iteration = [&](const pa::IterationStats& st, const Eigen::MatrixXd& uv,
                                const pa::Scaffold&) {
       nlohmann::ordered_json j = {{"iteration", st.iteration},
@@ -151,7 +152,7 @@ void register_param(CLI::App& app) {
       iterations.push_back(j);
       if (report_progress)
         report_progress(st.newton ? "newton" : "scaf",
-                        st.newton ? double(st.iteration) / (st.iteration + args->newton)
+                        st.newton ? double(++newton_done) / std::max(1, args->newton)
                                   : double(st.iteration) / std::max(1, args->iterations));
     };
     const pa::ScafResult result = pa::scaf_optimize(cut, uv0, options);

@@ -52,6 +52,13 @@ double end_distance(const Eigen::MatrixXd& V, int n) {
   return d;
 }
 
+// The split ring with its end caps already swapped: a self-intersecting genus-0 surface.
+SurfaceMesh tangled_ring(const RingCase& c) {
+  SurfaceMesh tangled = c.ring;
+  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  return tangled;
+}
+
 // A sphere whose rest shape is twice its size, in a box 1.5 × its extent.
 Deform3dOptions grown_sphere_options(int iterations) {
   Deform3dOptions options;
@@ -213,8 +220,7 @@ TEST(Scaf3d, BadTargetsAreRefusedNamingTheLine) {
 // toward the input until the ends meet. Checked exactly: no pair at the end, a valid tiling.
 TEST(Untangle, ASplitRingWhoseEndsCrossIsSeparatedThenPulledBackUntilTheEndsMeet) {
   const RingCase c = split_ring_case();
-  SurfaceMesh tangled = c.ring;
-  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  const SurfaceMesh tangled = tangled_ring(c);
   const int pairs = check::count_self_intersecting_pairs(tangled.V, tangled.F);
   ASSERT_GT(pairs, 0);
   UntangleOptions options;
@@ -243,8 +249,7 @@ TEST(Untangle, ASplitRingWhoseEndsCrossIsSeparatedThenPulledBackUntilTheEndsMeet
 // pull it back: refused.
 TEST(Untangle, TheArapWayBackKeepsTheInputsShape) {
   const RingCase c = split_ring_case();
-  SurfaceMesh tangled = c.ring;
-  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  const SurfaceMesh tangled = tangled_ring(c);
   UntangleOptions targets;
   targets.deform.max_iterations = 25;
   const UntangleResult by_targets = untangle_surface(tangled, targets);
@@ -276,8 +281,7 @@ TEST(Untangle, TheGenusIsReportedAndTheRingIsGenusZero) {
   // and gets the warning, but the flow is still tried (here it separates it: the crossing is a
   // small local fold).
   const RingCase c = split_ring_case();
-  SurfaceMesh tangled = c.ring;
-  for (const PositionTarget& t : c.targets) tangled.V.row(t.vertex) = t.target.transpose();
+  const SurfaceMesh tangled = tangled_ring(c);
   UntangleOptions options;
   options.deform.max_iterations = 2;
   EXPECT_EQ(untangle_surface(tangled, options).genus, 0);
