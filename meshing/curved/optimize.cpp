@@ -436,29 +436,29 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // at K = 4. tr12j_occt K = 4 (1 thread): the worst-cell search 48.5 -> 15 s, 1.3 of its
     // 1.8 million trials rejected that way, the same mesh.
     std::vector<double> trial_sj(cells.size());
+    std::vector<Eigen::MatrixXd> nodes_of(cells.size(), Eigen::MatrixXd(mesh.cells.cols(), 3));
     auto value = [&](const Eigen::Vector3d& d, double bar) {
       place(d);
+      // Each curved cell's nodes are gathered once per trial, into buffers kept over the visit.
+      for (std::size_t i = 0; i < cells.size(); ++i)
+        if (curved_cell[cells[i].second] && k > 1)
+          for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
+            nodes_of[i].row(n) = mesh.nodes.row(mesh.cells(cells[i].second, n));
       // Any cell clearly below the bar at its hint fails the trial, whichever cell the full
       // evaluations below would have stopped at.
       const double clearly_below = bar - 1e-12 * std::abs(bar) - 1e-300;
       for (std::size_t i = 0; i < cells.size(); ++i) {
         const int c = cells[i].second;
-        const std::array<int, 4>& h = cell_hint[std::size_t(c)];
-        if (h[0] >= 0 && curved_cell[c] && k > 1 && [&] {
-              const Eigen::MatrixXd X = cell_nodes(mesh, c);
-              for (int j : h)
-                if (j >= 0 && scaled_jacobian_at(k, X, j) < clearly_below) return true;
-              return false;
-            }()) {
-          return -k_inf;
-        }
+        if (!curved_cell[c] || k == 1) continue;
+        for (int j : cell_hint[std::size_t(c)])
+          if (j >= 0 && scaled_jacobian_at(k, nodes_of[i], j) < clearly_below) return -k_inf;
       }
       double m = k_inf;
       for (std::size_t i = 0; i < cells.size(); ++i) {
         const int c = cells[i].second;
         if (curved_cell[c] && k > 1) {
           int at = -1;
-          trial_sj[i] = min_scaled_jacobian(k, cell_nodes(mesh, c), &at);
+          trial_sj[i] = min_scaled_jacobian(k, nodes_of[i], &at);
           std::array<int, 4>& h = cell_hint[std::size_t(c)];
           if (std::find(h.begin(), h.end(), at) == h.end()) h = {at, h[0], h[1], h[2]};
         } else {
