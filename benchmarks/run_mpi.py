@@ -98,8 +98,10 @@ def main():
     lines = ["# `curvefem run` on 1 and 2 MPI ranks (issue 24)", "",
              "Written by `benchmarks/run_mpi.py` (" + " ".join(sys.argv[1:]) + "), "
              + time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()) + ", 2-core machine "
-             "(shared with other builds: times indicative). Only the linear solve is distributed "
-             "(fem/solvers/distributed.hpp); assembly and every other stage run on rank 0.", ""]
+             "(shared with other builds: times indicative). The linear solve is distributed, and "
+             "the matrix is assembled by rows, one rank's rows at a time on rank 0, where the "
+             "solver row says \"by rows\" (fem/solvers/distributed.hpp); the element matrices "
+             "and every other stage are computed on rank 0.", ""]
     for name in a.cases.split(","):
         d = a.divisions_poisson if name == "poisson_p2" else a.divisions_elasticity
         runs = {n: run(a.build, a.work, name, d, n, a.threads) for n in (1, 2)}
@@ -122,6 +124,9 @@ def main():
                   f"| solver setup / solve (s) | {s1['setup_s']:.2f} / {s1['solve_s']:.2f} | "
                   f"{s2['setup_s']:.2f} / {s2['solve_s']:.2f} (partition "
                   f"{s2.get('partition_s', 0):.2f}, distribute {s2.get('distribute_s', 0):.2f}) |",
+                  f"| matrix | whole | "
+                  + (f"by rows (their assembly {s2.get('rows_assembly_s', 0):.2f} s)"
+                     if s2.get("assembled_by_rows") else "whole on rank 0") + " |",
                   f"| rows per rank | {sum(s2.get('rows_per_rank', [0]))} (all) | "
                   f"{s2.get('rows_per_rank')} ({s2.get('partitioner')}) |",
                   f"| peak RSS per rank (MiB) | {r1['peak_rss_mb']:.0f} | "

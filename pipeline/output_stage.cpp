@@ -301,6 +301,8 @@ json load_report(const LoadResult& l) {
     report["solver"]["partitioner"] = s.partitioner;
     report["solver"]["partition_s"] = s.partition_s;
     report["solver"]["distribute_s"] = s.distribute_s;
+    report["solver"]["assembled_by_rows"] = s.assembled_by_rows;
+    if (s.assembled_by_rows) report["solver"]["rows_assembly_s"] = s.assembly_s;
   }
   return report;
 }
@@ -504,9 +506,14 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
     }
     report["peak_rss_mb"] = peak_rss_mb();
     if (fem::distributed::active()) {
-      // Several ranks (fem/solvers/distributed.hpp): only the linear solves are distributed.
+      // Several ranks (fem/solvers/distributed.hpp): the linear solves are distributed, and the
+      // linear problems with Dirichlet data assemble their matrix by rows (solver
+      // "assembled_by_rows"): one rank's rows at a time on rank 0, never the whole matrix.
       report["mpi"] = {{"ranks", fem::distributed::size()},
-                       {"distributed", "linear solves (assembly and all other stages on rank 0)"},
+                       {"distributed",
+                        "linear solves; matrix storage (assembled by rows on rank 0, one rank's "
+                        "rows at a time, where the solver reports assembled_by_rows); all other "
+                        "stages on rank 0"},
                        {"peak_rss_mb_per_rank", fem::distributed::peak_rss_mb_per_rank()}};
     }
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");

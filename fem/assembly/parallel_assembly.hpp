@@ -12,11 +12,17 @@
 namespace curvefem::fem {
 
 /// compute(cell, Ke, Fe): Ke is local_size², Fe local_size, both zeroed before the call. Either
-/// output may be skipped by passing a null `values` / `load`.
+/// output may be skipped by passing a null `values` / `load`; `pattern` is needed (non-null)
+/// only with `values`.
 using ElementKernel = std::function<void(int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd& Fe)>;
 
+/// active_cells (size num_cells), if given: only the cells flagged are computed and scattered.
 void assemble_cells(int num_cells, int local_size, const ElementKernel& compute,
-                    const SparsePattern& pattern, const Eigen::MatrixXi& cell_dofs, int block_size,
-                    double* values, Eigen::VectorXd* load);
+                    const SparsePattern* pattern, const Eigen::MatrixXi& cell_dofs, int block_size,
+                    double* values, Eigen::VectorXd* load,
+                    const std::vector<char>* active_cells = nullptr);
+
+/// The cells with at least one DOF flagged in `dofs` (size: the DOF count).
+std::vector<char> cells_touching(const Eigen::MatrixXi& cell_dofs, const std::vector<char>& dofs);
 
 }  // namespace curvefem::fem

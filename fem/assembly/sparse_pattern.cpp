@@ -6,8 +6,11 @@
 
 namespace curvefem::fem {
 
-SparsePattern::SparsePattern(const Eigen::MatrixXi& cell_dofs, int num_dofs, int block_size)
+SparsePattern::SparsePattern(const Eigen::MatrixXi& cell_dofs, int num_dofs, int block_size,
+                             const std::vector<char>* row_dofs)
     : m_cell_dofs(cell_dofs), m_block(block_size) {
+  if (row_dofs && static_cast<int>(row_dofs->size()) != num_dofs)
+    throw std::invalid_argument("SparsePattern: row_dofs does not match num_dofs");
   const int nc = static_cast<int>(cell_dofs.rows()), n = static_cast<int>(cell_dofs.cols());
   // The cells' DOF lists row by row (the matrix is column-major), then DOF → cells.
   std::vector<int> dofs(static_cast<std::size_t>(nc) * n);
@@ -25,9 +28,16 @@ SparsePattern::SparsePattern(const Eigen::MatrixXi& cell_dofs, int num_dofs, int
   // neighbours are sorted.
   std::vector<int> row_ptr(static_cast<std::size_t>(num_dofs) + 1, 0), col,
       marker(std::size_t(num_dofs), -1);
-  col.reserve(std::size_t(num_dofs) * std::size_t(std::min(n * 4, 256)));
+  const std::size_t kept_rows =
+      row_dofs ? static_cast<std::size_t>(std::count(row_dofs->begin(), row_dofs->end(), 1))
+               : static_cast<std::size_t>(num_dofs);
+  col.reserve(kept_rows * std::size_t(std::min(n * 4, 256)));
   for (int d = 0; d < num_dofs; ++d) {
     const std::size_t row_start = col.size();
+    if (row_dofs && !(*row_dofs)[std::size_t(d)]) {
+      row_ptr[std::size_t(d) + 1] = static_cast<int>(col.size());
+      continue;
+    }
     for (int i = start[std::size_t(d)]; i < start[std::size_t(d) + 1]; ++i) {
       const int* list = dofs.data() + std::size_t(cells[std::size_t(i)]) * n;
       for (int l = 0; l < n; ++l)
@@ -82,6 +92,7 @@ void SparsePattern::scatter(int cell, const Eigen::MatrixXd& local, double* valu
   for (int a = 0; a < n; ++a)
     for (int i = 0; i < b; ++i) {
       const int row = m_cell_dofs(cell, a) * b + i;
+      if (m_row_ptr[row] == m_row_ptr[row + 1]) continue;  // a row left out (row_dofs)
       const int* col = m_col.data() + m_row_ptr[row];
       double* value = values + m_row_ptr[row];
       const int ai = a * b + i;

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
 
 namespace curvefem::fem {
 
@@ -143,6 +144,34 @@ Eigen::VectorXd solve_constrained(SparseMatrix&& K, const Eigen::VectorXd& F, co
   SparseMatrix owned;
   owned.swap(K);  // not std::move: Eigen's SparseMatrix would copy (linear_solver.hpp)
   return reduce_and_solve(owned, F, c, options, info, &owned);
+}
+
+Eigen::VectorXd solve_constrained_by_rows(const distributed::RowAssembly& system,
+                                          const Eigen::VectorXd& F, const Constraints& c,
+                                          const LinearSolverOptions& options,
+                                          LinearSolveInfo* info) {
+  const int n = static_cast<int>(F.size());
+  CF_VERIFY(static_cast<int>(c.fixed.size()) == n && c.values.size() == n,
+            "constraints do not match the system size");
+  std::vector<int> reduced(static_cast<std::size_t>(n), -1);
+  int m = 0;
+  for (int i = 0; i < n; ++i)
+    if (!c.fixed[std::size_t(i)]) reduced[std::size_t(i)] = m++;
+  LinearSolveInfo local;
+  LinearSolveInfo& out = info ? *info : local;
+  out = {};
+  if (m == 0) return c.values;
+  const bool direct = options.type == SolverType::direct;  // "auto" is cg over several ranks
+  const Eigen::VectorXd uf = distributed::solve_by_rows(
+      system, F, c.values, reduced, m, reduced_options(options, reduced, m), direct, out);
+  log::info("linear solve (", out.method, ", ", out.ranks, " ranks, assembled by rows): ", m,
+            " unknowns, ", out.iterations, " iterations, relative residual ", out.relative_residual,
+            ", setup ", out.setup_s, " s (of it the rows' assembly ", out.assembly_s, " s), solve ",
+            out.solve_s, " s");
+  Eigen::VectorXd u(n);
+  for (int i = 0; i < n; ++i)
+    u[i] = reduced[std::size_t(i)] >= 0 ? uf[reduced[std::size_t(i)]] : c.values[i];
+  return u;
 }
 
 }  // namespace curvefem::fem

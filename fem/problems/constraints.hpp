@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "fem/problems/boundary_conditions.hpp"
+#include "fem/solvers/distributed.hpp"
 #include "fem/solvers/linear_solver.hpp"
 #include "fem/space/function_space.hpp"
 
@@ -34,5 +35,14 @@ Eigen::VectorXd solve_constrained(const SparseMatrix& K, const Eigen::VectorXd& 
 Eigen::VectorXd solve_constrained(SparseMatrix&& K, const Eigen::VectorXd& F,
                                   const Constraints& constraints,
                                   const LinearSolverOptions& options, LinearSolveInfo* info);
+
+/// Several MPI ranks (fem/solvers/distributed.hpp, on rank 0): the same solve with the matrix
+/// assembled by rows, one rank's rows at a time (distributed::solve_by_rows), so that rank 0
+/// never holds the whole matrix. `system` gives the rows of the full system (F's numbering).
+/// "auto" is cg; direct is MUMPS over the ranks.
+Eigen::VectorXd solve_constrained_by_rows(const distributed::RowAssembly& system,
+                                          const Eigen::VectorXd& F, const Constraints& constraints,
+                                          const LinearSolverOptions& options,
+                                          LinearSolveInfo* info);
 
 }  // namespace curvefem::fem

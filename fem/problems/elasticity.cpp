@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <utility>
 
@@ -14,6 +15,7 @@
 #include "fem/problems/kept_operator.hpp"
 #include "fem/problems/nitsche.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
+#include "fem/solvers/distributed.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 
@@ -24,13 +26,15 @@ struct Setup {
   const QuadratureRule* rule;
   GeometryEvaluator geometry;
   ReferenceTabulation basis;
-  SparsePattern pattern;
+  std::unique_ptr<const SparsePattern> pattern;  ///< the whole matrix's (unless left out)
   int n;
-  Setup(const LagrangeMesh& mesh, const FunctionSpace& space, int degree)
+  Setup(const LagrangeMesh& mesh, const FunctionSpace& space, int degree, bool with_pattern = true)
       : rule(&tetrahedron_quadrature(degree)),
         geometry(mesh, rule->points, rule->weights),
         basis(tabulate(CellKind::tetrahedron, space.degree, rule->points)),
-        pattern(space.cell_dofs, space.num_dofs, 3),
+        pattern(with_pattern
+                    ? std::make_unique<const SparsePattern>(space.cell_dofs, space.num_dofs, 3)
+                    : nullptr),
         n(static_cast<int>(space.cell_dofs.cols())) {}
 };
 
@@ -58,7 +62,7 @@ Eigen::VectorXd external_load(const LagrangeMesh& mesh, const FunctionSpace& spa
           for (int i = 0; i < 3; ++i) Fe[3 * a + i] += f[i] * setup.basis.values(q, a);
       }
     };
-    assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, nullptr, &F);
+    assemble_cells(mesh.num_cells(), 3 * n, kernel, nullptr, space.cell_dofs, 3, nullptr, &F);
   }
   if (body) *body = F;
   // Tractions: evaluated at every face point in parallel, summed serially in point order.
@@ -101,11 +105,13 @@ Constraints dirichlet_constraints(const FunctionSpace& space, const ElasticityPr
   return c;
 }
 
-/// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F, on
-/// the constrained components i: −(σ(u)n)ᵢ vᵢ − (σ(v)n)ᵢ (uᵢ − gᵢ) + β (uᵢ − gᵢ) vᵢ.
+/// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F (the
+/// parts assembled: K's rows, F), on the constrained components i: −(σ(u)n)ᵢ vᵢ − (σ(v)n)ᵢ
+/// (uᵢ − gᵢ) + β (uᵢ − gᵢ) vᵢ.
 void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
                  const ElasticityProblem& problem, const VectorDirichlet& bc,
-                 const DirichletFaceSplit& split, SparseMatrix& K, Eigen::VectorXd& F) {
+                 const DirichletFaceSplit& split, SparseMatrix& K, Eigen::VectorXd& F,
+                 const AssemblyParts& parts = {}) {
   const FacePoints& P = split.points;
   const int n = static_cast<int>(space.cell_dofs.cols());
   Eigen::MatrixXd Ke(3 * n, 3 * n);
@@ -154,10 +160,12 @@ void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
     for (int a = 0; a < n; ++a)
       for (int i = 0; i < 3; ++i) {
         const int row = 3 * space.cell_dofs(cell, a) + i;
-        F[row] += Fe[3 * a + i];
-        for (int b = 0; b < n; ++b)
-          for (int j = 0; j < 3; ++j)
-            K.coeffRef(row, 3 * space.cell_dofs(cell, b) + j) += Ke(3 * a + i, 3 * b + j);
+        if (parts.load) F[row] += Fe[3 * a + i];
+        for (int b = 0; b < n; ++b) {
+          const int db = space.cell_dofs(cell, b);
+          if (!parts.keeps(db)) continue;
+          for (int j = 0; j < 3; ++j) K.coeffRef(row, 3 * db + j) += Ke(3 * a + i, 3 * b + j);
+        }
       }
   }
 }
@@ -167,11 +175,14 @@ void gather(const FunctionSpace& space, const Eigen::VectorXd& u, int cell, Eige
     for (int i = 0; i < 3; ++i) U(a, i) = u[3 * space.cell_dofs(cell, a) + i];
 }
 
-/// K of linear elasticity (no Dirichlet data, no Nitsche terms) into `K` (setup's pattern).
+/// K of linear elasticity (no Dirichlet data, no Nitsche terms) into `K` with `pattern` (the
+/// setup's, or one of some rows: then only the cells touching them, `active`, are computed).
 void assemble_stiffness(const LagrangeMesh& mesh, const FunctionSpace& space,
-                        const ElasticityProblem& problem, const Setup& setup, SparseMatrix& K) {
+                        const ElasticityProblem& problem, const Setup& setup,
+                        const SparsePattern& pattern, SparseMatrix& K,
+                        const std::vector<char>* active = nullptr) {
   const int n = setup.n;
-  K = setup.pattern.zero_matrix();
+  K = pattern.zero_matrix();
   const int nq = setup.geometry.num_points();
   // Ke(3a+i, 3b+j) = Σ_q w (λ G_ai G_bj + μ G_aj G_bi + δ_ij μ Σ_k G_ak G_bk), G = ∇φ at q.
   // With M = Σ_q w g_q g_qᵀ for the stacked gradients g_q (row i·n + a = G_ai), one matrix
@@ -235,8 +246,8 @@ void assemble_stiffness(const LagrangeMesh& mesh, const FunctionSpace& space,
                                        mu * M(j * n + a, i * n + b) + (i == j ? mu * trace : 0.0);
         }
   };
-  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, K.valuePtr(),
-                 nullptr);
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, &pattern, space.cell_dofs, 3, K.valuePtr(),
+                 nullptr, active);
 }
 
 /// The stiffness of one solve, with what it depends on, kept in the solver's FactorizationCache
@@ -274,26 +285,34 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   result.dofs = space.num_dofs;
   Stopwatch watch;
   const int quadrature = stiffness_degree(mesh, space, problem);
+  // Several MPI ranks: K is assembled by rows, one rank's at a time, inside the distributed solve
+  // (solve_constrained_by_rows); here only F. Not for traction-only problems (their kernel is
+  // handled on the whole matrix) nor with a cache (load cases keep the whole matrix).
+  const bool by_rows =
+      distributed::active() && !solver.factorization_cache && !problem.dirichlet.empty();
   // The stiffness kept by an earlier solve sharing the solver's cache, if it is this one's.
   std::shared_ptr<KeptStiffness> kept;
-  if (solver.factorization_cache) {
+  std::shared_ptr<const Setup> row_setup;  // by rows: the tables, without the whole pattern
+  if (by_rows) {
+    row_setup = std::make_shared<const Setup>(mesh, space, quadrature, /*with_pattern=*/false);
+  } else if (solver.factorization_cache) {
     kept =
         std::dynamic_pointer_cast<KeptStiffness>(assembly_cache_slot(*solver.factorization_cache));
     if (kept && !kept->matches(mesh, space, problem, quadrature)) kept.reset();
   }
   if (kept) {
     count_assembly(*solver.factorization_cache, true);
-  } else {
+  } else if (!by_rows) {
     kept = std::make_shared<KeptStiffness>(mesh, space, problem, quadrature);
-    assemble_stiffness(mesh, space, problem, *kept->setup, kept->K);
+    assemble_stiffness(mesh, space, problem, *kept->setup, *kept->setup->pattern, kept->K);
     if (solver.factorization_cache) {
       assembly_cache_slot(*solver.factorization_cache) = kept;
       count_assembly(*solver.factorization_cache, false);
     }
   }
-  const Setup& setup = *kept->setup;
+  const Setup& setup = by_rows ? *row_setup : *kept->setup;
   // A copy where the cache keeps it for the next solve; otherwise the assembled matrix itself.
-  SparseMatrix K = solver.factorization_cache ? kept->K : take(kept->K);
+  SparseMatrix K = by_rows ? SparseMatrix() : solver.factorization_cache ? kept->K : take(kept->K);
   Eigen::VectorXd body;
   Eigen::VectorXd F = external_load(mesh, space, problem, setup, &body);
   const Eigen::VectorXd load = F;  // l(v) before the Nitsche terms join F
@@ -301,7 +320,8 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   for (const auto& bc : problem.dirichlet) {
     splits.push_back(
         split_dirichlet_faces(mesh, space, bc.faces, bc.where, problem.partial_dirichlet));
-    add_nitsche(mesh, space, problem, bc, splits.back(), K, F);
+    add_nitsche(mesh, space, problem, bc, splits.back(), K, F,
+                by_rows ? k_load_only : AssemblyParts{});
     result.nitsche_faces += splits.back().partial_faces;
   }
   result.timings.add("assembly", watch.seconds());
@@ -332,7 +352,27 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
     result.load_functional_volume = body.dot(result.u);
     return result;
   }
-  {
+  if (by_rows) {
+    distributed::RowAssembly rows;
+    rows.cell_dofs = &space.cell_dofs;
+    rows.nodes = space.num_dofs;
+    rows.block_size = 3;
+    rows.rows = [&](const std::vector<char>& nodes) {
+      const SparsePattern pattern(space.cell_dofs, space.num_dofs, 3, &nodes);
+      const std::vector<char> active = cells_touching(space.cell_dofs, nodes);
+      SparseMatrix block;
+      assemble_stiffness(mesh, space, problem, *row_setup, pattern, block, &active);
+      Eigen::VectorXd unused;
+      for (std::size_t i = 0; i < problem.dirichlet.size(); ++i)
+        add_nitsche(mesh, space, problem, problem.dirichlet[i], splits[i], block, unused,
+                    AssemblyParts{true, false, &nodes});
+      return block;  // NRVO (a copy at worst: linear_solver.hpp)
+    };
+    Stopwatch solve_watch;
+    result.u = solve_constrained_by_rows(rows, F, constraints, options, &result.solve);
+    result.timings.add("assembly", result.solve.assembly_s);
+    result.timings.add("solve", solve_watch.seconds() - result.solve.assembly_s);
+  } else {
     ScopedTimer t(result.timings, "solve");
     result.u = solve_constrained(std::move(K), F, constraints, options, &result.solve);
   }
@@ -356,7 +396,7 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
   const int n = setup.n;
   NeoHookeanState s;
   s.internal = Eigen::VectorXd::Zero(u.size());
-  if (with_matrix) s.K = setup.pattern.zero_matrix();
+  if (with_matrix) s.K = setup.pattern->zero_matrix();
   std::vector<double> energy(mesh.num_cells(), 0.0);
   std::atomic<bool> valid{true};
   // Tangent: Ke(3a+i, 3b+j) = Σ_q w [μ δij (G Gᵀ)(a,b) + c1 H(a,j) H(b,i) + λ H(a,i) H(b,j)]
@@ -426,7 +466,7 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
     }
     energy[cell] = e;
   };
-  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3,
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern.get(), space.cell_dofs, 3,
                  with_matrix ? s.K.valuePtr() : nullptr, &s.internal);
   s.valid = valid;
   if (!s.valid) {
@@ -559,7 +599,7 @@ ForceBalance force_balance(const LagrangeMesh& mesh, const FunctionSpace& space,
                            const ElasticityProblem& problem, const Eigen::VectorXd& u,
                            bool neo_hookean) {
   ForceBalance out;
-  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
+  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem), /*with_pattern=*/false);
   const int n = setup.n;
   // Applied load, without the basis: Σ_q f(x_q) w_q and Σ_k t(x_k) ds_k.
   if (problem.body_force) {
@@ -611,8 +651,7 @@ ForceBalance force_balance(const LagrangeMesh& mesh, const FunctionSpace& space,
         for (int i = 0; i < 3; ++i) Re[3 * a + i] += g.det_w[q] * GP(a, i);
     }
   };
-  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern, space.cell_dofs, 3, nullptr,
-                 &internal);
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, nullptr, space.cell_dofs, 3, nullptr, &internal);
   const Eigen::VectorXd residual = internal - external_load(mesh, space, problem, setup);
   // Supported unknowns: the fixed ones, and every unknown of a cell with a Nitsche face.
   std::vector<DirichletFaceSplit> splits;

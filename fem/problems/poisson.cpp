@@ -9,6 +9,7 @@
 #include "fem/problems/kept_operator.hpp"
 #include "fem/problems/nitsche.hpp"
 #include "fem/quadrature/simplex_quadrature.hpp"
+#include "fem/solvers/distributed.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 
@@ -54,25 +55,70 @@ struct KeptPoissonStiffness : KeptOperator {
   }
 };
 
+/// Robin: ∫ h φ_a φ_b into K (the parts' rows) and ∫ h u∞ φ_a into F (with the load) at the
+/// same face points (a face's DOFs all belong to its cell, so every entry is in the pattern).
+void add_robin(const LagrangeMesh& mesh, const FunctionSpace& space, const PoissonProblem& problem,
+               const AssemblyParts& parts, AssembledSystem& system) {
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  const int face_degree = default_quadrature_degree(space.degree, mesh.order, QuadratureUse::mass);
+  for (const auto& bc : problem.robin) {
+    const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
+    std::vector<double> h(points.size(), 0.0), u_inf(points.size(), 0.0);
+    const std::vector<char> used =
+        evaluate_at_face_points(points, bc.where, [&](int k, const Eigen::Vector3d& x) {
+          const Eigen::Vector3d normal = points.normal.row(k).transpose();
+          h[std::size_t(k)] = bc.h(x, normal);
+          u_inf[std::size_t(k)] = bc.u_inf(x, normal);
+        });
+    for (int k = 0; k < points.size(); ++k) {
+      if (!used[k]) continue;
+      if (!(h[k] > 0))
+        throw InputError("Robin condition: the coefficient h is " + std::to_string(h[k]) + " at (" +
+                         std::to_string(points.x(k, 0)) + ", " + std::to_string(points.x(k, 1)) +
+                         ", " + std::to_string(points.x(k, 2)) + "); it must be positive");
+      const double w = h[k] * points.ds_w[k];
+      system.robin_area += points.ds_w[k];
+      const double* phi = points.basis.row(points.basis_row[k]).data();
+      const int cell = points.cell[k];
+      for (int a = 0; a < n; ++a) {
+        const int da = space.cell_dofs(cell, a);
+        if (parts.load) system.F[da] += w * u_inf[k] * phi[a];
+        for (int b = 0; b < n; ++b) {
+          const int db = space.cell_dofs(cell, b);
+          if (parts.keeps(db)) system.K.coeffRef(da, db) += w * phi[a] * phi[b];
+        }
+      }
+    }
+  }
+}
+
 /// assemble_poisson, taking the cell part of K from `kept_in` (then only F is assembled over the
-/// cells) or leaving a copy of it, with its pattern, in `kept_out`.
+/// cells) or leaving a copy of it, with its pattern, in `kept_out`; `parts` says what to compute
+/// (without kept_in/kept_out unless whole).
 AssembledSystem assemble_poisson_kept(const LagrangeMesh& mesh, const FunctionSpace& space,
                                       const PoissonProblem& problem,
                                       const KeptPoissonStiffness* kept_in,
-                                      KeptPoissonStiffness* kept_out) {
+                                      KeptPoissonStiffness* kept_out,
+                                      const AssemblyParts& parts = {}) {
   const int p = space.degree;
   const int degree = stiffness_quadrature(mesh, space, problem);
   const QuadratureRule& rule = tetrahedron_quadrature(degree);
   const GeometryEvaluator geometry(mesh, rule.points, rule.weights);
   const ReferenceTabulation basis = tabulate(CellKind::tetrahedron, p, rule.points);
   const int n = static_cast<int>(space.cell_dofs.cols());
-  const bool with_matrix = kept_in == nullptr;
+  CF_VERIFY(parts.matrix || parts.load, "assemble_poisson: nothing to assemble");
+  CF_VERIFY((parts.matrix && parts.load && !parts.rows) || (!kept_in && !kept_out),
+            "assemble_poisson: a kept stiffness with a partial assembly");
+  const bool with_matrix = kept_in == nullptr && parts.matrix;
+  const bool with_load = parts.load;
   const std::shared_ptr<const SparsePattern> pattern =
       kept_in ? kept_in->pattern
-              : std::make_shared<const SparsePattern>(space.cell_dofs, space.num_dofs, 1);
+      : with_matrix
+          ? std::make_shared<const SparsePattern>(space.cell_dofs, space.num_dofs, 1, parts.rows)
+          : nullptr;
   AssembledSystem system;
-  system.K = kept_in ? kept_in->K : pattern->zero_matrix();
-  system.F = Eigen::VectorXd::Zero(space.num_dofs);
+  if (pattern) system.K = kept_in ? kept_in->K : pattern->zero_matrix();
+  if (with_load) system.F = Eigen::VectorXd::Zero(space.num_dofs);
 
   const int nq = geometry.num_points();
   // Straight cells and a constant κ: K_e = κ det J Σ_ij C_ij S_ij with C = J⁻¹J⁻ᵀ and the reference
@@ -99,7 +145,8 @@ AssembledSystem assemble_poisson_kept(const LagrangeMesh& mesh, const FunctionSp
     thread_local Eigen::MatrixXd G, Gw;  // n × 3·nq physical gradients, and weighted by κ det J w
     thread_local Eigen::VectorXd f;      // rhs_batch at the points
     geometry.evaluate(cell, g);
-    if (problem.rhs_batch) {
+    if (!with_load) {
+    } else if (problem.rhs_batch) {
       f.resize(nq);
       problem.rhs_batch(g.x, f);
       Fe.noalias() += basis.values.transpose() * g.det_w.cwiseProduct(f);
@@ -129,11 +176,18 @@ AssembledSystem assemble_poisson_kept(const LagrangeMesh& mesh, const FunctionSp
     }
     Ke.noalias() = Gw * G.transpose();  // Σ_q κ det J w ∇φ ∇φᵀ as one matrix product
   };
-  assemble_cells(mesh.num_cells(), n, kernel, *pattern, space.cell_dofs, 1,
-                 with_matrix ? system.K.valuePtr() : nullptr, &system.F);
+  const std::vector<char> active =
+      parts.rows ? cells_touching(space.cell_dofs, *parts.rows) : std::vector<char>();
+  assemble_cells(mesh.num_cells(), n, kernel, pattern.get(), space.cell_dofs, 1,
+                 with_matrix ? system.K.valuePtr() : nullptr, with_load ? &system.F : nullptr,
+                 parts.rows ? &active : nullptr);
   if (kept_out) {
     kept_out->pattern = pattern;
     kept_out->K = system.K;
+  }
+  if (!with_load) {
+    add_robin(mesh, space, problem, parts, system);
+    return system;
   }
 
   system.F_volume = system.F;
@@ -156,35 +210,7 @@ AssembledSystem assemble_poisson_kept(const LagrangeMesh& mesh, const FunctionSp
     }
   }
   system.flux_integral = system.F.sum() - system.rhs_integral;
-  // Robin: ∫ h φ_a φ_b into K and ∫ h u∞ φ_a into F at the same face points (a face's DOFs all
-  // belong to its cell, so every entry is in the pattern).
-  for (const auto& bc : problem.robin) {
-    const FacePoints points = face_points(mesh, space, bc.faces, face_degree);
-    std::vector<double> h(points.size(), 0.0), u_inf(points.size(), 0.0);
-    const std::vector<char> used =
-        evaluate_at_face_points(points, bc.where, [&](int k, const Eigen::Vector3d& x) {
-          const Eigen::Vector3d normal = points.normal.row(k).transpose();
-          h[std::size_t(k)] = bc.h(x, normal);
-          u_inf[std::size_t(k)] = bc.u_inf(x, normal);
-        });
-    for (int k = 0; k < points.size(); ++k) {
-      if (!used[k]) continue;
-      if (!(h[k] > 0))
-        throw InputError("Robin condition: the coefficient h is " + std::to_string(h[k]) + " at (" +
-                         std::to_string(points.x(k, 0)) + ", " + std::to_string(points.x(k, 1)) +
-                         ", " + std::to_string(points.x(k, 2)) + "); it must be positive");
-      const double w = h[k] * points.ds_w[k];
-      system.robin_area += points.ds_w[k];
-      const double* phi = points.basis.row(points.basis_row[k]).data();
-      const int cell = points.cell[k];
-      for (int a = 0; a < n; ++a) {
-        const int da = space.cell_dofs(cell, a);
-        system.F[da] += w * u_inf[k] * phi[a];
-        for (int b = 0; b < n; ++b)
-          system.K.coeffRef(da, space.cell_dofs(cell, b)) += w * phi[a] * phi[b];
-      }
-    }
-  }
+  add_robin(mesh, space, problem, parts, system);
   return system;
 }
 
@@ -197,10 +223,12 @@ AssembledSystem assemble_poisson(const LagrangeMesh& mesh, const FunctionSpace& 
 
 namespace {
 
-/// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F.
+/// Adds the symmetric Nitsche terms of one Dirichlet condition on its partial faces to K, F (the
+/// parts assembled: K's rows, F).
 void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
                  const PoissonProblem& problem, const ScalarDirichlet& bc,
-                 const DirichletFaceSplit& split, AssembledSystem& system) {
+                 const DirichletFaceSplit& split, AssembledSystem& system,
+                 const AssemblyParts& parts = {}) {
   const FacePoints& P = split.points;
   const int n = static_cast<int>(space.cell_dofs.cols());
   Eigen::MatrixXd Ke(n, n);
@@ -222,8 +250,11 @@ void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
     Fe.noalias() = (w * g) * (beta * phi - kappa * dn);
     for (int a = 0; a < n; ++a) {
       const int da = space.cell_dofs(cell, a);
-      system.F[da] += Fe[a];
-      for (int b = 0; b < n; ++b) system.K.coeffRef(da, space.cell_dofs(cell, b)) += Ke(a, b);
+      if (parts.load) system.F[da] += Fe[a];
+      for (int b = 0; b < n; ++b) {
+        const int db = space.cell_dofs(cell, b);
+        if (parts.keeps(db)) system.K.coeffRef(da, db) += Ke(a, b);
+      }
     }
   }
 }
@@ -235,12 +266,19 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
   PoissonSolution result;
   result.dofs = space.num_dofs;
   AssembledSystem system;
+  // Several MPI ranks: K is assembled by rows, one rank's at a time, inside the distributed solve
+  // (solve_constrained_by_rows); here only F. Not for pure Neumann problems (their kernel is
+  // handled on the whole matrix) nor with a cache (load cases keep the whole matrix).
+  bool by_rows = distributed::active() && !solver.factorization_cache &&
+                 !(problem.dirichlet.empty() && problem.robin.empty());
   {
     ScopedTimer t(result.timings, "assembly");
     // The cell stiffness kept by an earlier solve sharing the solver's cache, if it is this one's.
     const int quadrature = stiffness_quadrature(mesh, space, problem);
     std::shared_ptr<KeptPoissonStiffness> kept;
-    if (solver.factorization_cache) {
+    if (by_rows) {
+      system = assemble_poisson_kept(mesh, space, problem, nullptr, nullptr, k_load_only);
+    } else if (solver.factorization_cache) {
       kept = std::dynamic_pointer_cast<KeptPoissonStiffness>(
           assembly_cache_slot(*solver.factorization_cache));
       if (kept && !kept->matches(mesh, space, problem, quadrature)) kept.reset();
@@ -253,8 +291,15 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
       system = assemble_poisson_kept(mesh, space, problem, nullptr, kept.get());
       assembly_cache_slot(*solver.factorization_cache) = kept;
       count_assembly(*solver.factorization_cache, false);
-    } else {
+    } else if (!by_rows) {
       system = assemble_poisson(mesh, space, problem);
+    }
+    if (by_rows && problem.dirichlet.empty() && system.robin_area == 0) {
+      // Robin conditions that select no point: pure Neumann after all, on the whole matrix.
+      by_rows = false;
+      AssembledSystem whole = assemble_poisson_kept(mesh, space, problem, nullptr, nullptr,
+                                                    AssemblyParts{true, false, nullptr});
+      system.K.swap(whole.K);
     }
   }
   const Eigen::VectorXd load = system.F;  // l(v) before the Nitsche terms join F
@@ -264,7 +309,8 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
     for (const auto& bc : problem.dirichlet) {
       splits.push_back(
           split_dirichlet_faces(mesh, space, bc.faces, bc.where, problem.partial_dirichlet));
-      add_nitsche(mesh, space, problem, bc, splits.back(), system);
+      add_nitsche(mesh, space, problem, bc, splits.back(), system,
+                  by_rows ? k_load_only : AssemblyParts{});
       result.nitsche_faces += splits.back().partial_faces;
     }
   }
@@ -298,7 +344,23 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
     result.load_functional_volume = system.F_volume.dot(result.u);
     return result;
   }
-  {
+  if (by_rows) {
+    distributed::RowAssembly rows;
+    rows.cell_dofs = &space.cell_dofs;
+    rows.nodes = space.num_dofs;
+    rows.block_size = 1;
+    rows.rows = [&](const std::vector<char>& dofs) {
+      const AssemblyParts part{true, false, &dofs};
+      AssembledSystem block = assemble_poisson_kept(mesh, space, problem, nullptr, nullptr, part);
+      for (std::size_t i = 0; i < problem.dirichlet.size(); ++i)
+        add_nitsche(mesh, space, problem, problem.dirichlet[i], splits[i], block, part);
+      return take(block.K);
+    };
+    Stopwatch watch;
+    result.u = solve_constrained_by_rows(rows, system.F, constraints, solver, &result.solve);
+    result.timings.add("assembly", result.solve.assembly_s);
+    result.timings.add("solve", watch.seconds() - result.solve.assembly_s);
+  } else {
     ScopedTimer t(result.timings, "solve");
     result.u = solve_constrained(std::move(system.K), system.F, constraints, solver, &result.solve);
   }

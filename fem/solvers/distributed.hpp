@@ -11,10 +11,16 @@
 // MATMPIAIJ and the same KSP as the one-process engine (CG + GAMG | hypre | ML, rigid-body modes
 // from its owned nodes' coordinates; `direct`: MUMPS Cholesky), the solution is gathered on rank 0
 // (VecScatterCreateToZero) and put back in the caller's numbering.
-// Not distributed (yet): assembly and everything before and after the solve stay on rank 0, so
-// rank 0's peak is at least the assembly's; through the solve, when the caller hands the matrix
-// over (solve_spd(SparseMatrix&&), as the constrained solves do), rank 0 keeps only its own rows
-// like the other ranks, plus its part of the preconditioner.
+// Distributed assembly (solve_by_rows; linear Poisson and elasticity with Dirichlet conditions):
+// the matrix is never whole on rank 0. The partition is computed first, from the cells' node
+// graph; then each rank's rows are assembled (by rank 0, from the cells touching that rank's
+// nodes), reduced by the Dirichlet values and sent, one rank at a time, so rank 0 holds one
+// rank's rows at once, like the others. The element matrices are still computed by rank 0 alone
+// (the coefficients are functions of the case, which only rank 0 holds). Everything else before
+// and after the solve stays on rank 0. The matrix path (solve) remains for the other solves (pure
+// Neumann, Neo-Hookean's Newton steps): there, when the caller hands the matrix over
+// (solve_spd(SparseMatrix&&)), rank 0 keeps only its own rows through the solve, but its peak
+// is at least the whole assembly's.
 //
 // Protocol: every rank calls start(); ranks != 0 call serve(), which returns when rank 0 calls
 // release_workers(); then every rank calls finish(). Between the two, rank 0 alone runs library
@@ -23,6 +29,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,6 +75,31 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
                       const LinearSolverOptions& options, bool direct,
                       const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
                       SparseMatrix* owned);
+
+/// A symmetric system that rank 0 assembles by rows (distributed assembly).
+struct RowAssembly {
+  /// The graph the partition splits: `nodes` nodes, each owning `block_size` consecutive
+  /// unknowns of the full system (node d: unknowns b·d .. b·d+b−1); nodes sharing a cell of
+  /// `cell_dofs` are neighbours.
+  const Eigen::MatrixXi* cell_dofs = nullptr;
+  int nodes = 0;
+  int block_size = 1;
+  /// The rows of the unknowns of the nodes flagged (size `nodes`), every column, in the full
+  /// numbering, as a compressed column-major matrix whose column u holds row u (the matrix is
+  /// symmetric); the columns of the other unknowns may be empty.
+  std::function<SparseMatrix(const std::vector<char>& nodes)> rows;
+};
+
+/// Rank 0, collective: solves the reduced system K_ff x = F_f − K_fd v_d over all ranks, where
+/// reduced[u] is the index of full unknown u among the m free ones (-1: fixed at values[u]) and
+/// `options` are the reduced system's (block size, near-nullspace in the reduced numbering; no
+/// null space). Each rank's rows are assembled by system.rows for the nodes it owns, reduced and
+/// sent before the next rank's are assembled. Returns x in the reduced numbering; fills info as
+/// solve() does. Throws SolverError when CG does not converge.
+Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& F,
+                              const Eigen::VectorXd& values, const std::vector<int>& reduced, int m,
+                              const LinearSolverOptions& options, bool direct,
+                              LinearSolveInfo& info);
 
 /// Renumbering of nodes by owning rank, keeping the order within a rank: new_of[old] and the
 /// first new index of each rank (size ranks + 1). Pure; unit-tested.

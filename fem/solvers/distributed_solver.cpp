@@ -422,6 +422,102 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
   return solve(A, b, options, direct, null_space, info, nullptr);
 }
 
+namespace {
+
+/// The near-nullspace of a system of n rows as options give it: rigid-body modes from
+/// coordinates (blocks of 3), or explicit vectors (orthonormalized here); InputError on sizes.
+struct NearNullspace {
+  bool coordinates = false, vectors = false;
+  Eigen::MatrixXd basis;  // the orthonormalized vectors
+};
+NearNullspace near_nullspace_of(const LinearSolverOptions& options, long long n, bool direct) {
+  NearNullspace out;
+  const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
+  out.coordinates = !direct && options.use_near_nullspace && coordinates.size() > 0;
+  if (out.coordinates &&
+      (options.block_size != 3 || coordinates.cols() != 3 || 3 * coordinates.rows() != n))
+    throw InputError("near-nullspace: " + std::to_string(coordinates.rows()) + "x" +
+                     std::to_string(coordinates.cols()) + " coordinates for " + std::to_string(n) +
+                     " unknowns in blocks of " + std::to_string(options.block_size));
+  out.vectors = !direct && options.use_near_nullspace && !out.coordinates &&
+                options.near_nullspace_vectors.size() > 0;
+  if (out.vectors && options.near_nullspace_vectors.rows() != n)
+    throw InputError("near-nullspace: " + std::to_string(options.near_nullspace_vectors.rows()) +
+                     " rows of vectors for " + std::to_string(n) + " unknowns");
+  if (out.vectors) {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(options.near_nullspace_vectors);
+    out.basis =
+        qr.householderQ() * Eigen::MatrixXd::Identity(n, options.near_nullspace_vectors.cols());
+  }
+  return out;
+}
+
+Header header_of(long long n, long long groups, int bs, int kernel_columns,
+                 const NearNullspace& near, const LinearSolverOptions& options, bool direct) {
+  Header h;
+  h.n = n;
+  h.graph_nodes = groups;
+  h.block_size = bs;
+  h.kernel_columns = kernel_columns;
+  h.vector_columns = near.vectors ? int(near.basis.cols()) : 0;
+  h.coordinates = near.coordinates;
+  h.direct = direct;
+  h.preconditioner = static_cast<int>(options.preconditioner);
+  h.max_iterations = options.max_iterations;
+  h.rtol = options.rtol;
+  return h;
+}
+
+/// Rank 0: broadcasts the solve and its header, and partitions the graph (collective).
+std::vector<int> start_solve(Header& h, const std::vector<int>& ptr, const std::vector<int>& adj,
+                             std::string& partitioner) {
+  broadcast_command(k_solve);
+  MPI_Request request;
+  MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
+  wait(request);
+  return partition(ptr, adj, h.graph_nodes, partitioner);
+}
+
+void fill_info(LinearSolveInfo& info, SolveOutcome& out, bool direct,
+               const LinearSolverOptions& options, const std::string& partitioner,
+               double partition_s, double distribute_s) {
+  info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + to_string(options.preconditioner);
+  info.iterations = out.iterations;
+  info.relative_residual = out.relative_residual;
+  info.residual_history = std::move(out.history);
+  info.near_nullspace = out.near_nullspace;
+  info.setup_s = partition_s + distribute_s + out.setup_s;
+  info.solve_s = out.solve_s;
+  info.ranks = g_size;
+  info.partitioner = partitioner;
+  info.partition_s = partition_s;
+  info.distribute_s = distribute_s;
+}
+
+void throw_if_failed(const SolveOutcome& out, const LinearSolveInfo& info, bool direct) {
+  if (out.reason >= 0) return;
+  std::ostringstream s;
+  s << (direct ? "MUMPS Cholesky failed" : "distributed CG did not converge") << " (PETSc reason "
+    << out.reason << ") after " << out.iterations << " iterations on " << g_size
+    << " ranks; residual history:";
+  const auto& hist = info.residual_history;
+  for (std::size_t i = 0; i < hist.size(); i += std::max<std::size_t>(1, hist.size() / 10))
+    s << ' ' << hist[i];
+  throw SolverError(s.str());
+}
+
+/// At most this many vertices in the graph PT-Scotch partitions on rank 0: nodes are grouped in
+/// runs of consecutive ones. The DOFs are numbered in spatial order (fem/space), so consecutive
+/// nodes are near each other; grouping keeps the partitioning's memory on rank 0 (it holds the
+/// whole graph) a fraction of the matrix's instead of several times the pattern's.
+constexpr long long k_graph_target = 1 << 17;
+
+long long group_size(long long nodes) {
+  return std::max(1LL, (nodes + k_graph_target - 1) / k_graph_target);
+}
+
+}  // namespace
+
 Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
                       const LinearSolverOptions& options, bool direct,
                       const Eigen::MatrixXd& null_space, LinearSolveInfo& info,
@@ -429,28 +525,12 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
   if (!active() || g_rank != 0) throw Error("distributed::solve: only on rank 0 of several");
   CF_VERIFY(owned == nullptr || owned == &A, "distributed::solve: owned must be A");
   const long long n = A.rows();
+  const NearNullspace near = near_nullspace_of(options, n, direct);
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
-  const bool use_coordinates = !direct && options.use_near_nullspace && coordinates.size() > 0;
-  if (use_coordinates &&
-      (options.block_size != 3 || coordinates.cols() != 3 || 3 * coordinates.rows() != n))
-    throw InputError("near-nullspace: " + std::to_string(coordinates.rows()) + "x" +
-                     std::to_string(coordinates.cols()) + " coordinates for " + std::to_string(n) +
-                     " unknowns in blocks of " + std::to_string(options.block_size));
-  const bool use_vectors = !direct && options.use_near_nullspace && !use_coordinates &&
-                           options.near_nullspace_vectors.size() > 0;
-  if (use_vectors && options.near_nullspace_vectors.rows() != n)
-    throw InputError("near-nullspace: " + std::to_string(options.near_nullspace_vectors.rows()) +
-                     " rows of vectors for " + std::to_string(n) + " unknowns");
   const int bs = std::max(1, options.block_size);
   if (n % bs != 0)
     throw InputError("distributed solve: " + std::to_string(n) + " unknowns in blocks of " +
                      std::to_string(bs));
-  Eigen::MatrixXd vectors;
-  if (use_vectors) {
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(options.near_nullspace_vectors);
-    vectors =
-        qr.householderQ() * Eigen::MatrixXd::Identity(n, options.near_nullspace_vectors.cols());
-  }
   Stopwatch watch;
   SparseMatrix copy;  // only when A is not compressed (the assemblies' matrices are)
   if (!A.isCompressed()) {
@@ -458,15 +538,10 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     copy.makeCompressed();
   }
   const SparseMatrix& C = A.isCompressed() ? A : copy;
-  // The node graph: node i = rows i*bs .. i*bs+bs-1; neighbours from the (symmetric) pattern.
   // The graph PT-Scotch partitions: nodes (blocks of bs rows) in groups of `group` consecutive
-  // ones, neighbours from the (symmetric) pattern. The DOFs are numbered in spatial order
-  // (fem/space), so consecutive nodes are near each other; grouping keeps the graph at most
-  // k_graph_target vertices, whose partitioning on rank 0 (it holds the whole graph) then costs
-  // a fraction of the matrix's memory instead of several times the pattern's.
-  constexpr long long k_graph_target = 1 << 17;
+  // ones, neighbours from the (symmetric) pattern.
   const long long nodes = n / bs;
-  const long long group = std::max(1LL, (nodes + k_graph_target - 1) / k_graph_target);
+  const long long group = group_size(nodes);
   const long long groups = (nodes + group - 1) / group;
   std::vector<int> ptr(std::size_t(groups) + 1, 0), adj;
   {
@@ -485,26 +560,12 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     }
     adj.shrink_to_fit();
   }
-  Header h;
-  h.n = n;
-  h.graph_nodes = groups;
-  h.block_size = bs;
-  h.kernel_columns = int(null_space.cols());
-  h.vector_columns = use_vectors ? int(vectors.cols()) : 0;
-  h.coordinates = use_coordinates;
-  h.direct = direct;
-  h.preconditioner = static_cast<int>(options.preconditioner);
-  h.max_iterations = options.max_iterations;
-  h.rtol = options.rtol;
-  broadcast_command(k_solve);
+  Header h = header_of(n, groups, bs, int(null_space.cols()), near, options, direct);
   SolveOutcome out;
   Eigen::VectorXd x(n);
   try {
-    MPI_Request request;
-    MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
-    wait(request);
     std::string partitioner;
-    const std::vector<int> group_owner = partition(ptr, adj, groups, partitioner);
+    const std::vector<int> group_owner = start_solve(h, ptr, adj, partitioner);
     release(ptr);
     release(adj);
     std::vector<int> owner(static_cast<std::size_t>(nodes));
@@ -546,7 +607,7 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
         part.row_ptr.push_back(static_cast<PetscInt>(part.cols.size()));
         part.b[std::size_t(k - first)] = b[old];
       }
-      if (use_coordinates) {
+      if (near.coordinates) {
         part.coordinates.reserve(m);
         for (int k = first / 3; k < last / 3; ++k)
           for (int c = 0; c < 3; ++c)
@@ -559,7 +620,7 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
             out.push_back(V(r.old_of[std::size_t(k / bs)] * bs + k % bs, j));
       };
       slice(null_space, part.kernel);
-      if (use_vectors) slice(vectors, part.vectors);
+      if (near.vectors) slice(near.basis, part.vectors);
       info.rows_per_rank.insert(info.rows_per_rank.begin(), static_cast<long long>(m));
       if (p == 0)
         own = std::move(part);
@@ -570,33 +631,169 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     if (owned) fem::release(*owned);  // rank 0 keeps its own rows only, like the others
     const double distribute_s = watch.seconds() - partition_s;
     out = solve_part(h, own);
-    info.method = direct ? "petsc-mumps-cholesky" : "petsc-cg-" + to_string(options.preconditioner);
-    info.iterations = out.iterations;
-    info.relative_residual = out.relative_residual;
-    info.residual_history = std::move(out.history);
-    info.near_nullspace = out.near_nullspace;
-    info.setup_s = partition_s + distribute_s + out.setup_s;
-    info.solve_s = out.solve_s;
-    info.ranks = g_size;
-    info.partitioner = partitioner;
-    info.partition_s = partition_s;
-    info.distribute_s = distribute_s;
+    fill_info(info, out, direct, options, partitioner, partition_s, distribute_s);
     for (long long i = 0; i < n; ++i) x[i] = out.x[std::size_t(new_row(int(i)))];
   } catch (const std::exception& e) {
     // The other ranks are somewhere in the protocol: nothing brings them back to serve().
     log::error("distributed solve: ", e.what());
     abort(3);
   }
-  if (out.reason < 0) {
-    std::ostringstream s;
-    s << (direct ? "MUMPS Cholesky failed" : "distributed CG did not converge") << " (PETSc reason "
-      << out.reason << ") after " << out.iterations << " iterations on " << g_size
-      << " ranks; residual history:";
-    const auto& hist = info.residual_history;
-    for (std::size_t i = 0; i < hist.size(); i += std::max<std::size_t>(1, hist.size() / 10))
-      s << ' ' << hist[i];
-    throw SolverError(s.str());
+  throw_if_failed(out, info, direct);
+  return x;
+}
+
+Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& F,
+                              const Eigen::VectorXd& values, const std::vector<int>& reduced, int m,
+                              const LinearSolverOptions& options, bool direct,
+                              LinearSolveInfo& info) {
+  if (!active() || g_rank != 0)
+    throw Error("distributed::solve_by_rows: only on rank 0 of several");
+  CF_VERIFY(system.cell_dofs && system.rows && system.block_size >= 1,
+            "distributed::solve_by_rows: incomplete system");
+  const int fb = system.block_size;  // unknowns per node of the full system
+  const long long full = static_cast<long long>(system.nodes) * fb;
+  CF_VERIFY(
+      F.size() == full && values.size() == full && static_cast<long long>(reduced.size()) == full,
+      "distributed::solve_by_rows: sizes do not match the system");
+  const NearNullspace near = near_nullspace_of(options, m, direct);
+  const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
+  const int bs = std::max(1, options.block_size);
+  if (m % bs != 0)
+    throw InputError("distributed solve: " + std::to_string(m) + " unknowns in blocks of " +
+                     std::to_string(bs));
+  Stopwatch watch;
+  // The graph PT-Scotch partitions: the full system's nodes in groups of consecutive ones,
+  // neighbours through the cells (node -> cells incidence, then each group's cells' nodes).
+  const Eigen::MatrixXi& cells = *system.cell_dofs;
+  const long long nodes = system.nodes;
+  const long long group = group_size(nodes);
+  const long long groups = (nodes + group - 1) / group;
+  std::vector<int> ptr(std::size_t(groups) + 1, 0), adj;
+  {
+    const int nc = static_cast<int>(cells.rows()), nl = static_cast<int>(cells.cols());
+    std::vector<int> start(std::size_t(nodes) + 1, 0);
+    for (int c = 0; c < nc; ++c)
+      for (int l = 0; l < nl; ++l) ++start[std::size_t(cells(c, l)) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<int> incident(std::size_t(start.back())), fill(start.begin(), start.end() - 1);
+    for (int c = 0; c < nc; ++c)
+      for (int l = 0; l < nl; ++l) incident[std::size_t(fill[std::size_t(cells(c, l))]++)] = c;
+    release(fill);
+    std::vector<int> seen(std::size_t(groups), -1);
+    for (long long G = 0; G < groups; ++G) {
+      for (long long i = G * group; i < std::min(nodes, (G + 1) * group); ++i)
+        for (int k = start[std::size_t(i)]; k < start[std::size_t(i) + 1]; ++k)
+          for (int l = 0; l < nl; ++l) {
+            const int J = int(cells(incident[std::size_t(k)], l) / group);
+            if (J != G && seen[std::size_t(J)] != int(G)) {
+              seen[std::size_t(J)] = int(G);
+              adj.push_back(J);
+            }
+          }
+      ptr[std::size_t(G) + 1] = int(adj.size());
+    }
+    adj.shrink_to_fit();
   }
+  Header h = header_of(m, groups, bs, 0, near, options, direct);
+  SolveOutcome out;
+  Eigen::VectorXd x(m);
+  try {
+    std::string partitioner;
+    const std::vector<int> group_owner = start_solve(h, ptr, adj, partitioner);
+    release(ptr);
+    release(adj);
+    // Owners: of every node, then of every free unknown (its node's); new numbers by owner,
+    // keeping the order within a rank, so blocks of free nodes stay aligned.
+    std::vector<int> full_of(std::size_t(m), -1), row_owner(std::size_t(m), 0);
+    for (long long u = 0; u < full; ++u) {
+      const int k = reduced[std::size_t(u)];
+      if (k < 0) continue;
+      CF_VERIFY(k < m, "distributed::solve_by_rows: a reduced index beyond m");
+      full_of[std::size_t(k)] = int(u);
+      row_owner[std::size_t(k)] = group_owner[std::size_t(u / fb / group)];
+    }
+    const Renumbering r = renumber_by_owner(row_owner, g_size);
+    release(row_owner);
+    const double partition_s = watch.seconds();
+    double assemble_s = 0;
+    LocalPart own;
+    for (int p = g_size - 1; p >= 0; --p) {
+      const int first = r.offsets[std::size_t(p)], last = r.offsets[std::size_t(p) + 1];
+      CF_VERIFY(first % bs == 0 && last % bs == 0,
+                "distributed::solve_by_rows: a block split between ranks");
+      std::vector<char> mine(std::size_t(nodes), 0);
+      for (long long i = 0; i < nodes; ++i)
+        mine[std::size_t(i)] = group_owner[std::size_t(i / group)] == p;
+      Stopwatch assembly;
+      SparseMatrix A = system.rows(mine);
+      assemble_s += assembly.seconds();
+      release(mine);
+      CF_VERIFY(A.isCompressed() && A.rows() == full && A.cols() == full,
+                "distributed::solve_by_rows: the rows assembled do not match the system");
+      LocalPart part;
+      const std::size_t rows = std::size_t(last - first);
+      part.row_ptr.reserve(rows + 1);
+      part.row_ptr.push_back(0);
+      part.b.resize(rows);
+      std::size_t entries = 0;
+      for (int k = first; k < last; ++k) {
+        const int u = full_of[std::size_t(r.old_of[std::size_t(k)])];
+        entries += std::size_t(A.outerIndexPtr()[u + 1] - A.outerIndexPtr()[u]);
+      }
+      part.cols.reserve(entries);
+      part.values.reserve(entries);
+      std::vector<std::pair<PetscInt, double>> row;
+      for (int k = first; k < last; ++k) {
+        const int u = full_of[std::size_t(r.old_of[std::size_t(k)])];
+        CF_VERIFY(A.outerIndexPtr()[u + 1] > A.outerIndexPtr()[u],
+                  "distributed::solve_by_rows: an owned row was not assembled");
+        double b = F[u];
+        row.clear();
+        for (SparseMatrix::InnerIterator it(A, u); it; ++it) {  // column u = row u
+          const int j = reduced[std::size_t(it.row())];
+          if (j >= 0)
+            row.emplace_back(r.new_of[std::size_t(j)], it.value());
+          else
+            b -= it.value() * values[it.row()];
+        }
+        std::sort(row.begin(), row.end());
+        for (const auto& [c, v] : row) {
+          part.cols.push_back(c);
+          part.values.push_back(v);
+        }
+        part.row_ptr.push_back(static_cast<PetscInt>(part.cols.size()));
+        part.b[std::size_t(k - first)] = b;
+      }
+      fem::release(A);
+      if (near.coordinates) {
+        part.coordinates.reserve(rows);
+        for (int k = first; k < last; k += 3)
+          for (int c = 0; c < 3; ++c)
+            part.coordinates.push_back(coordinates(r.old_of[std::size_t(k)] / 3, c));
+      }
+      if (near.vectors) {
+        part.vectors.reserve(rows * std::size_t(near.basis.cols()));
+        for (Eigen::Index j = 0; j < near.basis.cols(); ++j)
+          for (int k = first; k < last; ++k)
+            part.vectors.push_back(near.basis(r.old_of[std::size_t(k)], j));
+      }
+      info.rows_per_rank.insert(info.rows_per_rank.begin(), static_cast<long long>(rows));
+      if (p == 0)
+        own = std::move(part);
+      else
+        send_part(part, p);
+    }
+    const double distribute_s = watch.seconds() - partition_s;
+    out = solve_part(h, own);
+    fill_info(info, out, direct, options, partitioner, partition_s, distribute_s);
+    info.assembly_s = assemble_s;
+    info.assembled_by_rows = true;
+    for (int k = 0; k < m; ++k) x[k] = out.x[std::size_t(r.new_of[std::size_t(k)])];
+  } catch (const std::exception& e) {
+    log::error("distributed solve: ", e.what());
+    abort(3);
+  }
+  throw_if_failed(out, info, direct);
   return x;
 }
 

@@ -102,6 +102,10 @@ struct LinearSolveInfo {
   std::vector<long long> rows_per_rank;          ///< rows owned by each rank (empty on one rank)
   std::string partitioner;                       ///< "ptscotch" | "contiguous" (several ranks)
   double partition_s = 0.0, distribute_s = 0.0;  ///< parts of setup_s
+  /// Distributed assembly (distributed::solve_by_rows): the matrix was never whole on rank 0,
+  /// each rank's rows were assembled in turn; assembly_s (part of distribute_s) is their time.
+  bool assembled_by_rows = false;
+  double assembly_s = 0.0;
 };
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;

@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "fem/assembly/parallel_assembly.hpp"
 #include "fem/problems/poisson.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/primitives.hpp"
@@ -181,4 +183,57 @@ TEST(SparseMatrixOwnership, TakeMovesTheStorageAndReleaseFreesIt) {
   EXPECT_EQ(C.nonZeros(), 1000);  // std::move left C whole: it copied
   C = curvefem::fem::SparseMatrix();
   EXPECT_GE(C.data().allocatedSize(), 1000);  // cleared, not freed
+}
+
+// Distributed assembly (fem/solvers/distributed.hpp, solve_by_rows) assembles a matrix by blocks
+// of rows: a pattern of some DOFs' rows, and only the cells touching them. Those rows must be the
+// whole matrix's, bit for bit (same cells, same order), and the other rows empty.
+TEST(Assembly, RowsOfSomeDofsAreTheWholeMatricesRowsBitForBit) {
+  const LagrangeMesh mesh = wobbly_cube(3, 2);
+  const fem::FunctionSpace space = fem::build_function_space(mesh, 2);
+  const int n = static_cast<int>(space.cell_dofs.cols());
+  for (const int b : {1, 3}) {
+    // A symmetric element matrix depending on the cell (values of all magnitudes).
+    const fem::ElementKernel kernel = [&](int cell, Eigen::MatrixXd& Ke, Eigen::VectorXd&) {
+      for (int i = 0; i < b * n; ++i)
+        for (int j = 0; j <= i; ++j)
+          Ke(i, j) = Ke(j, i) = std::sin(1.0 + cell + 0.37 * i * j) * std::exp(0.1 * (i - j));
+    };
+    const fem::SparsePattern whole(space.cell_dofs, space.num_dofs, b);
+    auto K = whole.zero_matrix();
+    fem::assemble_cells(mesh.num_cells(), b * n, kernel, &whole, space.cell_dofs, b, K.valuePtr(),
+                        nullptr);
+    // The DOFs of one corner of the cube (a rank's part), and every third DOF (scattered).
+    for (const int kind : {0, 1}) {
+      std::vector<char> rows(static_cast<std::size_t>(space.num_dofs), 0);
+      for (int d = 0; d < space.num_dofs; ++d)
+        rows[std::size_t(d)] =
+            kind == 0 ? space.dof_points(d, 0) < 0.4 && space.dof_points(d, 1) < 0.6 : d % 3 == 0;
+      const std::vector<char> active = fem::cells_touching(space.cell_dofs, rows);
+      const long long used = std::count(active.begin(), active.end(), 1);
+      EXPECT_GT(used, 0);
+      if (kind == 0) EXPECT_LT(used, mesh.num_cells());
+      const fem::SparsePattern some(space.cell_dofs, space.num_dofs, b, &rows);
+      EXPECT_LT(some.nonzeros(), whole.nonzeros());
+      auto A = some.zero_matrix();
+      fem::assemble_cells(mesh.num_cells(), b * n, kernel, &some, space.cell_dofs, b, A.valuePtr(),
+                          nullptr, &active);
+      long long kept = 0;
+      for (int u = 0; u < b * space.num_dofs; ++u) {
+        const int begin = A.outerIndexPtr()[u], end = A.outerIndexPtr()[u + 1];
+        if (!rows[std::size_t(u / b)]) {
+          ASSERT_EQ(begin, end) << "row " << u << " is not one of the rows asked for";
+          continue;
+        }
+        const int wb = K.outerIndexPtr()[u], we = K.outerIndexPtr()[u + 1];
+        ASSERT_EQ(end - begin, we - wb) << "row " << u;
+        for (int k = 0; k < end - begin; ++k) {
+          ASSERT_EQ(A.innerIndexPtr()[begin + k], K.innerIndexPtr()[wb + k]);
+          ASSERT_EQ(A.valuePtr()[begin + k], K.valuePtr()[wb + k]) << "row " << u;
+        }
+        ++kept;
+      }
+      EXPECT_EQ(kept, b * std::count(rows.begin(), rows.end(), 1));
+    }
+  }
 }

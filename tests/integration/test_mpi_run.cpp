@@ -106,6 +106,9 @@ TEST(MpiRun, PoissonP2OneAndTwoRanksAgree) {
   std::printf("Poisson P2: 1 vs 2 ranks, relative max difference %.3e\n", d);
   const auto r1 = report(one), r2 = report(two);
   expect_two_rank_report(r1, r2, "petsc-cg-gamg");
+  // The matrix was assembled by rows, one rank's at a time (distributed::solve_by_rows).
+  EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
+  EXPECT_GT(r2["solver"]["rows_assembly_s"].get<double>(), 0.0);
   EXPECT_NEAR(r2["l2_error"].get<double>(), r1["l2_error"].get<double>(),
               1e-8 * r1["l2_error"].get<double>());
   EXPECT_GT(r1["l2_error"].get<double>(), 1e-8);  // not in the space: the test can fail
@@ -132,6 +135,45 @@ TEST(MpiRun, ElasticityP2OneAndTwoRanksAgreeWithRigidBodyModes) {
   expect_two_rank_report(r1, r2, "petsc-cg-gamg");
   EXPECT_EQ(r2["solver"]["near_nullspace"], "rigid-body modes");
   EXPECT_EQ(r2["solver"]["rows_per_rank"][0].get<long long>() % 3, 0);
+  EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
+}
+
+// The boundary terms of a matrix assembled by rows: Robin's ∫ h u v and the Nitsche terms of a
+// Dirichlet selection that cuts boundary faces (Poisson; elasticity's Nitsche terms with
+// "partial_dirichlet": "nitsche"), each rank's rows from the same face points as one rank's.
+TEST(MpiRun, RobinAndNitscheTermsAssembledByRowsAgree) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const std::string poisson = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "poisson", "kappa": "1 + x*y"},
+    "discretization": {"degree": 2},
+    "rhs": "1 + z",
+    "boundary_conditions": [
+      {"type": "robin", "select": {"tag": 2}, "h": "2 + x", "u_inf": "y"},
+      {"type": "dirichlet", "select": {"box": [[-1, -1, -1], [0.3, 2, 0.55]]}, "value": "x*z"}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const std::string elasticity = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "linear_elasticity", "E": 1000, "nu": 0.3},
+    "discretization": {"degree": 2, "partial_dirichlet": "nitsche"},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"box": [[-1, -1, -1], [0.3, 2, 0.55]]}, "value": [0, 0, 0]},
+      {"type": "neumann", "select": {"tag": 2}, "value": [1, 0, "-1"]}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  for (const auto& [name, text] : {std::pair{"poisson", poisson}, {"elasticity", elasticity}}) {
+    const auto dir = test::scratch_dir(std::string("mpi_boundary_terms_") + name);
+    const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+    EXPECT_LT(relative_difference(one, two), 1e-8) << name;
+    const auto r1 = report(one), r2 = report(two);
+    expect_two_rank_report(r1, r2, "petsc-cg-gamg");
+    EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>()) << name;
+    // The selection cuts faces: Nitsche terms were assembled (the test covers them).
+    EXPECT_GT(r1["physics_details"]["nitsche_faces"].get<int>(), 0) << name;
+    EXPECT_EQ(r1["physics_details"]["nitsche_faces"], r2["physics_details"]["nitsche_faces"]);
+  }
 }
 
 TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
@@ -152,6 +194,7 @@ TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
   const auto r1 = report(one), r2 = report(two);
   EXPECT_EQ(r1["solver"]["method"], "cholmod-supernodal");
   expect_two_rank_report(r1, r2, "petsc-mumps-cholesky");
+  EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
 }
 
 // Pure Neumann Poisson (CG on the singular system with its kernel, and MUMPS after pinning) and
@@ -173,6 +216,8 @@ TEST(MpiRun, SingularSystemsAndExplicitNearNullspaceVectors) {
     const auto r2 = report(two);
     EXPECT_EQ(r2["solver"]["null_space_dim"], 1) << solver;
     EXPECT_EQ(r2["solver"]["ranks"], 2) << solver;
+    // Singular: solved on the whole matrix (its kernel), not assembled by rows.
+    EXPECT_FALSE(r2["solver"]["assembled_by_rows"].get<bool>()) << solver;
   }
   const auto dir = test::scratch_dir("mpi_vectors");
   const std::string text = R"json({
@@ -192,6 +237,7 @@ TEST(MpiRun, SingularSystemsAndExplicitNearNullspaceVectors) {
   EXPECT_EQ(r1["solver"]["near_nullspace"], "vectors");
   expect_two_rank_report(r1, r2, "petsc-cg-gamg");
   EXPECT_EQ(r2["solver"]["near_nullspace"], "vectors");
+  EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
 }
 
 // Failures on rank 0 end every rank: a bad case file (exit 2) and a CG that does not converge in
