@@ -8,6 +8,10 @@ mpi.peak_rss_mb_per_rank; one rank: peak_rss_mb).
 
   /usr/bin/python3 benchmarks/run_mpi.py --build build [--cases poisson_p2,elasticity_p2]
       [--divisions-poisson 50] [--divisions-elasticity 35] [--threads 1]
+
+Each case runs on 1 rank, on 2 ranks with the case's default `solver.parallel_ptap` ("auto"),
+and on 2 ranks with the other choice ("scalable" for elasticity, "allatonce" for Poisson), so the
+table compares GAMG's two parallel Galerkin products side by side.
 """
 import argparse
 import json
@@ -67,12 +71,17 @@ def read_vtu_field(path):
     return np.frombuffer(raw, dtype="<f8")
 
 
-def run(build, work, name, divisions, ranks, threads):
+def run(build, work, name, divisions, ranks, threads, ptap=None):
     os.makedirs(work, exist_ok=True)
-    case = os.path.join(work, f"{name}.json")
+    text = case_text(name, divisions)
+    tag = ""
+    if ptap:
+        text["solver"]["parallel_ptap"] = ptap
+        tag = "_" + ptap
+    case = os.path.join(work, f"{name}{tag}.json")
     with open(case, "w") as f:
-        json.dump(case_text(name, divisions), f, indent=1)
-    out = os.path.join(work, f"{name}_n{ranks}")
+        json.dump(text, f, indent=1)
+    out = os.path.join(work, f"{name}_n{ranks}{tag}")
     cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", str(ranks),
            os.path.join(build, "tools/curvefem/curvefem"), "run", "-q", case, "-o", out,
            "--threads", str(threads)]
@@ -100,40 +109,64 @@ def main():
              + time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()) + ", 2-core machine "
              "(shared with other builds: times indicative). The linear solve is distributed, and "
              "the matrix is assembled by rows, one rank's rows at a time on rank 0, where the "
-             "solver row says \"by rows\" (fem/solvers/distributed.hpp); the element matrices "
+             "matrix row says \"by rows\" (fem/solvers/distributed.hpp); the element matrices "
              "and every other stage are computed on rank 0.", ""]
     for name in a.cases.split(","):
         d = a.divisions_poisson if name == "poisson_p2" else a.divisions_elasticity
-        runs = {n: run(a.build, a.work, name, d, n, a.threads) for n in (1, 2)}
-        u1 = read_vtu_field(os.path.join(runs[1]["out"], "volume.vtu"))
-        u2 = read_vtu_field(os.path.join(runs[2]["out"], "volume.vtu"))
-        diff = float(np.max(np.abs(u1 - u2)) / np.max(np.abs(u1)))
-        r1, r2 = runs[1]["report"], runs[2]["report"]
+        other = "allatonce" if name == "poisson_p2" else "scalable"
+        runs = [run(a.build, a.work, name, d, 1, a.threads),
+                run(a.build, a.work, name, d, 2, a.threads),
+                run(a.build, a.work, name, d, 2, a.threads, other)]
+        u = [read_vtu_field(os.path.join(r["out"], "volume.vtu")) for r in runs]
+        diffs = [float(np.max(np.abs(u[0] - v)) / np.max(np.abs(u[0]))) for v in u[1:]]
+        reps = [r["report"] for r in runs]
+        r1 = reps[0]
         lines += [f"## {name}: builtin cube, {d} divisions, {r1['tets']} tets, {r1['dofs']} DOFs",
-                  "", "```"] + [runs[n]["cmd"] for n in (1, 2)] + ["```", "",
-                  f"max |u1 - u2| / max |u1| = {diff:.3e}", ""]
-        stages = sorted(set(r1["time_s"]) | set(r2["time_s"]))
-        lines += ["| | 1 rank | 2 ranks |", "|---|---|---|"]
+                  "", "```"] + [r["cmd"] for r in runs] + ["```", "",
+                  "max |u1 - u2| / max |u1| = " + ", ".join(f"{x:.3e}" for x in diffs)
+                  + " (2 ranks, then 2 ranks with " + other + ")", ""]
+        stages = sorted(set().union(*(set(r["time_s"]) for r in reps)))
+        lines += [f"| | 1 rank | 2 ranks (auto) | 2 ranks ({other}) |", "|---|---|---|---|"]
         for s in stages:
-            lines.append(f"| time `{s}` (s) | {r1['time_s'].get(s, 0):.2f} | "
-                         f"{r2['time_s'].get(s, 0):.2f} |")
-        s1, s2 = r1["solver"], r2["solver"]
-        lines += [f"| wall (mpirun, s) | {runs[1]['wall']:.1f} | {runs[2]['wall']:.1f} |",
-                  f"| solver | {s1['method']}, {s1['iterations']} it | "
-                  f"{s2['method']}, {s2['iterations']} it |",
-                  f"| solver setup / solve (s) | {s1['setup_s']:.2f} / {s1['solve_s']:.2f} | "
-                  f"{s2['setup_s']:.2f} / {s2['solve_s']:.2f} (partition "
-                  f"{s2.get('partition_s', 0):.2f}, distribute {s2.get('distribute_s', 0):.2f}) |",
-                  f"| matrix | whole | "
-                  + (f"by rows (their assembly {s2.get('rows_assembly_s', 0):.2f} s)"
-                     if s2.get("assembled_by_rows") else "whole on rank 0") + " |",
-                  f"| rows per rank | {sum(s2.get('rows_per_rank', [0]))} (all) | "
-                  f"{s2.get('rows_per_rank')} ({s2.get('partitioner')}) |",
-                  f"| peak RSS per rank (MiB) | {r1['peak_rss_mb']:.0f} | "
-                  + ", ".join(f"{m:.0f}" for m in r2["mpi"]["peak_rss_mb_per_rank"]) + " |",
-                  f"| max rank / 1 rank | 1 | "
-                  f"{max(r2['mpi']['peak_rss_mb_per_rank']) / r1['peak_rss_mb']:.2f} |", ""]
-        print("\n".join(lines[-20:]), flush=True)
+            lines.append(f"| time `{s}` (s) | "
+                         + " | ".join(f"{r['time_s'].get(s, 0):.2f}" for r in reps) + " |")
+        sv = [r["solver"] for r in reps]
+
+        def setup(x):
+            extra = ""
+            if "partition_s" in x:
+                extra = (f" (partition {x['partition_s']:.2f}, distribute "
+                         f"{x['distribute_s']:.2f})")
+            return f"{x['setup_s']:.2f} / {x['solve_s']:.2f}{extra}"
+
+        def matrix(x):
+            if "ranks" not in x:
+                return "whole"
+            return (f"by rows (their assembly {x.get('rows_assembly_s', 0):.2f} s)"
+                    if x.get("assembled_by_rows") else "whole on rank 0")
+
+        def rss(r):
+            return ", ".join(f"{m:.0f}" for m in r.get("mpi", {}).get(
+                "peak_rss_mb_per_rank", [r["peak_rss_mb"]]))
+
+        def ratio(r):
+            return max(r.get("mpi", {}).get("peak_rss_mb_per_rank", [r["peak_rss_mb"]])) \
+                / r1["peak_rss_mb"]
+
+        lines += ["| wall (mpirun, s) | " + " | ".join(f"{r['wall']:.1f}" for r in runs) + " |",
+                  "| solver | " + " | ".join(f"{x['method']}, {x['iterations']} it" for x in sv)
+                  + " |",
+                  "| parallel Galerkin product (`-matptap_via`) | – | "
+                  + " | ".join(x.get("parallel_ptap", "–") for x in sv[1:]) + " |",
+                  "| solver setup / solve (s) | " + " | ".join(setup(x) for x in sv) + " |",
+                  "| matrix | " + " | ".join(matrix(x) for x in sv) + " |",
+                  "| rows per rank | " + " | ".join(
+                      f"{x.get('rows_per_rank')} ({x.get('partitioner')})" if "ranks" in x
+                      else "all" for x in sv) + " |",
+                  "| peak RSS per rank (MiB) | " + " | ".join(rss(r) for r in reps) + " |",
+                  "| max rank / 1 rank | " + " | ".join(f"{ratio(r):.2f}" for r in reps) + " |",
+                  ""]
+        print("\n".join(lines[-22:]), flush=True)
     # A hand-written "## Reading" section of an existing file is kept after the new tables.
     kept = ""
     if os.path.exists(a.results):

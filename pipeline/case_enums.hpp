@@ -20,13 +20,14 @@ enum class FeatureMode { automatic, none, angle, file };         ///< geometry.f
 enum class MeshingMethod { given, curved, dense };               ///< meshing.method
 enum class SolveOn { outside, both };                            ///< meshing.solve_on
 enum class Physics { poisson, linear_elasticity, neo_hookean };  ///< physics.type
-enum class PartialDirichlet { nitsche, nodal };         ///< discretization.partial_dirichlet
-enum class SolveGeometry { iso, mesh };                 ///< discretization.geometry
-enum class SolverType { automatic, direct, cg };        ///< solver.type
-enum class Preconditioner { gamg, hypre, ml };          ///< solver.preconditioner
-enum class BoundaryType { dirichlet, neumann, robin };  ///< boundary_conditions[].type
-enum class SurfaceValues { extended, image };           ///< output.surface_values
-enum class BoundaryValuesAt { input, mesh, shifted };   ///< discretization.boundary_values_at
+enum class PartialDirichlet { nitsche, nodal };              ///< discretization.partial_dirichlet
+enum class SolveGeometry { iso, mesh };                      ///< discretization.geometry
+enum class SolverType { automatic, direct, cg };             ///< solver.type
+enum class Preconditioner { gamg, hypre, ml };               ///< solver.preconditioner
+enum class ParallelPtap { automatic, allatonce, scalable };  ///< solver.parallel_ptap
+enum class BoundaryType { dirichlet, neumann, robin };       ///< boundary_conditions[].type
+enum class SurfaceValues { extended, image };                ///< output.surface_values
+enum class BoundaryValuesAt { input, mesh, shifted };        ///< discretization.boundary_values_at
 
 /// The spelling of every value, in the enum's order ("" for a value no file spells: none).
 template <class E>
@@ -70,6 +71,7 @@ CURVEFEM_ENUM_NAMES(PartialDirichlet, "nitsche", "nodal")
 CURVEFEM_ENUM_NAMES(SolveGeometry, "iso", "mesh")
 CURVEFEM_ENUM_NAMES(SolverType, "auto", "direct", "cg")
 CURVEFEM_ENUM_NAMES(Preconditioner, "gamg", "hypre", "ml")
+CURVEFEM_ENUM_NAMES(ParallelPtap, "auto", "allatonce", "scalable")
 CURVEFEM_ENUM_NAMES(BoundaryType, "dirichlet", "neumann", "robin")
 CURVEFEM_ENUM_NAMES(SurfaceValues, "extended", "image")
 CURVEFEM_ENUM_NAMES(BoundaryValuesAt, "input", "mesh", "shifted")

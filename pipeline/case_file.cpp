@@ -687,6 +687,9 @@ CaseSpec read_case_json(const nlohmann::json& given, const std::filesystem::path
       c.solver_preconditioner =
           r.choice_of<Preconditioner>(*v, "/solver/preconditioner", "solver.preconditioner");
     }
+    if (const json* v = r.get(*s, "parallel_ptap"))
+      c.solver_parallel_ptap =
+          r.choice_of<ParallelPtap>(*v, "/solver/parallel_ptap", "solver.parallel_ptap");
   }
   std::string out = "out";
   if (const json* o = r.get(j, "output")) {

@@ -137,6 +137,7 @@ struct CaseSpec {
   int solver_max_iterations = 5000;
   bool solver_near_nullspace = true;  ///< cg: rigid-body modes for GAMG (elasticity)
   Preconditioner solver_preconditioner = Preconditioner::gamg;  ///< cg
+  ParallelPtap solver_parallel_ptap = ParallelPtap::automatic;  ///< GAMG over several ranks
   std::filesystem::path output_dir;                             ///< resolved
   SurfaceValues surface_values = SurfaceValues::extended;       ///< output.surface_values
   nlohmann::json resolved;                                      ///< the case with defaults, as run

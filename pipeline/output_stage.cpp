@@ -302,6 +302,7 @@ json load_report(const LoadResult& l) {
     report["solver"]["partition_s"] = s.partition_s;
     report["solver"]["distribute_s"] = s.distribute_s;
     report["solver"]["assembled_by_rows"] = s.assembled_by_rows;
+    if (!s.parallel_ptap.empty()) report["solver"]["parallel_ptap"] = s.parallel_ptap;
     if (s.assembled_by_rows) report["solver"]["rows_assembly_s"] = s.assembly_s;
   }
   return report;

@@ -226,6 +226,10 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
   solver.max_iterations = spec.solver_max_iterations;
   solver.use_near_nullspace = spec.solver_near_nullspace;
   solver.preconditioner = fem::preconditioner_from(to_string(spec.solver_preconditioner));
+  solver.parallel_ptap =
+      spec.solver_parallel_ptap == ParallelPtap::scalable    ? fem::ParallelPtap::scalable
+      : spec.solver_parallel_ptap == ParallelPtap::allatonce ? fem::ParallelPtap::allatonce
+                                                             : fem::ParallelPtap::automatic;
   solver.auto_direct_max_dofs = auto_direct_max_unknowns(spec.physics, disc.space.degree);
   if (spec.physics != Physics::neo_hookean) solver.factorization_cache = std::move(cache);
   const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == PartialDirichlet::nodal

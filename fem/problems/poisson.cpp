@@ -145,12 +145,11 @@ AssembledSystem assemble_poisson_kept(const LagrangeMesh& mesh, const FunctionSp
     thread_local Eigen::MatrixXd G, Gw;  // n × 3·nq physical gradients, and weighted by κ det J w
     thread_local Eigen::VectorXd f;      // rhs_batch at the points
     geometry.evaluate(cell, g);
-    if (!with_load) {
-    } else if (problem.rhs_batch) {
+    if (with_load && problem.rhs_batch) {
       f.resize(nq);
       problem.rhs_batch(g.x, f);
       Fe.noalias() += basis.values.transpose() * g.det_w.cwiseProduct(f);
-    } else if (problem.rhs) {
+    } else if (with_load && problem.rhs) {
       for (int q = 0; q < nq; ++q)
         Fe.noalias() +=
             (g.det_w[q] * problem.rhs(g.x.row(q).transpose())) * basis.values.row(q).transpose();

@@ -93,6 +93,7 @@ struct Header {
   int coordinates = 0;     // 1: rigid-body modes from the owned nodes' coordinates
   int direct = 0;          // 1: MUMPS Cholesky
   int preconditioner = 0;  // Preconditioner as an int: 0 gamg, 1 hypre, 2 ml
+  int parallel_ptap = 0;   // ParallelPtap as an int: 0 automatic, 1 allatonce, 2 scalable
   int max_iterations = 0;
   double rtol = 0;
 };
@@ -204,6 +205,7 @@ struct SolveOutcome {
   std::vector<double> history;
   double setup_s = 0, solve_s = 0;
   std::string near_nullspace = "default";
+  std::string parallel_ptap;  // GAMG: the -matptap_via of its set-up
 };
 
 /// Collective: every rank solves with its part (its CSR is released once PETSc has copied it).
@@ -273,7 +275,36 @@ SolveOutcome solve_part(const Header& h, LocalPart& part) {
           "KSPSetTolerances");
   }
   check(KSPSetFromOptions(ksp), "KSPSetFromOptions");
-  check(KSPSetUp(ksp), "KSPSetUp");
+  // GAMG's parallel Galerkin products (PtAP, in its coarsening and its coarse operators):
+  // "scalable" is PETSc's default; "allatonce" holds far less memory per rank
+  // (benchmarks/results/mpi.md). Set for this set-up only, unless $PETSC_OPTIONS chose already.
+  PetscBool user_ptap = PETSC_FALSE;
+  check(PetscOptionsHasName(nullptr, nullptr, "-matptap_via", &user_ptap), "PetscOptionsHasName");
+  const bool set_ptap = !h.direct && !user_ptap;
+  const bool with_modes = h.coordinates || h.vector_columns > 0;
+  const bool allatonce =
+      h.parallel_ptap == static_cast<int>(ParallelPtap::allatonce) ||
+      (h.parallel_ptap == static_cast<int>(ParallelPtap::automatic) && with_modes);
+  if (set_ptap)
+    check(PetscOptionsSetValue(nullptr, "-matptap_via", allatonce ? "allatonce" : "scalable"),
+          "PetscOptionsSetValue");
+  if (set_ptap && g_rank == 0 && h.preconditioner == static_cast<int>(Preconditioner::gamg))
+    log::info("GAMG over ", g_size, " ranks: parallel Galerkin products '",
+              allatonce ? "allatonce" : "scalable", "' (",
+              allatonce ? "the least memory per rank; \"solver\": {\"parallel_ptap\": "
+                          "\"scalable\"} sets up faster"
+                        : "PETSc's default; \"allatonce\" holds less memory per rank",
+              ")");
+  if (!h.direct && h.preconditioner == static_cast<int>(Preconditioner::gamg)) {
+    char via[64] = "";
+    PetscBool found = PETSC_FALSE;
+    check(PetscOptionsGetString(nullptr, nullptr, "-matptap_via", via, sizeof via, &found),
+          "PetscOptionsGetString");
+    out.parallel_ptap = found ? via : "scalable";
+  }
+  const PetscErrorCode setup = KSPSetUp(ksp);
+  if (set_ptap) PetscOptionsClearValue(nullptr, "-matptap_via");
+  check(setup, "KSPSetUp");
   out.setup_s = watch.seconds();
   watch.reset();
   Vec x, b;
@@ -463,6 +494,7 @@ Header header_of(long long n, long long groups, int bs, int kernel_columns,
   h.coordinates = near.coordinates;
   h.direct = direct;
   h.preconditioner = static_cast<int>(options.preconditioner);
+  h.parallel_ptap = static_cast<int>(options.parallel_ptap);
   h.max_iterations = options.max_iterations;
   h.rtol = options.rtol;
   return h;
@@ -490,6 +522,7 @@ void fill_info(LinearSolveInfo& info, SolveOutcome& out, bool direct,
   info.solve_s = out.solve_s;
   info.ranks = g_size;
   info.partitioner = partitioner;
+  info.parallel_ptap = out.parallel_ptap;
   info.partition_s = partition_s;
   info.distribute_s = distribute_s;
 }

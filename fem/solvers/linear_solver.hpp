@@ -58,6 +58,13 @@ class FactorizationCache {
 enum class SolverType { automatic, direct, cg };
 /// The AMG of cg.
 enum class Preconditioner { gamg, hypre, ml };
+/// GAMG over several MPI ranks: PETSc's algorithm for the parallel Galerkin products of its
+/// set-up (-matptap_via; fem/solvers/distributed.hpp). allatonce: a fraction of the memory per
+/// rank, several times the set-up time of scalable (PETSc's default). automatic: allatonce with
+/// an explicit near-nullspace (elasticity's rigid-body modes, where scalable's memory per rank is
+/// the one-process set-up's), scalable otherwise (scalar problems: 3% more memory, 0.6x the
+/// set-up time; benchmarks/results/mpi.md).
+enum class ParallelPtap { automatic, allatonce, scalable };
 /// Spellings as in case files and reports: "auto" | "direct" | "cg", "gamg" | "hypre" | "ml".
 std::string to_string(SolverType type);
 std::string to_string(Preconditioner preconditioner);
@@ -71,6 +78,7 @@ struct LinearSolverOptions {
   int max_iterations = 5000;
   int auto_direct_max_dofs = 200000;
   Preconditioner preconditioner = Preconditioner::gamg;  ///< cg
+  ParallelPtap parallel_ptap = ParallelPtap::automatic;  ///< cg + gamg over several ranks
   int block_size = 1;  ///< unknowns per node (3 for elasticity): helps AMG
   /// cg, block_size 3: coordinates of the node of each block of 3 consecutive rows (#rows/3 x 3,
   /// row r = the node of unknowns 3r, 3r+1, 3r+2): GAMG's near-nullspace = the rigid-body modes.
@@ -101,6 +109,7 @@ struct LinearSolveInfo {
   int ranks = 1;
   std::vector<long long> rows_per_rank;          ///< rows owned by each rank (empty on one rank)
   std::string partitioner;                       ///< "ptscotch" | "contiguous" (several ranks)
+  std::string parallel_ptap;                     ///< several ranks, GAMG: "allatonce" | "scalable"
   double partition_s = 0.0, distribute_s = 0.0;  ///< parts of setup_s
   /// Distributed assembly (distributed::solve_by_rows): the matrix was never whole on rank 0,
   /// each rank's rows were assembled in turn; assembly_s (part of distribute_s) is their time.

@@ -109,6 +109,8 @@ TEST(MpiRun, PoissonP2OneAndTwoRanksAgree) {
   // The matrix was assembled by rows, one rank's at a time (distributed::solve_by_rows).
   EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
   EXPECT_GT(r2["solver"]["rows_assembly_s"].get<double>(), 0.0);
+  // "auto": PETSc's own Galerkin products for a scalar problem (allatonce with elasticity's modes).
+  EXPECT_EQ(r2["solver"]["parallel_ptap"], "scalable");
   EXPECT_NEAR(r2["l2_error"].get<double>(), r1["l2_error"].get<double>(),
               1e-8 * r1["l2_error"].get<double>());
   EXPECT_GT(r1["l2_error"].get<double>(), 1e-8);  // not in the space: the test can fail
@@ -136,6 +138,14 @@ TEST(MpiRun, ElasticityP2OneAndTwoRanksAgreeWithRigidBodyModes) {
   EXPECT_EQ(r2["solver"]["near_nullspace"], "rigid-body modes");
   EXPECT_EQ(r2["solver"]["rows_per_rank"][0].get<long long>() % 3, 0);
   EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
+  // GAMG's parallel Galerkin products: "auto" is the lean allatonce with the rigid-body modes, and
+  // PETSc's own on request (the same solution to the solver tolerance).
+  EXPECT_EQ(r2["solver"]["parallel_ptap"], "allatonce");
+  std::string scalable = text;
+  scalable.replace(scalable.find("\"rtol\""), 0, "\"parallel_ptap\": \"scalable\", ");
+  const auto three = run_ranks(test::scratch_dir("mpi_elasticity_scalable"), scalable, 2);
+  EXPECT_LT(relative_difference(one, three), 1e-8);
+  EXPECT_EQ(report(three)["solver"]["parallel_ptap"], "scalable");
 }
 
 // The boundary terms of a matrix assembled by rows: Robin's ∫ h u v and the Nitsche terms of a
