@@ -287,9 +287,10 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
   const int quadrature = stiffness_degree(mesh, space, problem);
   // Several MPI ranks: K is assembled by rows, one rank's at a time, inside the distributed solve
   // (solve_constrained_by_rows); here only F. Not for traction-only problems (their kernel is
-  // handled on the whole matrix) nor with a cache (load cases keep the whole matrix).
-  const bool by_rows =
-      distributed::active() && !solver.factorization_cache && !problem.dirichlet.empty();
+  // handled on the whole matrix). A cache is not used then: the ranks set their KSP up for every
+  // solve anyway, and keeping the stiffness would keep the whole matrix on rank 0 (the load
+  // cases and the shifted passes of a run assemble their rows again).
+  const bool by_rows = distributed::active() && !problem.dirichlet.empty();
   // The stiffness kept by an earlier solve sharing the solver's cache, if it is this one's.
   std::shared_ptr<KeptStiffness> kept;
   std::shared_ptr<const Setup> row_setup;  // by rows: the tables, without the whole pattern

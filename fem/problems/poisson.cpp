@@ -267,9 +267,10 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
   AssembledSystem system;
   // Several MPI ranks: K is assembled by rows, one rank's at a time, inside the distributed solve
   // (solve_constrained_by_rows); here only F. Not for pure Neumann problems (their kernel is
-  // handled on the whole matrix) nor with a cache (load cases keep the whole matrix).
-  bool by_rows = distributed::active() && !solver.factorization_cache &&
-                 !(problem.dirichlet.empty() && problem.robin.empty());
+  // handled on the whole matrix). A cache is not used then: the ranks set their KSP up for every
+  // solve anyway, and keeping the stiffness would keep the whole matrix on rank 0 (the load
+  // cases and the shifted passes of a run assemble their rows again).
+  bool by_rows = distributed::active() && !(problem.dirichlet.empty() && problem.robin.empty());
   {
     ScopedTimer t(result.timings, "assembly");
     // The cell stiffness kept by an earlier solve sharing the solver's cache, if it is this one's.
@@ -285,7 +286,7 @@ PoissonSolution solve_poisson(const LagrangeMesh& mesh, const FunctionSpace& spa
     if (kept) {
       count_assembly(*solver.factorization_cache, true);
       system = assemble_poisson_kept(mesh, space, problem, kept.get(), nullptr);
-    } else if (solver.factorization_cache) {
+    } else if (solver.factorization_cache && !by_rows) {
       kept = std::make_shared<KeptPoissonStiffness>(mesh, space, problem, quadrature);
       system = assemble_poisson_kept(mesh, space, problem, nullptr, kept.get());
       assembly_cache_slot(*solver.factorization_cache) = kept;

@@ -186,6 +186,39 @@ TEST(MpiRun, RobinAndNitscheTermsAssembledByRowsAgree) {
   }
 }
 
+// Load cases (the solves of a run sharing a factorization cache, as the shifted passes of a curved
+// run do): on several ranks each case's matrix is assembled by rows too — the cache is not used
+// across ranks, and keeping the stiffness would keep the whole matrix on rank 0.
+TEST(MpiRun, LoadCasesAreAssembledByRowsToo) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_load_cases");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 4, "order": 1}},
+    "physics": {"type": "linear_elasticity", "E": 1000, "nu": 0.3},
+    "discretization": {"degree": 2},
+    "solver": {"type": "cg", "rtol": 1e-12},
+    "load_cases": [
+      {"name": "down", "boundary_conditions": [
+         {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+         {"type": "neumann", "select": {"tag": 2}, "value": [0, 0, -1]}]},
+      {"name": "side", "rhs": [0, "0.5", 0], "boundary_conditions": [
+         {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]}]}]
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+  EXPECT_LT(relative_difference(one, two), 1e-8);
+  const auto r1 = report(one), r2 = report(two);
+  ASSERT_EQ(r2["load_cases"].size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& s1 = r1["load_cases"][i]["solver"];
+    const auto& s2 = r2["load_cases"][i]["solver"];
+    EXPECT_FALSE(s1.contains("assembled_by_rows"));
+    EXPECT_EQ(s2["ranks"], 2);
+    EXPECT_TRUE(s2["assembled_by_rows"].get<bool>()) << i;
+    EXPECT_LT(s2["relative_residual"].get<double>(), 1e-8);
+  }
+}
+
 TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
   std::string why;
   if (!have_launcher(why)) GTEST_SKIP() << why;
