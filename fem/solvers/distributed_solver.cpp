@@ -483,6 +483,15 @@ NearNullspace near_nullspace_of(const LinearSolverOptions& options, long long n,
   return out;
 }
 
+/// options.block_size (at least 1), which must divide the n unknowns (InputError otherwise).
+int block_size_of(const LinearSolverOptions& options, long long n) {
+  const int bs = std::max(1, options.block_size);
+  if (n % bs != 0)
+    throw InputError("distributed solve: " + std::to_string(n) + " unknowns in blocks of " +
+                     std::to_string(bs));
+  return bs;
+}
+
 Header header_of(long long n, long long groups, int bs, int kernel_columns,
                  const NearNullspace& near, const LinearSolverOptions& options, bool direct) {
   Header h;
@@ -560,10 +569,7 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
   const long long n = A.rows();
   const NearNullspace near = near_nullspace_of(options, n, direct);
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
-  const int bs = std::max(1, options.block_size);
-  if (n % bs != 0)
-    throw InputError("distributed solve: " + std::to_string(n) + " unknowns in blocks of " +
-                     std::to_string(bs));
+  const int bs = block_size_of(options, n);
   Stopwatch watch;
   SparseMatrix copy;  // only when A is not compressed (the assemblies' matrices are)
   if (!A.isCompressed()) {
@@ -690,10 +696,7 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
       "distributed::solve_by_rows: sizes do not match the system");
   const NearNullspace near = near_nullspace_of(options, m, direct);
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
-  const int bs = std::max(1, options.block_size);
-  if (m % bs != 0)
-    throw InputError("distributed solve: " + std::to_string(m) + " unknowns in blocks of " +
-                     std::to_string(bs));
+  const int bs = block_size_of(options, m);
   Stopwatch watch;
   // The graph PT-Scotch partitions: the full system's nodes in groups of consecutive ones,
   // neighbours through the cells (node -> cells incidence, then each group's cells' nodes).
