@@ -391,13 +391,19 @@ struct NeoHookeanState {
   bool valid = true;  ///< false if det F ≤ 0 somewhere
 };
 
+/// The residual and energy over every cell, and with_matrix the tangent (the setup's pattern);
+/// or, given `rows` (a pattern of some nodes' rows) and `active` (the cells touching them), the
+/// tangent's rows alone (internal and strain_energy then cover those cells only).
 NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mesh,
                                      const FunctionSpace& space, const ElasticityProblem& problem,
-                                     const Eigen::VectorXd& u, bool with_matrix) {
+                                     const Eigen::VectorXd& u, bool with_matrix,
+                                     const SparsePattern* rows = nullptr,
+                                     const std::vector<char>* active = nullptr) {
   const int n = setup.n;
   NeoHookeanState s;
   s.internal = Eigen::VectorXd::Zero(u.size());
-  if (with_matrix) s.K = setup.pattern->zero_matrix();
+  const SparsePattern* pattern = rows ? rows : setup.pattern.get();
+  if (with_matrix) s.K = pattern->zero_matrix();
   std::vector<double> energy(mesh.num_cells(), 0.0);
   std::atomic<bool> valid{true};
   // Tangent: Ke(3a+i, 3b+j) = Σ_q w [μ δij (G Gᵀ)(a,b) + c1 H(a,j) H(b,i) + λ H(a,i) H(b,j)]
@@ -467,8 +473,8 @@ NeoHookeanState assemble_neo_hookean(const Setup& setup, const LagrangeMesh& mes
     }
     energy[cell] = e;
   };
-  assemble_cells(mesh.num_cells(), 3 * n, kernel, setup.pattern.get(), space.cell_dofs, 3,
-                 with_matrix ? s.K.valuePtr() : nullptr, &s.internal);
+  assemble_cells(mesh.num_cells(), 3 * n, kernel, pattern, space.cell_dofs, 3,
+                 with_matrix ? s.K.valuePtr() : nullptr, &s.internal, active);
   s.valid = valid;
   if (!s.valid) {
     release(s.K);  // a partial tangent is not handed out
@@ -495,7 +501,10 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
   if (newton.load_steps < 1) throw InputError("load_steps must be at least 1");
   ElasticitySolution result;
   result.dofs = space.num_dofs;
-  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem));
+  // Several MPI ranks: each Newton step's tangent is assembled by rows inside the distributed
+  // solve (solve_constrained_by_rows), so the whole pattern is not built.
+  const bool by_rows = distributed::active();
+  const Setup setup(mesh, space, stiffness_degree(mesh, space, problem), !by_rows);
   Eigen::VectorXd f_body;
   const Eigen::VectorXd f_ext = external_load(mesh, space, problem, setup, &f_body);
   const Constraints full = dirichlet_constraints(space, problem);
@@ -515,7 +524,7 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
     const Eigen::VectorXd f = s * f_ext;
     double first_residual = -1.0;
     for (int it = 0; it < newton.max_iterations; ++it) {
-      NeoHookeanState state = assemble_neo_hookean(setup, mesh, space, problem, u, true);
+      NeoHookeanState state = assemble_neo_hookean(setup, mesh, space, problem, u, !by_rows);
       if (!state.valid) return "an iterate inverts an element (det F <= 0)";
       const Eigen::VectorXd R = state.internal - f;
       const double rnorm = free_norm(R, full);
@@ -533,7 +542,22 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
       if (!moves_boundary && (rnorm <= newton.tolerance * scale || rnorm < 1e-13)) return "";
       Eigen::VectorXd du;
       try {
-        du = solve_constrained(state.K, -R, inc, options, &result.solve);
+        if (by_rows) {
+          distributed::RowAssembly tangent;
+          tangent.cell_dofs = &space.cell_dofs;
+          tangent.nodes = space.num_dofs;
+          tangent.block_size = 3;
+          tangent.rows = [&](const std::vector<char>& nodes) {
+            const SparsePattern pattern(space.cell_dofs, space.num_dofs, 3, &nodes);
+            const std::vector<char> active = cells_touching(space.cell_dofs, nodes);
+            NeoHookeanState part =
+                assemble_neo_hookean(setup, mesh, space, problem, u, true, &pattern, &active);
+            return take(part.K);
+          };
+          du = solve_constrained_by_rows(tangent, -R, inc, options, &result.solve);
+        } else {
+          du = solve_constrained(state.K, -R, inc, options, &result.solve);
+        }
       } catch (const SolverError& e) {
         return std::string("the linear solve failed: ") + e.what();
       }

@@ -11,14 +11,15 @@
 // MATMPIAIJ and the same KSP as the one-process engine (CG + GAMG | hypre | ML, rigid-body modes
 // from its owned nodes' coordinates; `direct`: MUMPS Cholesky), the solution is gathered on rank 0
 // (VecScatterCreateToZero) and put back in the caller's numbering.
-// Distributed assembly (solve_by_rows; linear Poisson and elasticity with Dirichlet conditions):
+// Distributed assembly (solve_by_rows; Poisson, linear elasticity and Neo-Hookean's tangents with
+// Dirichlet conditions):
 // the matrix is never whole on rank 0. The partition is computed first, from the cells' node
 // graph; then each rank's rows are assembled (by rank 0, from the cells touching that rank's
 // nodes), reduced by the Dirichlet values and sent, one rank at a time, so rank 0 holds one
 // rank's rows at once, like the others. The element matrices are still computed by rank 0 alone
 // (the coefficients are functions of the case, which only rank 0 holds). Everything else before
-// and after the solve stays on rank 0. The matrix path (solve) remains for the other solves (pure
-// Neumann, Neo-Hookean's Newton steps): there, when the caller hands the matrix over
+// and after the solve stays on rank 0. The matrix path (solve) remains for the singular systems
+// (pure Neumann, tractions only): there, when the caller hands the matrix over
 // (solve_spd(SparseMatrix&&)), rank 0 keeps only its own rows through the solve, but its peak
 // is at least the whole assembly's.
 //

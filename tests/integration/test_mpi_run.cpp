@@ -219,6 +219,30 @@ TEST(MpiRun, LoadCasesAreAssembledByRowsToo) {
   }
 }
 
+// Neo-Hookean: every Newton step's tangent is assembled by rows on several ranks; the Newton
+// iterations and the solution match one rank's.
+TEST(MpiRun, NeoHookeanNewtonTangentsAssembledByRows) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  const auto dir = test::scratch_dir("mpi_neo_hookean");
+  const std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 3, "order": 1}},
+    "physics": {"type": "neo_hookean", "E": 1000, "nu": 0.3, "load_steps": 2},
+    "discretization": {"degree": 2},
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"tag": 1}, "value": [0, 0, 0]},
+      {"type": "neumann", "select": {"tag": 2}, "value": [0, 0, -80]}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const auto one = run_ranks(dir, text, 1), two = run_ranks(dir, text, 2);
+  EXPECT_LT(relative_difference(one, two), 1e-8);
+  const auto r1 = report(one), r2 = report(two);
+  EXPECT_EQ(r2["solver"]["ranks"], 2);
+  EXPECT_TRUE(r2["solver"]["assembled_by_rows"].get<bool>());
+  EXPECT_EQ(r1["physics_details"]["newton"].size(), r2["physics_details"]["newton"].size());
+  EXPECT_GT(r2["physics_details"]["newton"].size(), 2u);
+}
+
 TEST(MpiRun, DirectIsMumpsOnTwoRanks) {
   std::string why;
   if (!have_launcher(why)) GTEST_SKIP() << why;
