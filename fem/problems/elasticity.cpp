@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -168,6 +169,22 @@ void add_nitsche(const LagrangeMesh& mesh, const FunctionSpace& space,
         }
       }
   }
+}
+
+/// A matrix assembled by rows (several MPI ranks; constraints.hpp, solve_constrained_by_rows):
+/// `assemble` fills the rows of the nodes flagged, given their pattern and the cells touching them.
+using RowKernel = std::function<SparseMatrix(
+    const SparsePattern& pattern, const std::vector<char>& active, const std::vector<char>& nodes)>;
+distributed::RowAssembly rows_of(const FunctionSpace& space, RowKernel assemble) {
+  distributed::RowAssembly rows;
+  rows.cell_dofs = &space.cell_dofs;
+  rows.nodes = space.num_dofs;
+  rows.block_size = 3;
+  rows.rows = [&space, assemble = std::move(assemble)](const std::vector<char>& nodes) {
+    const SparsePattern pattern(space.cell_dofs, space.num_dofs, 3, &nodes);
+    return assemble(pattern, cells_touching(space.cell_dofs, nodes), nodes);
+  };
+  return rows;
 }
 
 void gather(const FunctionSpace& space, const Eigen::VectorXd& u, int cell, Eigen::MatrixXd& U) {
@@ -354,21 +371,17 @@ ElasticitySolution solve_linear_elasticity(const LagrangeMesh& mesh, const Funct
     return result;
   }
   if (by_rows) {
-    distributed::RowAssembly rows;
-    rows.cell_dofs = &space.cell_dofs;
-    rows.nodes = space.num_dofs;
-    rows.block_size = 3;
-    rows.rows = [&](const std::vector<char>& nodes) {
-      const SparsePattern pattern(space.cell_dofs, space.num_dofs, 3, &nodes);
-      const std::vector<char> active = cells_touching(space.cell_dofs, nodes);
-      SparseMatrix block;
-      assemble_stiffness(mesh, space, problem, *row_setup, pattern, block, &active);
-      Eigen::VectorXd unused;
-      for (std::size_t i = 0; i < problem.dirichlet.size(); ++i)
-        add_nitsche(mesh, space, problem, problem.dirichlet[i], splits[i], block, unused,
-                    AssemblyParts{true, false, &nodes});
-      return block;  // NRVO (a copy at worst: linear_solver.hpp)
-    };
+    const distributed::RowAssembly rows =
+        rows_of(space, [&](const SparsePattern& pattern, const std::vector<char>& active,
+                           const std::vector<char>& nodes) {
+          SparseMatrix block;
+          assemble_stiffness(mesh, space, problem, *row_setup, pattern, block, &active);
+          Eigen::VectorXd unused;
+          for (std::size_t i = 0; i < problem.dirichlet.size(); ++i)
+            add_nitsche(mesh, space, problem, problem.dirichlet[i], splits[i], block, unused,
+                        AssemblyParts{true, false, &nodes});
+          return block;  // NRVO (a copy at worst: linear_solver.hpp)
+        });
     Stopwatch solve_watch;
     result.u = solve_constrained_by_rows(rows, F, constraints, options, &result.solve);
     result.timings.add("assembly", result.solve.assembly_s);
@@ -543,17 +556,13 @@ ElasticitySolution solve_neo_hookean(const LagrangeMesh& mesh, const FunctionSpa
       Eigen::VectorXd du;
       try {
         if (by_rows) {
-          distributed::RowAssembly tangent;
-          tangent.cell_dofs = &space.cell_dofs;
-          tangent.nodes = space.num_dofs;
-          tangent.block_size = 3;
-          tangent.rows = [&](const std::vector<char>& nodes) {
-            const SparsePattern pattern(space.cell_dofs, space.num_dofs, 3, &nodes);
-            const std::vector<char> active = cells_touching(space.cell_dofs, nodes);
-            NeoHookeanState part =
-                assemble_neo_hookean(setup, mesh, space, problem, u, true, &pattern, &active);
-            return take(part.K);
-          };
+          const distributed::RowAssembly tangent =
+              rows_of(space, [&](const SparsePattern& pattern, const std::vector<char>& active,
+                                 const std::vector<char>&) {
+                NeoHookeanState part =
+                    assemble_neo_hookean(setup, mesh, space, problem, u, true, &pattern, &active);
+                return take(part.K);
+              });
           du = solve_constrained_by_rows(tangent, -R, inc, options, &result.solve);
         } else {
           du = solve_constrained(state.K, -R, inc, options, &result.solve);
