@@ -757,9 +757,14 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
       const int first = r.offsets[std::size_t(p)], last = r.offsets[std::size_t(p) + 1];
       CF_VERIFY(first % bs == 0 && last % bs == 0,
                 "distributed::solve_by_rows: a block split between ranks");
+      // The rank's nodes with a free unknown (a fixed row is not in the reduced system; the
+      // fixed columns come with the free rows).
       std::vector<char> mine(std::size_t(nodes), 0);
-      for (long long i = 0; i < nodes; ++i)
-        mine[std::size_t(i)] = group_owner[std::size_t(i / group)] == p;
+      for (long long i = 0; i < nodes; ++i) {
+        bool free = false;
+        for (int c = 0; c < fb && !free; ++c) free = reduced[std::size_t(i * fb + c)] >= 0;
+        mine[std::size_t(i)] = free && group_owner[std::size_t(i / group)] == p;
+      }
       Stopwatch assembly;
       SparseMatrix A = system.rows(mine);
       assemble_s += assembly.seconds();
