@@ -696,21 +696,28 @@ Eigen::MatrixXi jacobian_lattice(int order) {
   return out;
 }
 
+/// f(std::integral_constant<int, K>{}) for the order K in 1..4 (4 for anything above 3: the
+/// callers have checked the order).
+template <class F>
+decltype(auto) with_order(int order, F&& f) {
+  switch (order) {
+    case 1:
+      return f(std::integral_constant<int, 1>{});
+    case 2:
+      return f(std::integral_constant<int, 2>{});
+    case 3:
+      return f(std::integral_constant<int, 3>{});
+    default:
+      return f(std::integral_constant<int, 4>{});
+  }
+}
+
 JacobianCertificate certify_tet_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes,
                                          const CertificateOptions& opts) {
   check_input(order, nodes);
   NearestRounding rounding;
   const Prepared& t = tables(order);
-  switch (order) {
-    case 1:
-      return certify<1>(t, nodes, opts);
-    case 2:
-      return certify<2>(t, nodes, opts);
-    case 3:
-      return certify<3>(t, nodes, opts);
-    default:
-      return certify<4>(t, nodes, opts);
-  }
+  return with_order(order, [&](auto k) { return certify<decltype(k)::value>(t, nodes, opts); });
 }
 
 Eigen::VectorXd jacobian_bernstein_coefficients(int order,
@@ -732,47 +739,22 @@ Eigen::VectorXd jacobian_bernstein_coefficients(int order,
     for (int a = 0; a < M; ++a) out[a] = b[a] / t.den3;
     return out;
   };
-  switch (order) {
-    case 1:
-      return run(std::integral_constant<int, 1>{});
-    case 2:
-      return run(std::integral_constant<int, 2>{});
-    case 3:
-      return run(std::integral_constant<int, 3>{});
-    default:
-      return run(std::integral_constant<int, 4>{});
-  }
+  return with_order(order, run);
 }
 
 double min_scaled_jacobian(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes, int* argmin) {
   check_input(order, nodes);
   const Prepared& t = tables(order);
-  switch (order) {
-    case 1:
-      return min_scaled_jacobian_k<1>(t, nodes, argmin);
-    case 2:
-      return min_scaled_jacobian_k<2>(t, nodes, argmin);
-    case 3:
-      return min_scaled_jacobian_k<3>(t, nodes, argmin);
-    default:
-      return min_scaled_jacobian_k<4>(t, nodes, argmin);
-  }
+  return with_order(
+      order, [&](auto k) { return min_scaled_jacobian_k<decltype(k)::value>(t, nodes, argmin); });
 }
 
 double scaled_jacobian_at(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes, int point) {
   check_input(order, nodes);
   const Prepared& t = tables(order);
   CF_VERIFY(point >= 0 && point < t.m, "scaled_jacobian_at: no such lattice point");
-  switch (order) {
-    case 1:
-      return scaled_jacobian_at_k<1>(t, nodes, point);
-    case 2:
-      return scaled_jacobian_at_k<2>(t, nodes, point);
-    case 3:
-      return scaled_jacobian_at_k<3>(t, nodes, point);
-    default:
-      return scaled_jacobian_at_k<4>(t, nodes, point);
-  }
+  return with_order(
+      order, [&](auto k) { return scaled_jacobian_at_k<decltype(k)::value>(t, nodes, point); });
 }
 
 double curved_mips(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
