@@ -110,10 +110,10 @@ def g(x, fmt="{:.3g}"):
 
 before, after = load(args.before), load(args.after)
 keys = [k for k in before if k in after]
-head = ["surface", "K", "coarse faces", "tets", "min SJ", "< 0.01", "max MIPS", "slab min SJ",
-        "interior min SJ", "s"]
+head = ["surface", "K", "coarse faces", "tets", "min SJ", "< 0.01", "max MIPS", "mean MIPS",
+        "slab min SJ", "interior min SJ", "s"]
 if args.fem:
-    head += ["P2 CG its", "P2 L2 rel"]
+    head += ["P2 DOFs", "P2 CG its", "P2 L2 rel"]
 lines = [f"# Before/after: {args.label_before} → {args.label_after}", "",
          f"Generated {datetime.datetime.now():%Y-%m-%d %H:%M} by `{command}`; HEAD "
          + subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
@@ -124,6 +124,9 @@ lines = [f"# Before/after: {args.label_before} → {args.label_after}", "",
             "Dirichlet everywhere; P2 L2 rel: its relative L2 error." if args.fem else ""), "",
          "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 goal = {"before": 0, "after": 0}
+# after against before, per measure: (better, worse) counts
+moved = {"min SJ": [0, 0], "tets below 0.01": [0, 0], "max MIPS": [0, 0], "mean MIPS": [0, 0],
+         "tets": [0, 0]}
 fem_change = {-1: 0, 0: 0, 1: 0}  # CG iterations fell / same / rose
 for key in keys:
     b, a = before[key], after[key]
@@ -141,19 +144,32 @@ for key in keys:
                 and r["max_mips"] <= 1e4:
             goal[label] += 1
     row = [key[0], str(key[1]), pair("coarse"), pair("tets"), pair("sj"), pair("below"),
-           pair("max_mips"), pair(None, src=tag("slab")), pair(None, src=tag("interior")),
+           pair("max_mips"), pair("mean_mips", "{:.1f}"), pair(None, src=tag("slab")),
+           pair(None, src=tag("interior")),
            pair("wall", "{:.1f}")]
     if args.fem:
         fb = fem(os.path.join(b["work"], f"{key[0]}_k{key[1]}")) if b.get("valid") else None
         fa = fem(os.path.join(a["work"], f"{key[0]}_k{key[1]}")) if a.get("valid") else None
         its = [x.get("iterations", x.get("error")) if x else None for x in (fb, fa)]
         l2 = [x.get("l2") if x else None for x in (fb, fa)]
-        row += [f"{g(its[0])} → {g(its[1])}", f"{g(l2[0])} → {g(l2[1])}"]
+        dofs = [x.get("dofs") if x else None for x in (fb, fa)]
+        row += [f"{g(dofs[0])} → {g(dofs[1])}", f"{g(its[0])} → {g(its[1])}",
+                f"{g(l2[0])} → {g(l2[1])}"]
         if all(isinstance(x, int) for x in its):
             fem_change[(its[1] > its[0]) - (its[1] < its[0])] += 1
         print(key, its, l2, flush=True)
     lines.append("| " + " | ".join(row) + " |")
-lines += ["", f"Quality goal (min SJ ≥ 1e-3, ≤ 1% of tets below 0.01, max MIPS ≤ 1e4) met on "
+    if b.get("valid") and a.get("valid"):
+        for name, field, sign in (("min SJ", "sj", 1), ("tets below 0.01", "below", -1),
+                                  ("max MIPS", "max_mips", -1), ("mean MIPS", "mean_mips", -1),
+                                  ("tets", "tets", -1)):
+            x, y = b.get(field) or 0, a.get(field) or 0
+            if x != y:
+                moved[name][0 if (y - x) * sign > 0 else 1] += 1
+lines += ["", "After against before, runs valid in both: " + "; ".join(
+    f"{name} {'higher' if name == 'min SJ' else 'lower'} on {c[0]}, "
+    f"{'lower' if name == 'min SJ' else 'higher'} on {c[1]}" for name, c in moved.items()) + ".",
+          "", f"Quality goal (min SJ ≥ 1e-3, ≤ 1% of tets below 0.01, max MIPS ≤ 1e4) met on "
           f"{goal['before']} → {goal['after']} of {len(keys)} runs."]
 if args.fem:
     lines.append(f"P2 Poisson CG + GAMG iterations: fewer on {fem_change[-1]}, the same on "

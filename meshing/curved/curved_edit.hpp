@@ -29,8 +29,11 @@
 namespace curvefem::meshing::curved {
 
 struct CurvedEditOptions {
-  int passes = 2;       // rounds of (collapses, flips); 0: off
-  double energy = 4.0;  // cells above this mean energy (optimize.hpp cell_energy) are targets
+  int passes = 2;  // rounds of (collapses, flips); 0: off
+  // Cells above this mean energy (optimize.hpp cell_energy) are targets. 2 (was 4): at K = 4 the
+  // mean curved MIPS of knight fell 51.1 -> 40.7, spot 46.5 -> 39.7, fandisk 46.4 -> 44.9, bunny
+  // 52.3 -> 51.5 (benchmarks/results/robustness_mean.md).
+  double energy = 2.0;
   bool collapses = true;
   // Target cells whose sampled scaled Jacobian is below this also try to collapse each free
   // corner toward every vertex of its one-ring, not only along the cell's own edges (a flat slab

@@ -180,7 +180,7 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--optimize-edit-energy", args->optimize_edit_energy,
                   "curved edits: only cells whose mean conformal AMIPS energy exceeds E are "
-                  "targets (default 4)")
+                  "targets (default 2)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--nondeterministic", args->nondeterministic,
                 "coarsen on all --threads workers: faster, but the mesh varies from run to run");
