@@ -558,6 +558,35 @@ long long group_size(long long nodes) {
   return std::max(1LL, (nodes + k_graph_target - 1) / k_graph_target);
 }
 
+// The graph PT-Scotch partitions: `nodes` in groups of `group` consecutive ones (group_size),
+// in CSR form (ptr, adj); two groups are neighbours when a node of one has a neighbour in the
+// other. neighbours(i, emit) calls emit(j) for the neighbours j of node i (repeats allowed).
+struct GroupGraph {
+  long long group = 1, groups = 0;
+  std::vector<int> ptr, adj;
+};
+template <class Neighbours>
+GroupGraph group_graph(long long nodes, Neighbours&& neighbours) {
+  GroupGraph g;
+  g.group = group_size(nodes);
+  g.groups = (nodes + g.group - 1) / g.group;
+  g.ptr.assign(std::size_t(g.groups) + 1, 0);
+  std::vector<int> seen(std::size_t(g.groups), -1);
+  for (long long G = 0; G < g.groups; ++G) {
+    for (long long i = G * g.group; i < std::min(nodes, (G + 1) * g.group); ++i)
+      neighbours(i, [&](long long j) {
+        const int J = int(j / g.group);
+        if (J != G && seen[std::size_t(J)] != int(G)) {
+          seen[std::size_t(J)] = int(G);
+          g.adj.push_back(J);
+        }
+      });
+    g.ptr[std::size_t(G) + 1] = int(g.adj.size());
+  }
+  g.adj.shrink_to_fit();
+  return g;
+}
+
 }  // namespace
 
 Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
@@ -577,36 +606,21 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
     copy.makeCompressed();
   }
   const SparseMatrix& C = A.isCompressed() ? A : copy;
-  // The graph PT-Scotch partitions: nodes (blocks of bs rows) in groups of `group` consecutive
-  // ones, neighbours from the (symmetric) pattern.
+  // Nodes are blocks of bs rows; their neighbours come from the (symmetric) pattern.
   const long long nodes = n / bs;
-  const long long group = group_size(nodes);
-  const long long groups = (nodes + group - 1) / group;
-  std::vector<int> ptr(std::size_t(groups) + 1, 0), adj;
-  {
-    std::vector<int> seen(std::size_t(groups), -1);
-    for (long long G = 0; G < groups; ++G) {
-      for (long long i = G * group; i < std::min(nodes, (G + 1) * group); ++i)
-        for (int c = 0; c < bs; ++c)
-          for (SparseMatrix::InnerIterator it(C, int(i * bs + c)); it; ++it) {
-            const int J = int(it.row() / bs / group);
-            if (J != G && seen[std::size_t(J)] != int(G)) {
-              seen[std::size_t(J)] = int(G);
-              adj.push_back(J);
-            }
-          }
-      ptr[std::size_t(G) + 1] = int(adj.size());
-    }
-    adj.shrink_to_fit();
-  }
+  GroupGraph graph = group_graph(nodes, [&](long long i, auto&& emit) {
+    for (int c = 0; c < bs; ++c)
+      for (SparseMatrix::InnerIterator it(C, int(i * bs + c)); it; ++it) emit(it.row() / bs);
+  });
+  const long long group = graph.group, groups = graph.groups;
   Header h = header_of(n, groups, bs, int(null_space.cols()), near, options, direct);
   SolveOutcome out;
   Eigen::VectorXd x(n);
   try {
     std::string partitioner;
-    const std::vector<int> group_owner = start_solve(h, ptr, adj, partitioner);
-    release(ptr);
-    release(adj);
+    const std::vector<int> group_owner = start_solve(h, graph.ptr, graph.adj, partitioner);
+    release(graph.ptr);
+    release(graph.adj);
     std::vector<int> owner(static_cast<std::size_t>(nodes));
     for (long long i = 0; i < nodes; ++i)
       owner[std::size_t(i)] = group_owner[std::size_t(i / group)];
@@ -698,15 +712,13 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
   const Eigen::MatrixXd& coordinates = options.near_nullspace_coordinates;
   const int bs = block_size_of(options, m);
   Stopwatch watch;
-  // The graph PT-Scotch partitions: the full system's nodes in groups of consecutive ones,
-  // neighbours through the cells (node -> cells incidence, then each group's cells' nodes).
+  // The full system's nodes; their neighbours come through the cells (the node -> cells
+  // incidence, then those cells' nodes).
   const Eigen::MatrixXi& cells = *system.cell_dofs;
   const long long nodes = system.nodes;
-  const long long group = group_size(nodes);
-  const long long groups = (nodes + group - 1) / group;
-  std::vector<int> ptr(std::size_t(groups) + 1, 0), adj;
+  const int nc = static_cast<int>(cells.rows()), nl = static_cast<int>(cells.cols());
+  GroupGraph graph;
   {
-    const int nc = static_cast<int>(cells.rows()), nl = static_cast<int>(cells.cols());
     std::vector<int> start(std::size_t(nodes) + 1, 0);
     for (int c = 0; c < nc; ++c)
       for (int l = 0; l < nl; ++l) ++start[std::size_t(cells(c, l)) + 1];
@@ -715,29 +727,20 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
     for (int c = 0; c < nc; ++c)
       for (int l = 0; l < nl; ++l) incident[std::size_t(fill[std::size_t(cells(c, l))]++)] = c;
     release(fill);
-    std::vector<int> seen(std::size_t(groups), -1);
-    for (long long G = 0; G < groups; ++G) {
-      for (long long i = G * group; i < std::min(nodes, (G + 1) * group); ++i)
-        for (int k = start[std::size_t(i)]; k < start[std::size_t(i) + 1]; ++k)
-          for (int l = 0; l < nl; ++l) {
-            const int J = int(cells(incident[std::size_t(k)], l) / group);
-            if (J != G && seen[std::size_t(J)] != int(G)) {
-              seen[std::size_t(J)] = int(G);
-              adj.push_back(J);
-            }
-          }
-      ptr[std::size_t(G) + 1] = int(adj.size());
-    }
-    adj.shrink_to_fit();
+    graph = group_graph(nodes, [&](long long i, auto&& emit) {
+      for (int k = start[std::size_t(i)]; k < start[std::size_t(i) + 1]; ++k)
+        for (int l = 0; l < nl; ++l) emit(cells(incident[std::size_t(k)], l));
+    });
   }
+  const long long group = graph.group, groups = graph.groups;
   Header h = header_of(m, groups, bs, 0, near, options, direct);
   SolveOutcome out;
   Eigen::VectorXd x(m);
   try {
     std::string partitioner;
-    const std::vector<int> group_owner = start_solve(h, ptr, adj, partitioner);
-    release(ptr);
-    release(adj);
+    const std::vector<int> group_owner = start_solve(h, graph.ptr, graph.adj, partitioner);
+    release(graph.ptr);
+    release(graph.adj);
     // Owners: of every node, then of every free unknown (its node's); new numbers by owner,
     // keeping the order within a rank, so blocks of free nodes stay aligned.
     std::vector<int> full_of(std::size_t(m), -1), row_owner(std::size_t(m), 0);
