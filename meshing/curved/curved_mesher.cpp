@@ -615,6 +615,7 @@ class Builder {
     if (recurve) raise_alpha(eps);
     raise_smooth(eps);
     if (quality_floor > 0) lower_for_quality(eps);
+    if (distortion_floor > 0) lower_for_distortion(eps);
     if (embed) embed_boundary(eps);
     int moved = 0;
     pulled_above.assign(nv, 0);
@@ -856,6 +857,134 @@ class Builder {
     }
     alpha_lowered_for_quality = lowered;
   }
+  // Parametric distortion of f's curved middle triangle at the current α: the smallest area
+  // element |x_u × x_v| over the order-4k lattice of the triangle, counted as 0 where the patch's
+  // normal turns against its linear triangle's (the patch folds), over the largest. 1 for a
+  // uniform parametrization (every linear face). The area element is the boundary factor of the
+  // Jacobian of every tet on the face, (x_u × x_v) · x_w, so a small one makes a flat curved tet
+  // that no interior node can lift.
+  double patch_distortion(int f) const {
+    if (distortion_gradients.empty()) {
+      const int m = 4 * k;
+      for (int j = 0; j <= m; ++j)
+        for (int i = 0; i + j <= m; ++i)
+          distortion_gradients.push_back(lagrange_shape_gradients(
+              CellKind::triangle, k, Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
+    }
+    const auto d = node_displacements(f);
+    std::vector<Eigen::Vector3d> x(tri_lattice.size());
+    for (std::size_t i = 0; i < tri_lattice.size(); ++i)
+      x[i] = linear_mid(f, double(tri_lattice[i][1]) / k, double(tri_lattice[i][2]) / k) + d[i];
+    const Eigen::Vector3d n0 =
+        (mid(rotated(f, 1)) - mid(rotated(f, 0))).cross(mid(rotated(f, 2)) - mid(rotated(f, 0)));
+    double lo = HUGE_VAL, hi = 0;
+    for (const Eigen::MatrixXd& g : distortion_gradients) {
+      Eigen::Vector3d xu = Eigen::Vector3d::Zero(), xv = Eigen::Vector3d::Zero();
+      for (std::size_t n = 0; n < x.size(); ++n) {
+        xu += g(Eigen::Index(n), 0) * x[n];
+        xv += g(Eigen::Index(n), 1) * x[n];
+      }
+      const Eigen::Vector3d c = xu.cross(xv);
+      const double a = c.dot(n0) > 0 ? c.norm() : 0.0;
+      lo = std::min(lo, a);
+      hi = std::max(hi, a);
+    }
+    return hi > 0 ? lo / hi : 0.0;
+  }
+  mutable std::vector<Eigen::MatrixXd> distortion_gradients;
+  // A face whose fibers cross the input far apart (tilted pillars over a noisy or folded input)
+  // gets a patch bunched toward one side or folded over, certified and within ε, whose slab tets
+  // are flat on the boundary (noise_sphere_2, K = 3: curved MIPS 5.8e4 on a face whose area
+  // element fell to 1.6% of its largest; 36 of its 1,184 faces folded). Each face that does not
+  // need full curving and is below distortion_floor tries α / 2, α / 4, ..., 0, every step
+  // checked like lower_for_quality (its slabs and those across its edges certified, ε held) and
+  // not taking a neighbour, which shares its edge nodes, below min(its value, the floor); it
+  // keeps the first α that reaches the floor, else the least distorted. A neighbour that the
+  // straightened edges fold (its inside still curved) joins the step with the same α, up to four
+  // of them (noise_sphere_2: 7 folds left without that, 1 with). Sequential.
+  void lower_for_distortion(double eps) {
+    // The last thickening's counts (a failed interior fill thickens again).
+    distortion_faces_before = distortion_faces_after = folded_faces_before = folded_faces_after = 0;
+    distorted_needed_after = 0;
+    alpha_lowered_for_distortion = 0;
+    std::vector<double> dist(static_cast<std::size_t>(nf));
+    for (int f = 0; f < nf; ++f) {
+      dist[std::size_t(f)] = patch_distortion(f);
+      distortion_faces_before += dist[std::size_t(f)] < distortion_floor;
+      folded_faces_before += dist[std::size_t(f)] == 0;
+    }
+    auto lowerable = [&](int g) { return alpha[g] > 0 && (needs_full.empty() || !needs_full[g]); };
+    for (int f = 0; f < nf; ++f) {
+      if (!(dist[std::size_t(f)] < distortion_floor) || !lowerable(f)) continue;
+      // Lowering f straightens its edges, which can fold a neighbour whose inside stays curved:
+      // such a neighbour (one that may be lowered) joins the group and takes the same α.
+      std::vector<std::pair<int, double>> group{{f, alpha[f]}};  // face, its α before
+      std::vector<std::pair<int, double>> best_group;
+      double best = dist[std::size_t(f)], best_a = -1;
+      auto restore = [&] {
+        for (const auto& [g, a] : group) alpha[g] = a;
+      };
+      for (double a = alpha[f] > 1.0 / 64 ? alpha[f] / 2 : 0.0;; a = a > 1.0 / 64 ? a / 2 : 0.0) {
+        bool ok = false;
+        for (int grow = 0; grow <= 4; ++grow) {
+          for (const auto& [g, old] : group) alpha[g] = std::min(old, a);
+          std::set<int> around;
+          for (const auto& [g, old] : group)
+            for (int h : across(g)) around.insert(h);
+          ok = true;
+          for (int h : around)
+            if (face_check(h, eps) != 0) {
+              ok = false;
+              break;
+            }
+          if (!ok) break;
+          int joined = 0;
+          for (int h : around) {
+            if (std::any_of(group.begin(), group.end(),
+                            [&](const auto& e) { return e.first == h; }))
+              continue;
+            if (patch_distortion(h) >= std::min(dist[std::size_t(h)], distortion_floor)) continue;
+            ok = false;
+            if (lowerable(h)) {
+              group.emplace_back(h, alpha[h]);
+              ++joined;
+            }
+          }
+          if (ok || joined == 0) break;
+        }
+        if (ok) {
+          double worst = HUGE_VAL;
+          for (const auto& [g, old] : group) worst = std::min(worst, patch_distortion(g));
+          if (worst > best) {
+            best = worst;
+            best_a = a;
+            best_group = group;
+          }
+          if (worst >= distortion_floor) break;
+        }
+        if (a == 0) break;
+      }
+      restore();
+      if (best_a < 0) continue;
+      std::set<int> changed;
+      for (const auto& [g, old] : best_group) {
+        alpha[g] = std::min(old, best_a);
+        alpha_lowered_for_distortion += alpha[g] < old;
+        for (int h : across(g)) changed.insert(h);
+      }
+      for (int h : changed) dist[std::size_t(h)] = patch_distortion(h);
+    }
+    for (int f = 0; f < nf; ++f) {
+      distortion_faces_after += dist[std::size_t(f)] < distortion_floor;
+      folded_faces_after += dist[std::size_t(f)] == 0;
+      distorted_needed_after +=
+          dist[std::size_t(f)] < distortion_floor && !needs_full.empty() && needs_full[f];
+    }
+  }
+  double distortion_floor = 0;
+  int alpha_lowered_for_distortion = 0;
+  int distortion_faces_before = 0, distortion_faces_after = 0;
+  int folded_faces_before = 0, folded_faces_after = 0, distorted_needed_after = 0;
   double quality_floor = 0;
   int alpha_lowered_for_quality = 0;
   double quality_before = HUGE_VAL, quality_after = HUGE_VAL;
@@ -1216,6 +1345,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     simplify_options.curved_order = options.order;
     simplify_options.relaxed_distance = options.curved_linear_factor * eps;
     simplify_options.curved_distance = options.curved_margin * eps;
+    simplify_options.curved_min_area_ratio = options.curved_min_area_ratio;
     simplify_options.strict_input_vertices = strict;
     simplify_options.strict_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
     // With an exterior the top half-prism becomes an outer slab with the same patch.
@@ -1433,6 +1563,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   b.recurve = options.recurve;
   b.embed = options.embed_boundary;
   b.quality_floor = options.curve_quality_floor;
+  b.distortion_floor = options.curve_distortion_floor;
   b.low_degree = options.low_degree_slabs;
   b.extra = points;
   b.point_scale = &point_scale;
@@ -1576,6 +1707,12 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.outer_lowered_vertices = b.outer_lowered;
     stats.faces_recurved = b.alpha_raised;
     stats.faces_lowered_for_quality = b.alpha_lowered_for_quality;
+    stats.faces_lowered_for_distortion = b.alpha_lowered_for_distortion;
+    stats.distorted_faces_before = b.distortion_faces_before;
+    stats.distorted_faces_after = b.distortion_faces_after;
+    stats.folded_faces_before = b.folded_faces_before;
+    stats.folded_faces_after = b.folded_faces_after;
+    stats.distorted_needed_after = b.distorted_needed_after;
     stats.embedding_pairs_before = b.embedding_pairs_before;
     stats.embedding_pairs_after = b.embedding_pairs_after;
     stats.embedding_rounds = b.embedding_rounds;

@@ -96,6 +96,18 @@ struct CurvedMeshOptions {
   // judges slabs before the smoothing, which fixes most of them anyway, and costs fidelity
   // (homer: 51 of 726 faces less curved).
   double curve_quality_floor = 0;
+  // Then faces whose curved middle triangle is parametrically distorted — its smallest area
+  // element below this fraction of its largest, or folded (its normal turned against the linear
+  // triangle's) — try a smaller α, checked like the quality floor, keeping the first that reaches
+  // the floor or else the least distorted (Builder::lower_for_distortion; 0: off). Such patches
+  // come from fibers that cross a noisy or folded input far apart, and make flat boundary tets
+  // that no smoothing can lift (noise_sphere_2, K = 3: max curved MIPS 5.8e4 -> 3.5e3).
+  // Faces that need full curving for ε keep it.
+  double curve_distortion_floor = 0.1;
+  // The coarsening's side of it (SimplifyOptions::curved_min_area_ratio): a face that needs full
+  // curving for ε cannot be lowered, so its fully curved patch must meet this bound to be made
+  // (0: off).
+  double curved_min_area_ratio = 0;
   // Slab nodes (slab_nodes.hpp): false (default) the full shear t·d of the patch; true the
   // low-degree nodes (the patch's quadratic part at degree 2, the rest sheared), with the shear as
   // a per-face fallback. Measured at K = 3 (issue 20): less cubic content and a lower pure
@@ -149,7 +161,9 @@ struct CurvedMeshOptions {
   // curved middle surface is sampled 2K per edge (as the validator does) and the faces of every
   // intersecting pair lower their curving α, down to their linear triangles if need be
   // (CurvedMeshStats::embedding_*). Seen on CGAL's femur.off with --feature-end-trim 1: two
-  // neighbouring patches crossing, the validator's 10 intersections and exit 3. false: off.
+  // neighbouring patches crossing, the validator's 10 intersections and exit 3 (distorted
+  // patches: with curve_distortion_floor, the default since, they are lowered before and the
+  // boundary is embedded without this repair). false: off.
   bool embed_boundary = true;
   // Between collapse rounds (simplify.hpp): edge flips, pillar rotation toward the coarse
   // surface, and thickness growth up to shell_zoom_rel × the longest bbox edge per half-pillar
@@ -281,6 +295,12 @@ struct CurvedMeshStats {
   int faces_recurved = 0;
   // Faces whose α the quality floor lowered after the recurving (curve_quality_floor).
   int faces_lowered_for_quality = 0;
+  // curve_distortion_floor: faces below it (of which folded) before and after, of the last
+  // thickening, and faces whose α it lowered.
+  int distorted_faces_before = 0, distorted_faces_after = 0;
+  int folded_faces_before = 0, folded_faces_after = 0;
+  int distorted_needed_after = 0;  // of distorted_faces_after: faces that need full curving
+  int faces_lowered_for_distortion = 0;
   // Construction-time embedding of the curved boundary (Builder::embed_boundary): pairs of coarse
   // faces whose curved patches, sampled 2K per edge, intersect after the recurving, before and
   // after the repair at the last thickening; repair rounds and faces whose α the repair lowered,

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -11,6 +12,7 @@
 
 #include "meshing/check/self_intersections.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/curved/element_distortion.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 
@@ -198,6 +200,44 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
       if (vol.size() == 0 || vol[b] < 0 || vol[b] >= mesh.num_nodes() ||
           (map.boundary.nodes.row(b) - mesh.nodes.row(vol[b])).cwiseAbs().maxCoeff() != 0)
         ++r.boundary_node_mismatches;
+  }
+
+  // Parametric quality of the curved boundary (a diagnostic, not part of `valid`): per boundary
+  // triangle, the smallest area element |x_ξ × x_η| over its order-4k lattice — 0 where its
+  // normal turns against the plane of its corners (the patch folds) — over the largest.
+  {
+    const auto& lattice = lagrange_lattice(CellKind::triangle, k);
+    const int m = 4 * k;
+    std::vector<Eigen::MatrixXd> grads;
+    for (int j = 0; j <= m; ++j)
+      for (int i = 0; i + j <= m; ++i)
+        grads.push_back(lagrange_shape_gradients(CellKind::triangle, k,
+                                                 Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
+    int corner[3] = {-1, -1, -1};
+    for (std::size_t n = 0; n < lattice.size(); ++n)
+      for (int c = 0; c < 3; ++c)
+        if (lattice[n][c] == k) corner[c] = int(n);
+    const auto& cells = map.boundary.cells;
+    for (int f = 0; f < cells.rows(); ++f) {
+      auto X = [&](int n) -> Eigen::Vector3d { return map.boundary.nodes.row(cells(f, n)); };
+      const Eigen::Vector3d n0 = (X(corner[1]) - X(corner[0])).cross(X(corner[2]) - X(corner[0]));
+      double lo = HUGE_VAL, hi = 0;
+      for (const Eigen::MatrixXd& g : grads) {
+        Eigen::Vector3d xu = Eigen::Vector3d::Zero(), xv = Eigen::Vector3d::Zero();
+        for (Eigen::Index n = 0; n < cells.cols(); ++n) {
+          xu += g(n, 0) * X(int(n));
+          xv += g(n, 1) * X(int(n));
+        }
+        const Eigen::Vector3d c = xu.cross(xv);
+        const double a = c.dot(n0) > 0 ? c.norm() : 0.0;
+        lo = std::min(lo, a);
+        hi = std::max(hi, a);
+      }
+      const double ratio = hi > 0 ? lo / hi : 0.0;
+      r.min_boundary_area_ratio = std::min(r.min_boundary_area_ratio, ratio);
+      r.boundary_faces_folded += ratio == 0;
+      r.boundary_faces_distorted += ratio < 0.1;
+    }
   }
 
   // Embedding of the curved boundary on a fine subdivision.

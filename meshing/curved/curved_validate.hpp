@@ -5,6 +5,8 @@
 //                Bernstein coefficients, subdivision, interval arithmetic);
 //   boundary     the faces used by exactly one tet are exactly the map's boundary triangles, and
 //                the map's node copy equals the volume nodes it points to;
+//   patches      diagnostic: the area element of each curved boundary triangle, smallest over
+//                largest (folded where its normal turns against its corners' plane);
 //   embedding    the boundary, subdivided into flat triangles at `subdivision` per edge, has no
 //                self-intersecting pair (exact predicates);
 //   distance     max over input vertices of |x - φ(x)|, relative to the bbox edge;
@@ -53,6 +55,11 @@ struct CurvedValidation {
   bool exterior = false;
   int exterior_boundary_faces = 0, exterior_faces_off_box = 0;
   int subdivision = 0, boundary_self_intersections = 0;
+  // Diagnostic, not part of `valid`: per boundary triangle, its smallest area element over its
+  // largest (0 where its normal turns against its corners' plane: a folded patch, which makes
+  // flat boundary tets); the worst, the folded ones and those below 0.1.
+  double min_boundary_area_ratio = 1;
+  int boundary_faces_folded = 0, boundary_faces_distorted = 0;
   int unmapped_vertices = 0;
   double max_distance_rel = 0;
   int max_distance_vertex = -1;

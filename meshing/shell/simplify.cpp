@@ -122,6 +122,7 @@ class ShellMesh : public TriMesh {
   // interpolant of P at its face's lattice nodes passes within curved_distance of it.
   int curved_order = 0;
   double relaxed_distance = 0, curved_distance = 0;
+  double curved_min_area_ratio = 0;  // SimplifyOptions::curved_min_area_ratio
   const std::vector<char>* strict = nullptr;
   const decltype(SimplifyOptions::curved_slab_ok)* curved_slab_ok = nullptr;
   double bound_of(int x) const {
@@ -363,6 +364,43 @@ class ShellMesh : public TriMesh {
     }
     return true;
   }
+  // Is the patch with these nodes (canonical lattice order) parametrically sound: its area
+  // element |x_u × x_v| over the order-4k lattice nowhere below curved_min_area_ratio of its
+  // largest, nor turned against the plane of its corners? The curved mesher lowers the curving
+  // of other faces where it is not (curve_distortion_floor); a needed face cannot be lowered.
+  bool patch_shape_ok(const std::vector<Eigen::Vector3d>& node) const {
+    if (!(curved_min_area_ratio > 0)) return true;
+    const int k = curved_order;
+    const auto& lattice = lagrange_lattice(CellKind::triangle, k);
+    // Shape gradients at the samples, per order (built once, read-only after).
+    static const std::array<std::vector<Eigen::MatrixXd>, 5> gradients = [] {
+      std::array<std::vector<Eigen::MatrixXd>, 5> out;
+      for (int order = 2; order <= 4; ++order)
+        for (int j = 0, m = 4 * order; j <= m; ++j)
+          for (int i = 0; i + j <= m; ++i)
+            out[std::size_t(order)].push_back(lagrange_shape_gradients(
+                CellKind::triangle, order, Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
+      return out;
+    }();
+    Eigen::Vector3d corner[3];
+    for (std::size_t n = 0; n < lattice.size(); ++n)
+      for (int c = 0; c < 3; ++c)
+        if (lattice[n][c] == k) corner[c] = node[n];
+    const Eigen::Vector3d n0 = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
+    double lo = HUGE_VAL, hi = 0;
+    for (const Eigen::MatrixXd& g : gradients[std::size_t(k)]) {
+      Eigen::Vector3d xu = Eigen::Vector3d::Zero(), xv = Eigen::Vector3d::Zero();
+      for (std::size_t n = 0; n < node.size(); ++n) {
+        xu += g(Eigen::Index(n), 0) * node[n];
+        xv += g(Eigen::Index(n), 1) * node[n];
+      }
+      const Eigen::Vector3d c = xu.cross(xv);
+      const double a = c.dot(n0) > 0 ? c.norm() : 0.0;
+      lo = std::min(lo, a);
+      hi = std::max(hi, a);
+    }
+    return hi > 0 && lo >= curved_min_area_ratio * hi;
+  }
   // Is f's bottom slab valid with its nodes `node` where `keep` says so (corners always) and
   // linear elsewhere?
   bool slab_ok(Id f, const std::vector<Eigen::Vector3d>& node,
@@ -434,6 +472,7 @@ class ShellMesh : public TriMesh {
       }
       std::vector<Eigen::Vector3d> node;
       if (!patch_nodes(f, node) || !patch_within(f, node, curved_distance) ||
+          !patch_shape_ok(node) ||
           !slab_ok(f, node, [](const std::array<int, 4>&) { return true; }))
         return false;
       const std::array<Id, 3> v = rotated_corners(f);
@@ -1197,6 +1236,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.relaxed_distance = std::max(options.relaxed_distance, options.max_distance);
     m.curved_distance =
         options.curved_distance > 0 ? options.curved_distance : options.max_distance;
+    m.curved_min_area_ratio = options.curved_min_area_ratio;
     if (!options.strict_input_vertices.empty()) m.strict = &options.strict_input_vertices;
     if (options.curved_slab_ok) m.curved_slab_ok = &options.curved_slab_ok;
   }

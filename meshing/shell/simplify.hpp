@@ -107,6 +107,10 @@ struct SimplifyOptions {
   // the chains' snapped vertices keep max_distance.
   int curved_order = 0;
   double relaxed_distance = 0, curved_distance = 0;
+  // > 0: a needed face's fully curved patch must also have its area element |x_u × x_v| (order-4k
+  // lattice) nowhere below this fraction of its largest, nor turned against its corners' plane:
+  // the curved mesher can lower the curving of a distorted face only when it does not need it.
+  double curved_min_area_ratio = 0;
   std::vector<char> strict_input_vertices;  // #input vertices or empty (none strict)
   // Optional, with curved_order: is the bottom half-prism of such a face, with corners base and
   // mid (rotated to the smallest id; canonical split of type_a) and its middle triangle displaced

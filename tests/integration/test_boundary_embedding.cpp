@@ -6,6 +6,8 @@
 // - without the repair (CurvedMeshOptions::embed_boundary = false) the validator finds them;
 // - with it (the default) the mesher finds the pair itself, lowers the two faces' curving, and
 //   the validator finds the boundary embedded, the mesh certified and within ε.
+// Both with the curving's distortion floor off: the crossing patches were distorted ones, and
+// with the floor (the default since) they do not arise, without the repair either.
 // Skipped without libcgal-dev's data (a Debian package file, not ../shared).
 #include <gtest/gtest.h>
 
@@ -30,6 +32,7 @@ TEST(BoundaryEmbedding, CrossingPatchesAreFoundAndLoweredDuringConstruction) {
   o.threads = 2;
   o.feature_edges = cv::detect_feature_edges(input, 60.0);  // the CLI's default angle
   o.feature_end_trim = 1;
+  o.curve_distortion_floor = 0;  // the crossing patches are distorted ones (below)
 
   o.embed_boundary = false;
   cv::CurvedMeshStats off_stats;
@@ -53,4 +56,17 @@ TEST(BoundaryEmbedding, CrossingPatchesAreFoundAndLoweredDuringConstruction) {
   EXPECT_TRUE(check.valid(o.eps_rel));
   // The repair only lowers curving: same coarse surface, same number of boundary faces.
   EXPECT_EQ(on.map.boundary.num_cells(), off.map.boundary.num_cells());
+
+  // The distortion floor lowers the crossing faces first: embedded without the repair.
+  o.curve_distortion_floor = cv::CurvedMeshOptions{}.curve_distortion_floor;
+  o.embed_boundary = false;
+  cv::CurvedMeshStats floor_stats;
+  const cv::CurvedMesh floored = cv::build_curved_mesh(input, o, floor_stats);
+  const cv::CurvedValidation floor_check =
+      cv::validate_curved_mesh(floored.mesh, floored.map, input);
+  std::printf("distortion floor, no repair: %d faces lowered, %d self-intersections\n",
+              floor_stats.faces_lowered_for_distortion, floor_check.boundary_self_intersections);
+  EXPECT_GT(floor_stats.faces_lowered_for_distortion, 0);
+  EXPECT_EQ(floor_check.boundary_self_intersections, 0);
+  EXPECT_TRUE(floor_check.valid(o.eps_rel));
 }

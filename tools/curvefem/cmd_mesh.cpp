@@ -63,6 +63,8 @@ struct MeshArgs {
   double feature_min_size = -1;  // unset: the default for detected features, 0 for a file
   double feature_end_trim = -1;  // likewise
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
+  double curve_distortion_floor = meshing::curved::CurvedMeshOptions{}.curve_distortion_floor;
+  double curved_min_area_ratio = meshing::curved::CurvedMeshOptions{}.curved_min_area_ratio;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
@@ -257,6 +259,15 @@ void register_mesh(CLI::App& app) {
                   "try a smaller blend (certified, within eps) that lifts them to Q (default 0: "
                   "off; measured mixed, meshing/curved/curved_mesher.hpp)")
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--curve-distortion-floor", args->curve_distortion_floor,
+                  "faces whose curved patch has its smallest area element below D of its largest, "
+                  "or folds, try a smaller blend (certified, within eps; default 0.1, 0: off)")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--curved-min-area-ratio", args->curved_min_area_ratio,
+                  "the curved-aware coarsening makes a face that needs full curving only if its "
+                  "curved patch has its smallest area element at least R of its largest and does "
+                  "not fold (default 0: off)")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -323,6 +334,8 @@ void register_mesh(CLI::App& app) {
     options.shape_refine_spike_angle = args->shape_refine_spike_angle;
     options.shape_slack = args->shape_slack;
     options.curve_quality_floor = args->curve_quality_floor;
+    options.curve_distortion_floor = args->curve_distortion_floor;
+    options.curved_min_area_ratio = args->curved_min_area_ratio;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {

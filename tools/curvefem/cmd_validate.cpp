@@ -107,6 +107,9 @@ void register_validate(CLI::App& app) {
       std::printf("  boundary embedded    %s (%d self-intersections at %d per edge)\n",
                   v.boundary_self_intersections == 0 ? "yes" : "NO", v.boundary_self_intersections,
                   v.subdivision);
+      std::printf(
+          "  boundary patches     (diag.) %d folded, %d with area element ratio < 0.1, min %.3g\n",
+          v.boundary_faces_folded, v.boundary_faces_distorted, v.min_boundary_area_ratio);
       if (v.eps_field)
         std::printf(
             "  distance             max %.4g (eps field up to %.4g); max distance / local eps "
