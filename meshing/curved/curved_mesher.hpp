@@ -106,7 +106,10 @@ struct CurvedMeshOptions {
   double curve_distortion_floor = 0.1;
   // The coarsening's side of it (SimplifyOptions::curved_min_area_ratio): a face that needs full
   // curving for ε cannot be lowered, so its fully curved patch must meet this bound to be made
-  // (0: off).
+  // (0: off). Off by default: at 0.1, against the floor alone (27 dev runs and 31 corpus runs
+  // measured, benchmarks/results/robustness_distortion.md) it changed the coarse meshes both
+  // ways (rocker_arm K = 3 484 -> 690 faces, fandisk 214 -> 176) and the worst cells got worse
+  // more often than better (max MIPS higher on 13 dev runs, lower on 6; quality goal unchanged).
   double curved_min_area_ratio = 0;
   // Slab nodes (slab_nodes.hpp): false (default) the full shear t·d of the patch; true the
   // low-degree nodes (the patch's quadratic part at degree 2, the rest sheared), with the shear as
