@@ -1,6 +1,8 @@
 #include "meshing/core/lagrange_nodes.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <mutex>
 
@@ -121,6 +123,38 @@ Eigen::MatrixXd lagrange_shape_gradients(CellKind kind, int order, const Eigen::
     for (int d = 0; d < dim; ++d) grad(n, d) = dlambda[d + 1] - dlambda[0];
   }
   return grad;
+}
+
+double triangle_area_element_ratio(int order, const std::vector<Eigen::Vector3d>& nodes) {
+  // Shape gradients at the samples, per order (built once, read-only after).
+  static const std::array<std::vector<Eigen::MatrixXd>, k_max_order + 1> gradients = [] {
+    std::array<std::vector<Eigen::MatrixXd>, k_max_order + 1> out;
+    for (int k = 1; k <= k_max_order; ++k)
+      for (int j = 0, m = 4 * k; j <= m; ++j)
+        for (int i = 0; i + j <= m; ++i)
+          out[std::size_t(k)].push_back(lagrange_shape_gradients(
+              CellKind::triangle, k, Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
+    return out;
+  }();
+  const auto& lattice = lagrange_lattice(CellKind::triangle, order);
+  Eigen::Vector3d corner[3];
+  for (std::size_t n = 0; n < lattice.size(); ++n)
+    for (int c = 0; c < 3; ++c)
+      if (lattice[n][std::size_t(c)] == order) corner[c] = nodes[n];
+  const Eigen::Vector3d n0 = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
+  double lo = HUGE_VAL, hi = 0;
+  for (const Eigen::MatrixXd& g : gradients[std::size_t(order)]) {
+    Eigen::Vector3d xu = Eigen::Vector3d::Zero(), xv = Eigen::Vector3d::Zero();
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      xu += g(Eigen::Index(n), 0) * nodes[n];
+      xv += g(Eigen::Index(n), 1) * nodes[n];
+    }
+    const Eigen::Vector3d c = xu.cross(xv);
+    const double a = c.dot(n0) > 0 ? c.norm() : 0.0;
+    lo = std::min(lo, a);
+    hi = std::max(hi, a);
+  }
+  return hi > 0 ? lo / hi : 0.0;
 }
 
 }  // namespace curvefem

@@ -41,4 +41,11 @@ Eigen::VectorXd lagrange_shape_values(CellKind kind, int order, const Eigen::Vec
 /// #nodes × dim reference gradients of the same basis.
 Eigen::MatrixXd lagrange_shape_gradients(CellKind kind, int order, const Eigen::Vector3d& xi);
 
+/// Parametric shape of an order-k Lagrange triangle in space (nodes in canonical order): the
+/// smallest area element |x_ξ × x_η| over the points of its order-4k lattice, over the largest;
+/// a point where the normal x_ξ × x_η turns against the plane of the corners counts as 0 (the
+/// patch folds). 1 for a straight triangle. Used by the mesher to lower the curving of distorted
+/// patches (the validator has its own).
+double triangle_area_element_ratio(int order, const std::vector<Eigen::Vector3d>& nodes);
+
 }  // namespace curvefem

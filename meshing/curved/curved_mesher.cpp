@@ -864,34 +864,12 @@ class Builder {
   // Jacobian of every tet on the face, (x_u × x_v) · x_w, so a small one makes a flat curved tet
   // that no interior node can lift.
   double patch_distortion(int f) const {
-    if (distortion_gradients.empty()) {
-      const int m = 4 * k;
-      for (int j = 0; j <= m; ++j)
-        for (int i = 0; i + j <= m; ++i)
-          distortion_gradients.push_back(lagrange_shape_gradients(
-              CellKind::triangle, k, Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
-    }
     const auto d = node_displacements(f);
     std::vector<Eigen::Vector3d> x(tri_lattice.size());
     for (std::size_t i = 0; i < tri_lattice.size(); ++i)
       x[i] = linear_mid(f, double(tri_lattice[i][1]) / k, double(tri_lattice[i][2]) / k) + d[i];
-    const Eigen::Vector3d n0 =
-        (mid(rotated(f, 1)) - mid(rotated(f, 0))).cross(mid(rotated(f, 2)) - mid(rotated(f, 0)));
-    double lo = HUGE_VAL, hi = 0;
-    for (const Eigen::MatrixXd& g : distortion_gradients) {
-      Eigen::Vector3d xu = Eigen::Vector3d::Zero(), xv = Eigen::Vector3d::Zero();
-      for (std::size_t n = 0; n < x.size(); ++n) {
-        xu += g(Eigen::Index(n), 0) * x[n];
-        xv += g(Eigen::Index(n), 1) * x[n];
-      }
-      const Eigen::Vector3d c = xu.cross(xv);
-      const double a = c.dot(n0) > 0 ? c.norm() : 0.0;
-      lo = std::min(lo, a);
-      hi = std::max(hi, a);
-    }
-    return hi > 0 ? lo / hi : 0.0;
+    return triangle_area_element_ratio(k, x);
   }
-  mutable std::vector<Eigen::MatrixXd> distortion_gradients;
   // A face whose fibers cross the input far apart (tilted pillars over a noisy or folded input)
   // gets a patch bunched toward one side or folded over, certified and within ε, whose slab tets
   // are flat on the boundary (noise_sphere_2, K = 3: curved MIPS 5.8e4 on a face whose area

@@ -369,37 +369,8 @@ class ShellMesh : public TriMesh {
   // largest, nor turned against the plane of its corners? The curved mesher lowers the curving
   // of other faces where it is not (curve_distortion_floor); a needed face cannot be lowered.
   bool patch_shape_ok(const std::vector<Eigen::Vector3d>& node) const {
-    if (!(curved_min_area_ratio > 0)) return true;
-    const int k = curved_order;
-    const auto& lattice = lagrange_lattice(CellKind::triangle, k);
-    // Shape gradients at the samples, per order (built once, read-only after).
-    static const std::array<std::vector<Eigen::MatrixXd>, 5> gradients = [] {
-      std::array<std::vector<Eigen::MatrixXd>, 5> out;
-      for (int order = 2; order <= 4; ++order)
-        for (int j = 0, m = 4 * order; j <= m; ++j)
-          for (int i = 0; i + j <= m; ++i)
-            out[std::size_t(order)].push_back(lagrange_shape_gradients(
-                CellKind::triangle, order, Eigen::Vector3d(double(i) / m, double(j) / m, 0)));
-      return out;
-    }();
-    Eigen::Vector3d corner[3];
-    for (std::size_t n = 0; n < lattice.size(); ++n)
-      for (int c = 0; c < 3; ++c)
-        if (lattice[n][c] == k) corner[c] = node[n];
-    const Eigen::Vector3d n0 = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
-    double lo = HUGE_VAL, hi = 0;
-    for (const Eigen::MatrixXd& g : gradients[std::size_t(k)]) {
-      Eigen::Vector3d xu = Eigen::Vector3d::Zero(), xv = Eigen::Vector3d::Zero();
-      for (std::size_t n = 0; n < node.size(); ++n) {
-        xu += g(Eigen::Index(n), 0) * node[n];
-        xv += g(Eigen::Index(n), 1) * node[n];
-      }
-      const Eigen::Vector3d c = xu.cross(xv);
-      const double a = c.dot(n0) > 0 ? c.norm() : 0.0;
-      lo = std::min(lo, a);
-      hi = std::max(hi, a);
-    }
-    return hi > 0 && lo >= curved_min_area_ratio * hi;
+    return !(curved_min_area_ratio > 0) ||
+           triangle_area_element_ratio(curved_order, node) >= curved_min_area_ratio;
   }
   // Is f's bottom slab valid with its nodes `node` where `keep` says so (corners always) and
   // linear elsewhere?

@@ -107,3 +107,32 @@ TEST(LagrangeMesh, CurvedTetReproducesPolynomialMapOfItsDegree) {
     }
   }
 }
+
+// The area-element ratio of a curved triangle (the curving's distortion floor): 1 for any
+// straight triangle at any order; below 1 when the nodes are bunched toward one side; 0 when the
+// patch folds over (its normal turns against its corners' plane).
+TEST(LagrangeNodes, AreaElementRatioOfCurvedTriangles) {
+  const Eigen::Vector3d a(0, 0, 0), b(2, 0, 0.5), c(0.3, 1.5, 0);
+  for (int k = 1; k <= k_max_order; ++k) {
+    const auto& lattice = lagrange_lattice(CellKind::triangle, k);
+    std::vector<Eigen::Vector3d> x(lattice.size());
+    for (std::size_t n = 0; n < lattice.size(); ++n)
+      x[n] = (lattice[n][0] * a + lattice[n][1] * b + lattice[n][2] * c) / double(k);
+    EXPECT_NEAR(triangle_area_element_ratio(k, x), 1.0, 1e-12) << "order " << k;
+  }
+  // Quadratic, canonical order: corners 0, 1, 2, then edges (0,1), (0,2), (1,2).
+  const Eigen::Vector3d p0(0, 0, 0), p1(1, 0, 0), p2(0, 1, 0);
+  std::vector<Eigen::Vector3d> x{p0, p1, p2, (p0 + p1) / 2, (p0 + p2) / 2, (p1 + p2) / 2};
+  // Edge (0,1)'s node moved along the edge to t: at the corner p1 the area element is 3 − 4t
+  // (x_ξ = (3 − 4t, 0, 0), x_η = (2 − 4t, 1, 0) there), 1.8 at p0's end of the edge: bunched at
+  // t = 0.7, folded past t = 3/4.
+  x[3] = Eigen::Vector3d(0.7, 0, 0);
+  const double bunched = triangle_area_element_ratio(2, x);
+  EXPECT_GT(bunched, 0.0);
+  EXPECT_LT(bunched, 0.5);
+  x[3] = Eigen::Vector3d(0.8, 0, 0);
+  EXPECT_EQ(triangle_area_element_ratio(2, x), 0.0);
+  // The mid-edge node lifted out of the plane keeps the normal's side: curved, not folded.
+  x[3] = Eigen::Vector3d(0.5, 0, 0.3);
+  EXPECT_GT(triangle_area_element_ratio(2, x), 0.0);
+}
