@@ -873,7 +873,7 @@ class Builder {
   // A face whose fibers cross the input far apart (tilted pillars over a noisy or folded input)
   // gets a patch bunched toward one side or folded over, certified and within ε, whose slab tets
   // are flat on the boundary (noise_sphere_2, K = 3: curved MIPS 5.8e4 on a face whose area
-  // element fell to 1.6% of its largest; 36 of its 1,184 faces folded). Each face that does not
+  // element fell to 1.6% of its largest; 37 of its 1,184 faces folded). Each face that does not
   // need full curving and is below distortion_floor tries α / 2, α / 4, ..., 0, every step
   // checked like lower_for_quality (its slabs and those across its edges certified, ε held) and
   // not taking a neighbour, which shares its edge nodes, below min(its value, the floor); it
@@ -891,6 +891,7 @@ class Builder {
       distortion_faces_before += dist[std::size_t(f)] < distortion_floor;
       folded_faces_before += dist[std::size_t(f)] == 0;
     }
+    const std::vector<double> alpha_before = alpha;  // faces lowered: counted once, at the end
     auto lowerable = [&](int g) { return alpha[g] > 0 && (needs_full.empty() || !needs_full[g]); };
     for (int f = 0; f < nf; ++f) {
       if (!(dist[std::size_t(f)] < distortion_floor) || !lowerable(f)) continue;
@@ -947,12 +948,12 @@ class Builder {
       std::set<int> changed;
       for (const auto& [g, old] : best_group) {
         alpha[g] = std::min(old, best_a);
-        alpha_lowered_for_distortion += alpha[g] < old;
         for (int h : across(g)) changed.insert(h);
       }
       for (int h : changed) dist[std::size_t(h)] = patch_distortion(h);
     }
     for (int f = 0; f < nf; ++f) {
+      alpha_lowered_for_distortion += alpha[f] < alpha_before[std::size_t(f)];
       distortion_faces_after += dist[std::size_t(f)] < distortion_floor;
       folded_faces_after += dist[std::size_t(f)] == 0;
       distorted_needed_after +=
