@@ -137,7 +137,8 @@ double triangle_area_element_ratio(int order, const std::vector<Eigen::Vector3d>
     return out;
   }();
   const auto& lattice = lagrange_lattice(CellKind::triangle, order);
-  Eigen::Vector3d corner[3];
+  Eigen::Vector3d corner[3] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                               Eigen::Vector3d::Zero()};  // every lattice has its three corners
   for (std::size_t n = 0; n < lattice.size(); ++n)
     for (int c = 0; c < 3; ++c)
       if (lattice[n][std::size_t(c)] == order) corner[c] = nodes[n];
