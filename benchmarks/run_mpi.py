@@ -10,8 +10,9 @@ mpi.peak_rss_mb_per_rank; one rank: peak_rss_mb).
       [--divisions-poisson 50] [--divisions-elasticity 35] [--threads 1]
 
 Each case runs on 1 rank, on 2 ranks with the case's default `solver.parallel_ptap` ("auto"),
-and on 2 ranks with the other choice ("scalable" for elasticity, "allatonce" for Poisson), so the
-table compares GAMG's two parallel Galerkin products side by side.
+on 2 ranks with the other choice ("scalable" for elasticity, "allatonce" for Poisson), so the
+table compares GAMG's two parallel Galerkin products side by side, and on 2 ranks with equal rows
+per rank (`solver.rank_balance` "rows"; the others balance the ranks' memory, the default).
 """
 import argparse
 import json
@@ -71,13 +72,16 @@ def read_vtu_field(path):
     return np.frombuffer(raw, dtype="<f8")
 
 
-def run(build, work, name, divisions, ranks, threads, ptap=None):
+def run(build, work, name, divisions, ranks, threads, ptap=None, balance=None):
     os.makedirs(work, exist_ok=True)
     text = case_text(name, divisions)
     tag = ""
     if ptap:
         text["solver"]["parallel_ptap"] = ptap
         tag = "_" + ptap
+    if balance:
+        text["solver"]["rank_balance"] = balance
+        tag += "_" + balance
     case = os.path.join(work, f"{name}{tag}.json")
     with open(case, "w") as f:
         json.dump(text, f, indent=1)
@@ -116,7 +120,8 @@ def main():
         other = "allatonce" if name == "poisson_p2" else "scalable"
         runs = [run(a.build, a.work, name, d, 1, a.threads),
                 run(a.build, a.work, name, d, 2, a.threads),
-                run(a.build, a.work, name, d, 2, a.threads, other)]
+                run(a.build, a.work, name, d, 2, a.threads, other),
+                run(a.build, a.work, name, d, 2, a.threads, balance="rows")]
         u = [read_vtu_field(os.path.join(r["out"], "volume.vtu")) for r in runs]
         diffs = [float(np.max(np.abs(u[0] - v)) / np.max(np.abs(u[0]))) for v in u[1:]]
         reps = [r["report"] for r in runs]
@@ -124,9 +129,10 @@ def main():
         lines += [f"## {name}: builtin cube, {d} divisions, {r1['tets']} tets, {r1['dofs']} DOFs",
                   "", "```"] + [r["cmd"] for r in runs] + ["```", "",
                   "max |u1 - u2| / max |u1| = " + ", ".join(f"{x:.3e}" for x in diffs)
-                  + " (2 ranks, then 2 ranks with " + other + ")", ""]
+                  + " (2 ranks, then 2 ranks with " + other + ", then 2 ranks with equal rows)", ""]
         stages = sorted(set().union(*(set(r["time_s"]) for r in reps)))
-        lines += [f"| | 1 rank | 2 ranks (auto) | 2 ranks ({other}) |", "|---|---|---|---|"]
+        lines += [f"| | 1 rank | 2 ranks (auto) | 2 ranks ({other}) | 2 ranks (auto, equal rows) |",
+                  "|---|---|---|---|---|"]
         for s in stages:
             lines.append(f"| time `{s}` (s) | "
                          + " | ".join(f"{r['time_s'].get(s, 0):.2f}" for r in reps) + " |")
@@ -163,10 +169,14 @@ def main():
                   "| rows per rank | " + " | ".join(
                       f"{x.get('rows_per_rank')} ({x.get('partitioner')})" if "ranks" in x
                       else "all" for x in sv) + " |",
+                  "| row shares asked (`solver.rank_balance`) | – | " + " | ".join(
+                      ("memory: " + ", ".join(f"{v:.3f}" for v in x["rank_shares"])
+                       + " (heap " + ", ".join(f"{v:.0f}" for v in x["rank_heap_mb"]) + " MiB)")
+                      if x.get("rank_shares") else "rows: equal" for x in sv[1:]) + " |",
                   "| peak RSS per rank (MiB) | " + " | ".join(rss(r) for r in reps) + " |",
                   "| max rank / 1 rank | " + " | ".join(f"{ratio(r):.2f}" for r in reps) + " |",
                   ""]
-        print("\n".join(lines[-22:]), flush=True)
+        print("\n".join(lines[-24:]), flush=True)
     # A hand-written "## Reading" section of an existing file is kept after the new tables.
     kept = ""
     if os.path.exists(a.results):

@@ -25,6 +25,7 @@ enum class SolveGeometry { iso, mesh };                      ///< discretization
 enum class SolverType { automatic, direct, cg };             ///< solver.type
 enum class Preconditioner { gamg, hypre, ml };               ///< solver.preconditioner
 enum class ParallelPtap { automatic, allatonce, scalable };  ///< solver.parallel_ptap
+enum class RankBalance { memory, rows };                     ///< solver.rank_balance
 enum class BoundaryType { dirichlet, neumann, robin };       ///< boundary_conditions[].type
 enum class SurfaceValues { extended, image };                ///< output.surface_values
 enum class BoundaryValuesAt { input, mesh, shifted };        ///< discretization.boundary_values_at
@@ -72,6 +73,7 @@ CURVEFEM_ENUM_NAMES(SolveGeometry, "iso", "mesh")
 CURVEFEM_ENUM_NAMES(SolverType, "auto", "direct", "cg")
 CURVEFEM_ENUM_NAMES(Preconditioner, "gamg", "hypre", "ml")
 CURVEFEM_ENUM_NAMES(ParallelPtap, "auto", "allatonce", "scalable")
+CURVEFEM_ENUM_NAMES(RankBalance, "memory", "rows")
 CURVEFEM_ENUM_NAMES(BoundaryType, "dirichlet", "neumann", "robin")
 CURVEFEM_ENUM_NAMES(SurfaceValues, "extended", "image")
 CURVEFEM_ENUM_NAMES(BoundaryValuesAt, "input", "mesh", "shifted")

@@ -690,6 +690,9 @@ CaseSpec read_case_json(const nlohmann::json& given, const std::filesystem::path
     if (const json* v = r.get(*s, "parallel_ptap"))
       c.solver_parallel_ptap =
           r.choice_of<ParallelPtap>(*v, "/solver/parallel_ptap", "solver.parallel_ptap");
+    if (const json* v = r.get(*s, "rank_balance"))
+      c.solver_rank_balance =
+          r.choice_of<RankBalance>(*v, "/solver/rank_balance", "solver.rank_balance");
   }
   std::string out = "out";
   if (const json* o = r.get(j, "output")) {

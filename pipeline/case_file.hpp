@@ -138,6 +138,7 @@ struct CaseSpec {
   bool solver_near_nullspace = true;  ///< cg: rigid-body modes for GAMG (elasticity)
   Preconditioner solver_preconditioner = Preconditioner::gamg;  ///< cg
   ParallelPtap solver_parallel_ptap = ParallelPtap::automatic;  ///< GAMG over several ranks
+  RankBalance solver_rank_balance = RankBalance::memory;        ///< several ranks
   std::filesystem::path output_dir;                             ///< resolved
   SurfaceValues surface_values = SurfaceValues::extended;       ///< output.surface_values
   nlohmann::json resolved;                                      ///< the case with defaults, as run

@@ -303,6 +303,10 @@ json load_report(const LoadResult& l) {
     report["solver"]["distribute_s"] = s.distribute_s;
     report["solver"]["assembled_by_rows"] = s.assembled_by_rows;
     if (!s.parallel_ptap.empty()) report["solver"]["parallel_ptap"] = s.parallel_ptap;
+    if (!s.rank_shares.empty()) {
+      report["solver"]["rank_shares"] = s.rank_shares;
+      report["solver"]["rank_heap_mb"] = s.rank_heap_mb;
+    }
     if (s.assembled_by_rows) report["solver"]["rows_assembly_s"] = s.assembly_s;
   }
   return report;

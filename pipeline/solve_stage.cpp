@@ -230,6 +230,8 @@ Solution solve(const CaseSpec& spec, const Discretization& disc, const BoundaryD
       spec.solver_parallel_ptap == ParallelPtap::scalable    ? fem::ParallelPtap::scalable
       : spec.solver_parallel_ptap == ParallelPtap::allatonce ? fem::ParallelPtap::allatonce
                                                              : fem::ParallelPtap::automatic;
+  solver.rank_balance = spec.solver_rank_balance == RankBalance::rows ? fem::RankBalance::rows
+                                                                      : fem::RankBalance::memory;
   solver.auto_direct_max_dofs = auto_direct_max_unknowns(spec.physics, disc.space.degree);
   if (spec.physics != Physics::neo_hookean) solver.factorization_cache = std::move(cache);
   const fem::PartialDirichlet partial_dirichlet = spec.partial_dirichlet == PartialDirichlet::nodal

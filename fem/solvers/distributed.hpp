@@ -5,7 +5,9 @@
 // rank 0 (solve_spd) becomes collective: rank 0 partitions the unknowns' graph (nodes = blocks of
 // block_size rows in groups of consecutive ones, at most 2^17 groups; edges = the matrix
 // pattern) with PETSc's MatPartitioning "ptscotch" (a
-// contiguous split with a warning when that fails), renumbers the rows so that every rank owns a
+// contiguous split with a warning when that fails; each rank's share of the rows from
+// LinearSolverOptions::rank_balance: by default rank 0, which holds the rest of the run, gets
+// fewer, see memory_balanced_shares), renumbers the rows so that every rank owns a
 // contiguous range, sends each rank its rows (CSR), its slice of the right-hand side, of the
 // near-nullspace coordinates / vectors and of the kernel; every rank builds its part of a
 // MATMPIAIJ and the same KSP as the one-process engine (CG + GAMG | hypre | ML, rigid-body modes
@@ -101,6 +103,13 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
                               const Eigen::VectorXd& values, const std::vector<int>& reduced, int m,
                               const LinearSolverOptions& options, bool direct,
                               LinearSolveInfo& info);
+
+/// Shares of the rows per rank (summing to 1) that even out the ranks' peak memory: rank p holds
+/// `heap_mb[p]` before the solve and the solver adds about `solve_mb` × its share, so the shares
+/// fill every rank up to one common level (water-filling), each at least `min_share`. Equal
+/// shares when solve_mb is not positive. Pure; unit-tested.
+std::vector<double> memory_balanced_shares(const std::vector<double>& heap_mb, double solve_mb,
+                                           double min_share);
 
 /// Renumbering of nodes by owning rank, keeping the order within a rank: new_of[old] and the
 /// first new index of each rank (size ranks + 1). Pure; unit-tested.

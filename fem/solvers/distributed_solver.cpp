@@ -2,6 +2,7 @@
 // rank its rows; every rank holds its part of a MATMPIAIJ and of the KSP; rank 0 gets the
 // solution back.
 // <mpi.h> through petscsys.h, which skips the MPI C++ bindings (OMPI_SKIP_MPICXX).
+#include <malloc.h>
 #include <petscksp.h>
 #include <sys/resource.h>
 
@@ -96,7 +97,38 @@ struct Header {
   int parallel_ptap = 0;   // ParallelPtap as an int: 0 automatic, 1 allatonce, 2 scalable
   int max_iterations = 0;
   double rtol = 0;
+  // RankBalance::memory: the solver's estimated memory over all ranks (MiB), and the part of
+  // rank 0's heap that the solve frees before its set-up (the whole matrix handed over).
+  int balance_memory = 0;
+  double solve_mb = 0, rank0_transient_mb = 0;
 };
+
+/// The parallel Galerkin product the header asks for: allatonce, or scalable (ParallelPtap).
+bool wants_allatonce(const Header& h) {
+  const bool with_modes = h.coordinates || h.vector_columns > 0;
+  return h.parallel_ptap == static_cast<int>(ParallelPtap::allatonce) ||
+         (h.parallel_ptap == static_cast<int>(ParallelPtap::automatic) && with_modes);
+}
+
+/// Bytes of a distributed CG + GAMG solve's memory per nonzero of its matrix, over all ranks: the
+/// matrix's CSR (12 bytes an entry) and what GAMG builds on it (the graph, the prolongators, the
+/// coarse operators, the Galerkin products' buffers). Measured on 2 ranks with equal rows, from
+/// the peak resident set of rank 1 (which holds nothing else) less its resident set before the
+/// solve (benchmarks/results/mpi.md, 2026-12-06): P2 Poisson, 1.03M rows, 25.8M nonzeros: 54
+/// (allatonce), 59 (scalable); P2 elasticity with the rigid-body modes, 1.07M rows, 87.8M
+/// nonzeros: 30 (allatonce), 61 (scalable). hypre and ML are not measured (the scalable figure).
+double solve_bytes_per_nonzero(const Header& h) {
+  const bool gamg = h.preconditioner == static_cast<int>(Preconditioner::gamg);
+  if (!gamg || !wants_allatonce(h)) return 60;
+  return h.block_size > 1 ? 30 : 54;
+}
+
+/// The heap this process is using (MiB): glibc's allocated chunks and its mmapped blocks, not
+/// what it freed and keeps for later allocations (which the resident set still counts).
+double heap_in_use_mb() {
+  const struct mallinfo2 m = mallinfo2();
+  return static_cast<double>(m.uordblks + m.hblkhd) / (1024.0 * 1024.0);
+}
 
 /// One rank's rows in the new numbering: CSR (global column indices), and its slices of the
 /// right-hand side, the coordinates (3 per node), the kernel and the vectors (column-major,
@@ -130,9 +162,22 @@ LocalPart receive_part() {
 }
 
 /// Collective: the owner of every node of the graph held by rank 0 (CSR without the diagonal;
-/// empty on the other ranks). Only rank 0's result is filled.
+/// empty on the other ranks). Only rank 0's result is filled. With h.balance_memory the ranks'
+/// shares of the nodes follow memory_balanced_shares (PT-Scotch's partition weights), from every
+/// rank's heap in use now; `shares` and `heap_mb` then say what was asked (else empty).
 std::vector<int> partition(const std::vector<int>& ptr, const std::vector<int>& adj,
-                           long long nodes, std::string& partitioner) {
+                           const Header& h, std::string& partitioner, std::vector<double>& shares,
+                           std::vector<double>& heap_mb) {
+  const long long nodes = h.graph_nodes;
+  shares.clear();
+  heap_mb.clear();
+  if (h.balance_memory && g_size > 1) {
+    double mine = heap_in_use_mb();
+    if (g_rank == 0) mine = std::max(0.0, mine - h.rank0_transient_mb);
+    heap_mb.assign(std::size_t(g_size), 0.0);
+    MPI_Allgather(&mine, 1, MPI_DOUBLE, heap_mb.data(), 1, MPI_DOUBLE, comm());
+    shares = memory_balanced_shares(heap_mb, h.solve_mb, 0.2 / g_size);
+  }
   const PetscInt local = g_rank == 0 ? static_cast<PetscInt>(nodes) : 0;
   const std::size_t nnz = g_rank == 0 ? adj.size() : 0;
   PetscInt *ia = nullptr, *ja = nullptr;  // owned by the MPIAdj matrix
@@ -151,6 +196,14 @@ std::vector<int> partition(const std::vector<int>& ptr, const std::vector<int>& 
   std::vector<int> owner;
   IS is = nullptr;
   PetscErrorCode err = MatPartitioningSetType(part, MATPARTITIONINGPTSCOTCH);
+  if (!err && !shares.empty()) {
+    PetscReal* weights = nullptr;  // freed by PETSc
+    err = PetscMalloc1(g_size, &weights);
+    if (!err) {
+      for (int p = 0; p < g_size; ++p) weights[p] = shares[std::size_t(p)];
+      err = MatPartitioningSetPartitionWeights(part, weights);
+    }
+  }
   if (!err) err = MatPartitioningApply(part, &is);
   if (!err) {
     partitioner = "ptscotch";
@@ -168,6 +221,15 @@ std::vector<int> partition(const std::vector<int>& ptr, const std::vector<int>& 
                 "); the nodes are split into contiguous ranges");
       owner.resize(std::size_t(nodes));
       for (long long i = 0; i < nodes; ++i) owner[std::size_t(i)] = int(i * g_size / nodes);
+      if (!shares.empty()) {  // the same shares, as consecutive ranges
+        double end = 0;
+        long long i = 0;
+        for (int p = 0; p < g_size; ++p) {
+          end += shares[std::size_t(p)];
+          const long long last = p + 1 == g_size ? nodes : std::llround(end * double(nodes));
+          for (; i < last; ++i) owner[std::size_t(i)] = p;
+        }
+      }
     }
   }
   MatPartitioningDestroy(&part);
@@ -281,10 +343,7 @@ SolveOutcome solve_part(const Header& h, LocalPart& part) {
   PetscBool user_ptap = PETSC_FALSE;
   check(PetscOptionsHasName(nullptr, nullptr, "-matptap_via", &user_ptap), "PetscOptionsHasName");
   const bool set_ptap = !h.direct && !user_ptap;
-  const bool with_modes = h.coordinates || h.vector_columns > 0;
-  const bool allatonce =
-      h.parallel_ptap == static_cast<int>(ParallelPtap::allatonce) ||
-      (h.parallel_ptap == static_cast<int>(ParallelPtap::automatic) && with_modes);
+  const bool allatonce = wants_allatonce(h);
   if (set_ptap)
     check(PetscOptionsSetValue(nullptr, "-matptap_via", allatonce ? "allatonce" : "scalable"),
           "PetscOptionsSetValue");
@@ -360,7 +419,8 @@ void serve_solve() {
   MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
   wait(request);
   std::string partitioner;
-  partition({}, {}, h.graph_nodes, partitioner);
+  std::vector<double> shares, heap_mb;
+  partition({}, {}, h, partitioner, shares, heap_mb);
   LocalPart part = receive_part();
   solve_part(h, part);
 }
@@ -424,6 +484,38 @@ std::vector<double> peak_rss_mb_per_rank() {
   std::vector<double> all(std::size_t(g_size), 0.0);
   MPI_Gather(&mb, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, comm());
   return all;
+}
+
+std::vector<double> memory_balanced_shares(const std::vector<double>& heap_mb, double solve_mb,
+                                           double min_share) {
+  const std::size_t n = heap_mb.size();
+  if (n == 0) return {};
+  std::vector<double> share(n, 1.0 / double(n));
+  if (!(solve_mb > 0) || n == 1) return share;
+  min_share = std::clamp(min_share, 0.0, 1.0 / double(n));
+  // Every rank gets at least min_share; the rest fills the ranks from the lowest heap up to a
+  // common level L: share_p = min_share + max(0, L − heap_p − min_share·solve) / solve.
+  std::vector<double> base(n);
+  for (std::size_t p = 0; p < n; ++p) base[p] = heap_mb[p] + min_share * solve_mb;
+  const double rest = solve_mb * (1.0 - min_share * double(n));
+  std::vector<double> sorted = base;
+  std::sort(sorted.begin(), sorted.end());
+  // The level: the first k lowest ranks are filled when L ≥ sorted[k-1].
+  double level = sorted.back() + rest / double(n);
+  double sum = 0;
+  for (std::size_t k = 1; k <= n; ++k) {
+    sum += sorted[k - 1];
+    const double L = (rest + sum) / double(k);
+    if (k == n || L <= sorted[k]) {
+      level = L;
+      break;
+    }
+  }
+  for (std::size_t p = 0; p < n; ++p)
+    share[p] = min_share + std::max(0.0, level - base[p]) / solve_mb;
+  const double total = std::accumulate(share.begin(), share.end(), 0.0);
+  for (double& x : share) x /= total;
+  return share;
 }
 
 Renumbering renumber_by_owner(const std::vector<int>& owner, int ranks) {
@@ -506,17 +598,31 @@ Header header_of(long long n, long long groups, int bs, int kernel_columns,
   h.parallel_ptap = static_cast<int>(options.parallel_ptap);
   h.max_iterations = options.max_iterations;
   h.rtol = options.rtol;
+  // Not for MUMPS (its factor's memory is not modelled): equal rows there.
+  h.balance_memory = options.rank_balance == RankBalance::memory && !direct;
   return h;
 }
 
 /// Rank 0: broadcasts the solve and its header, and partitions the graph (collective).
+/// `nonzeros`: the matrix's (estimated where it is not assembled yet), for the memory balance.
 std::vector<int> start_solve(Header& h, const std::vector<int>& ptr, const std::vector<int>& adj,
-                             std::string& partitioner) {
+                             double nonzeros, std::string& partitioner, LinearSolveInfo& info) {
+  h.solve_mb = nonzeros * solve_bytes_per_nonzero(h) / (1024.0 * 1024.0);
   broadcast_command(k_solve);
   MPI_Request request;
   MPI_Ibcast(&h, sizeof(Header), MPI_BYTE, 0, comm(), &request);
   wait(request);
-  return partition(ptr, adj, h.graph_nodes, partitioner);
+  std::vector<int> owner = partition(ptr, adj, h, partitioner, info.rank_shares, info.rank_heap_mb);
+  if (!info.rank_shares.empty()) {
+    std::ostringstream s;
+    for (int p = 0; p < g_size; ++p)
+      s << (p ? ", " : "") << "rank " << p << ": heap "
+        << std::llround(info.rank_heap_mb[std::size_t(p)]) << " MiB, share "
+        << info.rank_shares[std::size_t(p)];
+    log::debug("distributed solve: ", nonzeros, " nonzeros, solver memory about ",
+               std::llround(h.solve_mb), " MiB over all ranks; ", s.str());
+  }
+  return owner;
 }
 
 void fill_info(LinearSolveInfo& info, SolveOutcome& out, bool direct,
@@ -614,11 +720,17 @@ Eigen::VectorXd solve(const SparseMatrix& A, const Eigen::VectorXd& b,
   });
   const long long group = graph.group, groups = graph.groups;
   Header h = header_of(n, groups, bs, int(null_space.cols()), near, options, direct);
+  // A handed over is freed once the parts are sent, before the solver's set-up.
+  if (owned)
+    h.rank0_transient_mb = (double(C.nonZeros()) * (sizeof(double) + sizeof(int)) +
+                            double(C.outerSize() + 1) * sizeof(int)) /
+                           (1024.0 * 1024.0);
   SolveOutcome out;
   Eigen::VectorXd x(n);
   try {
     std::string partitioner;
-    const std::vector<int> group_owner = start_solve(h, graph.ptr, graph.adj, partitioner);
+    const std::vector<int> group_owner =
+        start_solve(h, graph.ptr, graph.adj, double(C.nonZeros()), partitioner, info);
     release(graph.ptr);
     release(graph.adj);
     std::vector<int> owner(static_cast<std::size_t>(nodes));
@@ -718,6 +830,7 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
   const long long nodes = system.nodes;
   const int nc = static_cast<int>(cells.rows()), nl = static_cast<int>(cells.cols());
   GroupGraph graph;
+  double node_pairs = 0;
   {
     std::vector<int> start(std::size_t(nodes) + 1, 0);
     for (int c = 0; c < nc; ++c)
@@ -727,9 +840,18 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
     for (int c = 0; c < nc; ++c)
       for (int l = 0; l < nl; ++l) incident[std::size_t(fill[std::size_t(cells(c, l))]++)] = c;
     release(fill);
+    // The pattern's size on the way (distinct neighbours per node), for the memory balance.
+    std::vector<long long> stamp(std::size_t(nodes), -1);
     graph = group_graph(nodes, [&](long long i, auto&& emit) {
       for (int k = start[std::size_t(i)]; k < start[std::size_t(i) + 1]; ++k)
-        for (int l = 0; l < nl; ++l) emit(cells(incident[std::size_t(k)], l));
+        for (int l = 0; l < nl; ++l) {
+          const int j = cells(incident[std::size_t(k)], l);
+          if (stamp[std::size_t(j)] != i) {
+            stamp[std::size_t(j)] = i;
+            ++node_pairs;
+          }
+          emit(j);
+        }
     });
   }
   const long long group = graph.group, groups = graph.groups;
@@ -738,7 +860,12 @@ Eigen::VectorXd solve_by_rows(const RowAssembly& system, const Eigen::VectorXd& 
   Eigen::VectorXd x(m);
   try {
     std::string partitioner;
-    const std::vector<int> group_owner = start_solve(h, graph.ptr, graph.adj, partitioner);
+    // Nonzeros of the reduced matrix: fb² per pair of neighbouring nodes, the fixed unknowns'
+    // rows and columns left out.
+    const double free_share = double(m) / double(std::max(1LL, full));
+    const double nonzeros = node_pairs * fb * fb * free_share * free_share;
+    const std::vector<int> group_owner =
+        start_solve(h, graph.ptr, graph.adj, nonzeros, partitioner, info);
     release(graph.ptr);
     release(graph.adj);
     // Owners: of every node, then of every free unknown (its node's); new numbers by owner,

@@ -65,6 +65,12 @@ enum class Preconditioner { gamg, hypre, ml };
 /// the one-process set-up's), scalable otherwise (scalar problems: 3% more memory, 0.6x the
 /// set-up time; benchmarks/results/mpi.md).
 enum class ParallelPtap { automatic, allatonce, scalable };
+/// How a distributed solve splits the rows between the ranks (fem/solvers/distributed.hpp).
+/// memory: so that every rank's peak memory is about the same — rank 0 also holds the mesh, the
+/// space and the run's other data, so it gets fewer rows (the shares from each rank's heap in use
+/// when the solve starts and an estimate of the solver's memory per matrix entry); rows: equal
+/// rows per rank (PT-Scotch's default balance).
+enum class RankBalance { memory, rows };
 /// Spellings as in case files and reports: "auto" | "direct" | "cg", "gamg" | "hypre" | "ml".
 std::string to_string(SolverType type);
 std::string to_string(Preconditioner preconditioner);
@@ -79,6 +85,7 @@ struct LinearSolverOptions {
   int auto_direct_max_dofs = 200000;
   Preconditioner preconditioner = Preconditioner::gamg;  ///< cg
   ParallelPtap parallel_ptap = ParallelPtap::automatic;  ///< cg + gamg over several ranks
+  RankBalance rank_balance = RankBalance::memory;        ///< several ranks
   int block_size = 1;  ///< unknowns per node (3 for elasticity): helps AMG
   /// cg, block_size 3: coordinates of the node of each block of 3 consecutive rows (#rows/3 x 3,
   /// row r = the node of unknowns 3r, 3r+1, 3r+2): GAMG's near-nullspace = the rigid-body modes.
@@ -107,7 +114,10 @@ struct LinearSolveInfo {
   bool reused_factorization = false;  ///< direct: the factor of an identical earlier matrix
   // Distributed solves (fem/solvers/distributed.hpp; 1 rank otherwise):
   int ranks = 1;
-  std::vector<long long> rows_per_rank;          ///< rows owned by each rank (empty on one rank)
+  std::vector<long long> rows_per_rank;  ///< rows owned by each rank (empty on one rank)
+  /// RankBalance::memory: the share of the rows asked of each rank, and the heap in use (MiB) on
+  /// each rank it was computed from; empty with RankBalance::rows or one rank.
+  std::vector<double> rank_shares, rank_heap_mb;
   std::string partitioner;                       ///< "ptscotch" | "contiguous" (several ranks)
   std::string parallel_ptap;                     ///< several ranks, GAMG: "allatonce" | "scalable"
   double partition_s = 0.0, distribute_s = 0.0;  ///< parts of setup_s

@@ -116,6 +116,44 @@ TEST(MpiRun, PoissonP2OneAndTwoRanksAgree) {
   EXPECT_GT(r1["l2_error"].get<double>(), 1e-8);  // not in the space: the test can fail
 }
 
+// solver.rank_balance: by default rank 0, which also holds the mesh and the space, is asked for
+// fewer rows (shares from the ranks' heaps); "rows" splits them evenly. Same solution either way.
+TEST(MpiRun, RankZeroGetsFewerRowsWhenTheRanksMemoryIsBalanced) {
+  std::string why;
+  if (!have_launcher(why)) GTEST_SKIP() << why;
+  std::string text = R"json({
+    "geometry": {"builtin": {"shape": "cube", "divisions": 6, "order": 1}},
+    "physics": {"type": "poisson"},
+    "discretization": {"degree": 2},
+    "rhs": "-2*exp(x)*sin(y)",
+    "boundary_conditions": [
+      {"type": "dirichlet", "select": {"all": true}, "value": "exp(x)*sin(y)*x + z"}],
+    "solver": {"type": "cg", "rtol": 1e-12}
+  })json";
+  const auto memory = run_ranks(test::scratch_dir("mpi_balance_memory"), text, 2);
+  text.replace(text.find("\"rtol\""), 0, "\"rank_balance\": \"rows\", ");
+  const auto rows = run_ranks(test::scratch_dir("mpi_balance_rows"), text, 2);
+  EXPECT_LT(relative_difference(memory, rows), 1e-8);
+  const auto m = report(memory)["solver"], r = report(rows)["solver"];
+  const auto shares = m["rank_shares"].get<std::vector<double>>();
+  const auto heap = m["rank_heap_mb"].get<std::vector<double>>();
+  ASSERT_EQ(shares.size(), 2u);
+  ASSERT_EQ(heap.size(), 2u);
+  EXPECT_NEAR(shares[0] + shares[1], 1.0, 1e-12);
+  EXPECT_GT(heap[0], heap[1]);  // rank 0 holds the mesh, the space, the boundary data
+  EXPECT_LT(shares[0], 0.5);
+  EXPECT_GE(shares[0], 0.1 - 1e-12);  // the floor: 0.2 / ranks
+  const auto asked = m["rows_per_rank"].get<std::vector<long long>>();
+  const auto even = r["rows_per_rank"].get<std::vector<long long>>();
+  ASSERT_EQ(asked.size(), 2u);
+  ASSERT_EQ(even.size(), 2u);
+  EXPECT_LT(asked[0], asked[1]);
+  // PT-Scotch follows the weights to within a few per cent of the rows.
+  EXPECT_NEAR(double(asked[0]) / double(asked[0] + asked[1]), shares[0], 0.05);
+  EXPECT_FALSE(r.contains("rank_shares"));
+  EXPECT_NEAR(double(even[0]) / double(even[0] + even[1]), 0.5, 0.05);
+}
+
 TEST(MpiRun, ElasticityP2OneAndTwoRanksAgreeWithRigidBodyModes) {
   std::string why;
   if (!have_launcher(why)) GTEST_SKIP() << why;
