@@ -1991,6 +1991,11 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       stats.optimize.worst_sj_before = w.worst_sj_before;
       stats.optimize.worst_sj_after = w.worst_sj_after;
       stats.optimize.worst_seconds = w.worst_seconds;
+      stats.optimize.worst_mips_movable = w.worst_mips_movable;
+      stats.optimize.worst_mips_visits = w.worst_mips_visits;
+      stats.optimize.worst_mips_moves = w.worst_mips_moves;
+      stats.optimize.worst_mips_before = w.worst_mips_before;
+      stats.optimize.worst_mips_after = w.worst_mips_after;
       stats.optimize.rejected_by_certificate += w.rejected_by_certificate;
       stats.optimize.max_energy_after = w.max_energy_after;
       stats.optimize.mean_energy_after = w.mean_energy_after;

@@ -390,7 +390,11 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
   // A high-order node off the boundary moves alone (its cells become curved): that reaches a
   // cell whose corners cannot move without inverting it, such as a slab tet under a curved
   // boundary face.
-  auto worst_visit = [&](int v, std::atomic<long long>& rejected) {
+  // by_mips: the same search lowers the star's worst curved MIPS instead (OptimizeOptions::
+  // worst_mips), keeping every cell's scaled Jacobian above min(the star's before, the worst
+  // search's threshold): a near-flat cell's MIPS can be far above the goal while its sampled
+  // scaled Jacobian is above that threshold (thin_plate_05, K = 3: MIPS 1.03e4 at 0.027).
+  auto worst_visit = [&](int v, std::atomic<long long>& rejected, bool by_mips) {
     const bool corner_move = is_corner[v];
     std::vector<std::pair<int, double>> moved;  // node, weight (of k)
     std::vector<std::pair<double, int>> cells;  // scaled Jacobian before, cell; worst first
@@ -435,8 +439,21 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // fails as the full evaluations would have made it fail, at a few 220ths of a cell's cost
     // at K = 4. tr12j_occt K = 4 (1 thread): the worst-cell search 48.5 -> 15 s, 1.3 of its
     // 1.8 million trials rejected that way, the same mesh.
-    std::vector<double> trial_sj(cells.size());
+    std::vector<double> trial_sj(cells.size()), trial_mips(cells.size());
     std::vector<Eigen::MatrixXd> nodes_of(cells.size(), Eigen::MatrixXd(mesh.cells.cols(), 3));
+    // by_mips: no cell's scaled Jacobian at or below sj_floor; the value is minus the worst MIPS.
+    const double sj_floor = std::min(cells.front().first, options.worst_scaled_jacobian);
+    auto mips_value = [&](double bar) {
+      double worst = 0;
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        const int c = cells[i].second;
+        trial_mips[i] = curved_cell[c] && k > 1 ? curved_mips(k, nodes_of[i])
+                                                : curved_mips(k, cell_nodes(mesh, c));
+        if (!(-trial_mips[i] > bar)) return -k_inf;
+        worst = std::max(worst, trial_mips[i]);
+      }
+      return -worst;
+    };
     auto value = [&](const Eigen::Vector3d& d, double bar) {
       place(d);
       // Each curved cell's nodes are gathered once per trial, into buffers kept over the visit.
@@ -446,7 +463,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
             nodes_of[i].row(n) = mesh.nodes.row(mesh.cells(cells[i].second, n));
       // Any cell clearly below the bar at its hint fails the trial, whichever cell the full
       // evaluations below would have stopped at.
-      const double clearly_below = bar - 1e-12 * std::abs(bar) - 1e-300;
+      const double sj_bar = by_mips ? sj_floor : bar;
+      const double clearly_below = sj_bar - 1e-12 * std::abs(sj_bar) - 1e-300;
       for (std::size_t i = 0; i < cells.size(); ++i) {
         const int c = cells[i].second;
         if (!curved_cell[c] || k == 1) continue;
@@ -464,10 +482,10 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         } else {
           trial_sj[i] = cell_sj_now(c);
         }
-        if (!(trial_sj[i] > bar)) return -k_inf;
+        if (!(trial_sj[i] > sj_bar)) return -k_inf;
         m = std::min(m, trial_sj[i]);
       }
-      return m;
+      return by_mips ? mips_value(bar) : m;
     };
     static const std::array<Eigen::Vector3d, 14> directions = [] {
       std::array<Eigen::Vector3d, 14> d;
@@ -480,13 +498,13 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
             Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1) / std::sqrt(3.0);
       return d;
     }();
-    const double before = cells.front().first;
     // (At the start position: the search below moves the nodes.)
     double mips_sum_before = 0, mips_max_before = 0;
     for (const auto& [q, c] : cells) {
       mips_sum_before += mips_of(c);
       mips_max_before = std::max(mips_max_before, mips_of(c));
     }
+    const double before = by_mips ? -mips_max_before : cells.front().first;
     double best = before;
     Eigen::Vector3d delta = Eigen::Vector3d::Zero();
     int evaluations = 0;
@@ -507,7 +525,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // A gain of less than 5% is not worth a certificate. The minimum alone would trade the other
     // cells' shape for it (tr12j_occt K = 3: mean curved MIPS 322 -> 358), so the star's summed
     // curved MIPS may not grow, nor its worst above max(its value before, mips_ceiling).
-    const double gain = 1.05;
+    // (by_mips: the values are negative, so the worst MIPS must fall below before / 1.05.)
+    const double gain = by_mips ? 1.0 / 1.05 : 1.05;
     const double mips_cap = std::max(mips_max_before, options.mips_ceiling);
     std::vector<double> mips_after(cells.size());
     bool accepted = false;
@@ -658,13 +677,38 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       return (is_corner[v] || node_ok[std::size_t(v)]) && !fixed[v] &&
              star_min_sj(v) < options.worst_scaled_jacobian;
     };
-    const Sweeps w = run(worst_visit, options.worst_sweeps, worst_eligible, star_min_sj, "worst");
+    const Sweeps w = run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, false); },
+                         options.worst_sweeps, worst_eligible, star_min_sj, "worst");
     stats.worst_movable = w.movable;
     stats.worst_sweeps = w.sweeps;
     stats.worst_visits = w.visits;
     stats.worst_moves = w.moves;
     stats.rejected_by_certificate += w.rejected;
     stats.worst_sj_after = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
+    if (options.worst_mips > 0) {
+      auto star_max_mips = [&](int v) {
+        double m = 0;
+        for (const auto& [c, local] : star[v]) m = std::max(m, mips_of(c));
+        return m;
+      };
+      auto mips_eligible = [&](int v) {
+        return (is_corner[v] || node_ok[std::size_t(v)]) && !fixed[v] &&
+               star_max_mips(v) > options.worst_mips;
+      };
+      for (int c = 0; c < nc; ++c)
+        stats.worst_mips_before = std::max(stats.worst_mips_before, mips_of(c));
+      const Sweeps x =
+          run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, true); },
+              options.worst_sweeps, mips_eligible, [&](int v) { return -star_max_mips(v); },
+              "worst MIPS");
+      stats.worst_mips_movable = x.movable;
+      stats.worst_mips_visits = x.visits;
+      stats.worst_mips_moves = x.moves;
+      stats.rejected_by_certificate += x.rejected;
+      for (int c = 0; c < nc; ++c)
+        stats.worst_mips_after = std::max(stats.worst_mips_after, mips_of(c));
+      stats.worst_sj_after = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
+    }
     stats.worst_seconds = worst_watch.seconds();
   }
   summarize(stats.mean_energy_after, stats.max_energy_after);

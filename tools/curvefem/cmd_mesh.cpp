@@ -68,6 +68,7 @@ struct MeshArgs {
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
+  double optimize_worst_mips = meshing::curved::OptimizeOptions{}.worst_mips;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
   double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
   double optimize_edit_locked_mips = meshing::curved::CurvedEditOptions{}.locked_mips;
@@ -164,6 +165,11 @@ void register_mesh(CLI::App& app) {
                   "last, sweeps moving the free corners of cells whose sampled scaled Jacobian "
                   "is below 0.02 to raise their star's minimum (default 3; 0: off)")
       ->check(CLI::Range(0, 100));
+  sub->add_option("--optimize-worst-mips", args->optimize_worst_mips,
+                  "then the same sweeps lower the worst curved MIPS of stars holding a cell "
+                  "above M, keeping their scaled Jacobians above min(before, 0.02) (0: off, the "
+                  "default)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
                   "node phase: move only nodes of stars with a sample whose "
                   "conformal AMIPS energy (1 for a regular tet) exceeds E (default 10)")
@@ -309,6 +315,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.sweeps = args->optimize_sweeps;
     options.optimize.node_sweeps = args->optimize_node_sweeps;
     options.optimize.worst_sweeps = args->optimize_worst_sweeps;
+    options.optimize.worst_mips = args->optimize_worst_mips;
     options.optimize.node_energy = args->optimize_node_energy;
     options.optimize.edits.passes = args->optimize_edit_passes;
     options.optimize.edits.energy = args->optimize_edit_energy;
