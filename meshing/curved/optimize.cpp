@@ -571,8 +571,10 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     long long visits = 0, moves = 0, rejected = 0;
   };
   using Visit = std::function<bool(int, std::atomic<long long>&)>;
+  // max_items > 0: each sweep visits at most that many items, the first in key order.
   auto run = [&](const Visit& visit_item, int max_sweeps, const std::function<bool(int)>& eligible,
-                 const std::function<double(int)>& key, const std::string& label) {
+                 const std::function<double(int)>& key, const std::string& label,
+                 std::size_t max_items = 0) {
     Sweeps out;
     std::vector<int> active;
     for (int v = 0; v < mesh.num_nodes(); ++v)
@@ -583,6 +585,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       std::vector<std::pair<double, int>> order;
       for (int v : active) order.emplace_back(key(v), v);
       std::sort(order.begin(), order.end());
+      if (max_items > 0 && order.size() > max_items) order.resize(max_items);
       std::vector<std::vector<int>> cell_colours(nc), classes;
       for (const auto& [neg, v] : order) {
         std::vector<char> used(classes.size() + 1, 0);
@@ -700,7 +703,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       const Sweeps x =
           run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, true); },
               options.worst_sweeps, mips_eligible, [&](int v) { return -star_max_mips(v); },
-              "worst MIPS");
+              "worst MIPS", std::size_t(std::max(0, options.worst_mips_visits)));
       stats.worst_mips_movable = x.movable;
       stats.worst_mips_visits = x.visits;
       stats.worst_mips_moves = x.moves;

@@ -77,8 +77,16 @@ struct OptimizeOptions {
   // scaled Jacobian above min(the star's before, worst_scaled_jacobian), and the other guards
   // above. A near-flat cell can be far above the quality goal's MIPS (1e4) with a sampled scaled
   // Jacobian above worst_scaled_jacobian (thin_plate_05, K = 3: 1.03e4 at 0.027), which the
-  // search by scaled Jacobian never visits. 0: off (the default; see meshing/curved/README.md).
-  double worst_mips = 0;
+  // search by scaled Jacobian never visits. Measured at 2000 without a visit budget on 38 dev
+  // and 72 corpus runs (benchmarks/results/robustness_worst_mips.md): max curved MIPS lower on
+  // 24, higher on none; quality goal 80 -> 81; min scaled Jacobian lowered on 8 runs, each only
+  // to the 0.02 floor. 0: off.
+  double worst_mips = 2000;
+  // At most this many stars per sweep of that search, the worst first (0: all). Where thousands
+  // of stars hold such cells (knife discs, tr12j_occt) visiting all of them cost 10-30 s for a
+  // few per cent; with 100, tr12j_occt K = 4's optimize stage is 30.7 s (30.3 s without the
+  // search, 50.7 s visiting all).
+  int worst_mips_visits = 100;
   // Collapses and flips of the stitched curved mesh before the smoothing (curved_edit.hpp; run by
   // the curved mesher, not by optimize_vertices).
   CurvedEditOptions edits;

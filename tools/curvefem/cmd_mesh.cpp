@@ -167,8 +167,8 @@ void register_mesh(CLI::App& app) {
       ->check(CLI::Range(0, 100));
   sub->add_option("--optimize-worst-mips", args->optimize_worst_mips,
                   "then the same sweeps lower the worst curved MIPS of stars holding a cell "
-                  "above M, keeping their scaled Jacobians above min(before, 0.02) (0: off, the "
-                  "default)")
+                  "above M, at most 100 stars a sweep, keeping their scaled Jacobians above "
+                  "min(before, 0.02) (default 2000; 0: off)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
                   "node phase: move only nodes of stars with a sample whose "
