@@ -441,14 +441,14 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // 1.8 million trials rejected that way, the same mesh.
     std::vector<double> trial_sj(cells.size()), trial_mips(cells.size());
     std::vector<Eigen::MatrixXd> nodes_of(cells.size(), Eigen::MatrixXd(mesh.cells.cols(), 3));
-    // by_mips: no cell's scaled Jacobian at or below sj_floor; the value is minus the worst MIPS.
+    // by_mips: no cell's scaled Jacobian at or below sj_floor; the value is minus the worst MIPS
+    // (from the nodes value() gathered).
     const double sj_floor = std::min(cells.front().first, options.worst_scaled_jacobian);
     auto mips_value = [&](double bar) {
       double worst = 0;
       for (std::size_t i = 0; i < cells.size(); ++i) {
         const int c = cells[i].second;
-        trial_mips[i] = curved_cell[c] && k > 1 ? curved_mips(k, nodes_of[i])
-                                                : curved_mips(k, cell_nodes(mesh, c));
+        trial_mips[i] = curved_mips(k, nodes_of[i]);
         if (!(-trial_mips[i] > bar)) return -k_inf;
         worst = std::max(worst, trial_mips[i]);
       }
@@ -457,8 +457,9 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     auto value = [&](const Eigen::Vector3d& d, double bar) {
       place(d);
       // Each curved cell's nodes are gathered once per trial, into buffers kept over the visit.
+      // (by_mips: every cell's, for its curved MIPS.)
       for (std::size_t i = 0; i < cells.size(); ++i)
-        if (curved_cell[cells[i].second] && k > 1)
+        if (by_mips || (curved_cell[cells[i].second] && k > 1))
           for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
             nodes_of[i].row(n) = mesh.nodes.row(mesh.cells(cells[i].second, n));
       // Any cell clearly below the bar at its hint fails the trial, whichever cell the full
