@@ -878,8 +878,12 @@ class Builder {
   // checked like lower_for_quality (its slabs and those across its edges certified, ε held) and
   // not taking a neighbour, which shares its edge nodes, below min(its value, the floor); it
   // keeps the first α that reaches the floor, else the least distorted. A neighbour that the
-  // straightened edges fold (its inside still curved) joins the step with the same α, up to four
-  // of them (noise_sphere_2: 7 folds left without that, 1 with). Sequential.
+  // straightened edges fold (its inside still curved) joins the step with the same α, and so
+  // does a neighbour whose slabs no longer certify or that misses ε with those edges straight
+  // (four rounds of joins at most). Without the first, noise_sphere_2 kept 7 folds (1 with);
+  // without the second, tr12j_occt (K = 4) kept a folded patch whose slab tet had a sampled
+  // scaled Jacobian of 2.7e-5 (straight shape 0.14): lowering it uncertified a neighbour's slabs.
+  // Sequential.
   void lower_for_distortion(double eps) {
     // The last thickening's counts (a failed interior fill thickens again).
     distortion_faces_before = distortion_faces_after = folded_faces_before = folded_faces_after = 0;
@@ -910,18 +914,30 @@ class Builder {
           std::set<int> around;
           for (const auto& [g, old] : group)
             for (int h : across(g)) around.insert(h);
+          auto in_group = [&](int h) {
+            return std::any_of(group.begin(), group.end(),
+                               [&](const auto& e) { return e.first == h; });
+          };
           ok = true;
+          int joined = 0;
           for (int h : around)
             if (face_check(h, eps) != 0) {
               ok = false;
-              break;
+              // A neighbour whose slabs no longer certify (or that misses ε) with the group's
+              // edges straightened joins the group, if it may be lowered.
+              if (in_group(h) || !lowerable(h)) {
+                joined = 0;
+                break;
+              }
+              group.emplace_back(h, alpha[h]);
+              ++joined;
             }
-          if (!ok) break;
-          int joined = 0;
+          if (!ok) {
+            if (joined == 0) break;
+            continue;
+          }
           for (int h : around) {
-            if (std::any_of(group.begin(), group.end(),
-                            [&](const auto& e) { return e.first == h; }))
-              continue;
+            if (in_group(h)) continue;
             if (patch_distortion(h) >= std::min(dist[std::size_t(h)], distortion_floor)) continue;
             ok = false;
             if (lowerable(h)) {
