@@ -201,12 +201,12 @@ TEST(CurvedData, DistortionRepairLowersTheNeighboursAFoldedPatchUncertifies) {
   cv::CurvedMeshStats stats;
   const cv::CurvedMesh m = cv::build_curved_mesh(run->input, o, stats);
   const cv::CurvedValidation v = cv::validate_curved_mesh(m.mesh, m.map, run->input);
-  std::printf("fertility K = 4: below the floor %d -> %d (%d need full curving), folded %d -> %d, "
-              "lowered %d; min sJ %g, max MIPS %g\n",
-              stats.distorted_faces_before, stats.distorted_faces_after,
-              stats.distorted_needed_after, stats.folded_faces_before,
-              stats.folded_faces_after, stats.faces_lowered_for_distortion, v.min_scaled_jacobian,
-              v.max_mips);
+  std::printf(
+      "fertility K = 4: below the floor %d -> %d (%d need full curving), folded %d -> %d, "
+      "lowered %d; min sJ %g, max MIPS %g\n",
+      stats.distorted_faces_before, stats.distorted_faces_after, stats.distorted_needed_after,
+      stats.folded_faces_before, stats.folded_faces_after, stats.faces_lowered_for_distortion,
+      v.min_scaled_jacobian, v.max_mips);
   EXPECT_TRUE(v.valid(1e-2));
   EXPECT_GT(stats.folded_faces_before, 0);
   EXPECT_EQ(stats.distorted_faces_after, stats.distorted_needed_after);
