@@ -1313,6 +1313,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.distance_scale = point_scale;
   simplify_options.rotate = options.shell_rotate;
   simplify_options.zoom = options.shell_zoom_rel * unit;
+  simplify_options.zoom_passes = options.shell_zoom_passes;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
   if (!options.feature_edges.empty() && surface.num_vertices() > input.num_vertices()) {

@@ -174,6 +174,13 @@ struct CurvedMeshOptions {
   bool shell_flips = true;
   bool shell_rotate = true;
   double shell_zoom_rel = 0.1;
+  // SimplifyOptions::zoom_passes: up to this many doublings a round for pillars pinned below
+  // 0.05 of their star's edges (1: one, as every pillar). Off by default: at 4, measured on 38
+  // dev and 72 corpus runs (benchmarks/results/robustness_zoom.md), the knife discs' worst cells
+  // rose 10-20x and tr12j_occt K = 4's 5x (its 179.9° cap over a 0.016-wide strip went), but
+  // cheese fell 8x (3.8e-4 -> 4.8e-5) and thin_plate_05 K = 3 left the quality goal; organic
+  // meshes unchanged.
+  int shell_zoom_passes = 1;
   // Pan passes (simplify.hpp) and split passes on middle triangles with a 2-D MIPS above
   // shell_split_mips (0: off). Pans at ε = 1%, K = 3 (dev meshes, 1 thread): faces -3% (bunny)
   // to -9% (homer), slab min scaled Jacobian up on knot2 0.0033 -> 0.0094, homer 0.0023 -> 0.0063,

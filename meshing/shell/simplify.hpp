@@ -12,7 +12,8 @@
 //   zoom      thickness growth: a vertex's base and top move away from the middle surface along
 //             the pillar (doubling each half, capped by max_half_thickness and by a fraction of
 //             the ray distance to the input), so a coarser middle surface still has the input
-//             inside its prisms.
+//             inside its prisms; pillars pinned thin (zoom_pinned) get up to zoom_passes
+//             doublings a round.
 // The middle surface keeps the input's vertices (no tangential moves). Every operation is
 // accepted only if every new or changed prism
 //   I1  passes the exact 24-tet positivity test,
@@ -123,6 +124,15 @@ struct SimplifyOptions {
                      const std::vector<Eigen::Vector3d>& d)>
       curved_slab_ok;
   double zoom = 0;  // > 0: thickness growth passes, each half-pillar capped at this length
+  // Zoom passes per round (each doubles a half-pillar at most; a pass's successes flag their
+  // stars for the next). With 1, a shell pinned thin by a sliver grows by 2 a round only, too
+  // slowly for the coarsening to remove the sliver once it could (tr12j_occt, K = 4: a
+  // 0.016-wide input strip kept as a 179.9° coarse cap, half-pillars 9e-4 at its ends).
+  // CurvedMeshOptions::shell_zoom_passes has the measurements (mixed, hence 1 by default).
+  int zoom_passes = 1;
+  // The passes after the first grow only pillars whose longer half is shorter than this × the
+  // mean length of their star's edges (pinned thin; 0: none).
+  double zoom_pinned = 0.05;
   double zoom_ray_fraction = 0.45;  // ... and at this fraction of the ray distance to the input
   // Repair mode (needs max_distance; the curved mesher's local repair of faces that missed ε
   // once curved): `shell` is the output of an earlier simplify_shell with the same input and extra

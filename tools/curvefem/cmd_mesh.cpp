@@ -65,6 +65,7 @@ struct MeshArgs {
   double curve_quality_floor = meshing::curved::CurvedMeshOptions{}.curve_quality_floor;
   double curve_distortion_floor = meshing::curved::CurvedMeshOptions{}.curve_distortion_floor;
   double curved_min_area_ratio = meshing::curved::CurvedMeshOptions{}.curved_min_area_ratio;
+  int shell_zoom_passes = meshing::curved::CurvedMeshOptions{}.shell_zoom_passes;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
@@ -274,6 +275,11 @@ void register_mesh(CLI::App& app) {
                   "curved patch has its smallest area element at least R of its largest and does "
                   "not fold (default 0: off)")
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--shell-zoom-passes", args->shell_zoom_passes,
+                  "thickness growth passes a coarsening round gives shell pillars pinned below "
+                  "0.05 of their star's edges, each doubling them (default 1; 4 measured mixed: "
+                  "benchmarks/results/robustness_zoom.md)")
+      ->check(CLI::Range(1, 16));
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -343,6 +349,7 @@ void register_mesh(CLI::App& app) {
     options.curve_quality_floor = args->curve_quality_floor;
     options.curve_distortion_floor = args->curve_distortion_floor;
     options.curved_min_area_ratio = args->curved_min_area_ratio;
+    options.shell_zoom_passes = args->shell_zoom_passes;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {

@@ -326,6 +326,64 @@ TEST(ShellSimplify, ThicknessGrowthLeavesRoomForTheFacingShell) {
   EXPECT_GT(worst_ratio(sh::simplify_shell(shell, two, o, s_uncapped)), 0.5);
 }
 
+TEST(ShellSimplify, ZoomPassesLetAShellPinnedThinGrowWithinARound) {
+  // A shell 1/20 as thick as built, as a sliver pins it (tr12j_occt's 0.016-wide input strip
+  // left half-pillars of 9e-4 at its ends). No collapse fits in it, and one zoom pass a round
+  // doubles a half-pillar at most: after two rounds without a collapse the coarsening stops, the
+  // shell 4x thicker and the input not coarsened (measured: 1,280 faces). With four passes a
+  // round, the pinned pillars (below SimplifyOptions::zoom_pinned of their star's edges) grow
+  // within the round, and the coarsening goes on (measured: 428 faces, half-pillars 16x).
+  const SurfaceMesh sphere = curvefem::make_icosphere(3);
+  sh::ShellStats stats;
+  sh::Shell thin = build(sphere, stats);
+  for (int v = 0; v < thin.mid.rows(); ++v) {
+    thin.top.row(v) = thin.mid.row(v) + 0.05 * (thin.top.row(v) - thin.mid.row(v));
+    thin.base.row(v) = thin.mid.row(v) + 0.05 * (thin.base.row(v) - thin.mid.row(v));
+  }
+  expect_valid(thin, sphere);
+  const double unit = curvefem::bbox_longest_edge(sphere.V);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.02 * unit;
+  o.max_mips = 10;
+  o.rounds = 3;
+  o.zoom = 0.1 * unit;
+  auto median_half = [](const sh::Shell& c) {
+    std::vector<double> h;
+    for (int v = 0; v < c.mid.rows(); ++v) h.push_back((c.top.row(v) - c.mid.row(v)).norm());
+    std::nth_element(h.begin(), h.begin() + h.size() / 2, h.end());
+    return h[h.size() / 2];
+  };
+  const double before = median_half(thin);
+  o.zoom_passes = 1;
+  sh::SimplifyStats one;
+  const sh::Shell c1 = sh::simplify_shell(thin, sphere, o, one);
+  o.zoom_passes = 4;
+  sh::SimplifyStats four;
+  const sh::Shell c4 = sh::simplify_shell(thin, sphere, o, four);
+  std::printf(
+      "thin start: median half-pillar x%.1f with 1 zoom pass a round, x%.1f with 4; "
+      "coarse faces %d, %d (input %d)\n",
+      median_half(c1) / before, median_half(c4) / before, int(c1.F.rows()), int(c4.F.rows()),
+      sphere.num_faces());
+  expect_valid(c1, sphere);
+  expect_valid(c4, sphere);
+  EXPECT_LE(median_half(c1), 8 * before * (1 + 1e-9));
+  EXPECT_GT(median_half(c4), 8 * before);
+  EXPECT_GT(four.zooms, one.zooms);
+  EXPECT_LT(c4.F.rows(), c1.F.rows());
+  // The shell as built is not pinned (its half-pillars are not below zoom_pinned = 0.05 of their
+  // star's edges): the extra passes leave its coarsening as it was, face for face.
+  const sh::Shell built = build(sphere, stats);
+  o.zoom_passes = 1;
+  sh::SimplifyStats s1, s4;
+  const sh::Shell b1 = sh::simplify_shell(built, sphere, o, s1);
+  o.zoom_passes = 4;
+  const sh::Shell b4 = sh::simplify_shell(built, sphere, o, s4);
+  EXPECT_EQ(b1.F, b4.F);
+  EXPECT_EQ(b1.top, b4.top);
+  EXPECT_EQ(s1.zooms, s4.zooms);
+}
+
 TEST(ShellSimplify, PansMoveMiddleVerticesOntoOtherInputVertices) {
   // A jittered sphere under a distance bound and the shape guard: collapses refused for their
   // triangle shape make the star's middle vertex move to a neighbouring input vertex. Every
