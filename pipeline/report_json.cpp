@@ -88,6 +88,7 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
             {"flips", stats.coarsen_flips},
             {"pillar_rotations", stats.coarsen_rotations},
             {"thickness_growths", stats.coarsen_zooms},
+            {"zoom_passes", options.shell_zoom_passes},
             {"pans", stats.coarsen_pans},
             {"splits", stats.coarsen_splits},
             {"chain_collapses", stats.coarsen_chain_collapses},

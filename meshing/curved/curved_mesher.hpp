@@ -177,7 +177,7 @@ struct CurvedMeshOptions {
   // SimplifyOptions::zoom_passes: up to this many doublings a round for pillars pinned below
   // 0.05 of their star's edges (1: one, as every pillar). Off by default: at 4, measured on 38
   // dev and 72 corpus runs (benchmarks/results/robustness_zoom.md), the knife discs' worst cells
-  // rose 10-20x and tr12j_occt K = 4's 5x (its 179.9° cap over a 0.016-wide strip went), but
+  // rose 2-20x and tr12j_occt K = 4's 5x (its 179.9° cap over a 0.016-wide strip went), but
   // cheese fell 8x (3.8e-4 -> 4.8e-5) and thin_plate_05 K = 3 left the quality goal; organic
   // meshes unchanged.
   int shell_zoom_passes = 1;
