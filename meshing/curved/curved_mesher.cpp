@@ -920,12 +920,15 @@ class Builder {
           };
           ok = true;
           int joined = 0;
+          const std::size_t members = group.size();
           for (int h : around)
             if (face_check(h, eps) != 0) {
               ok = false;
               // A neighbour whose slabs no longer certify (or that misses ε) with the group's
-              // edges straightened joins the group, if it may be lowered.
+              // edges straightened joins the group, if it may be lowered; if one may not, none
+              // of this round joins (they would be lowered for nothing).
               if (in_group(h) || !lowerable(h)) {
+                group.resize(members);
                 joined = 0;
                 break;
               }
