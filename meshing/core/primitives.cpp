@@ -69,6 +69,31 @@ SurfaceMesh make_torus(double R, double r, int nu, int nv) {
   return m;
 }
 
+SurfaceMesh make_figure_eight_tube(int n, int m, double r) {
+  SurfaceMesh out;
+  out.V.resize(n * m, 3);
+  const double two_pi = 2.0 * std::numbers::pi;
+  for (int i = 0; i < n; ++i) {
+    const double t = two_pi * i / n;
+    const Eigen::Vector3d c(std::cos(t), std::sin(2 * t) / 2, 0);
+    const Eigen::Vector3d d = Eigen::Vector3d(-std::sin(t), std::cos(2 * t), 0).normalized();
+    const Eigen::Vector3d z = Eigen::Vector3d::UnitZ(), side = z.cross(d);
+    for (int j = 0; j < m; ++j) {
+      const double w = two_pi * j / m;
+      out.V.row(i * m + j) = (c + r * (std::cos(w) * side + std::sin(w) * z)).transpose();
+    }
+  }
+  out.F.resize(2 * n * m, 3);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const int a = i * m + j, b = ((i + 1) % n) * m + j, c = ((i + 1) % n) * m + (j + 1) % m,
+                d = i * m + (j + 1) % m;
+      out.F.row(2 * (i * m + j)) << a, c, b;  // (side, z, d) is right-handed: reversed is outward
+      out.F.row(2 * (i * m + j) + 1) << a, d, c;
+    }
+  return out;
+}
+
 SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n) {
   SurfaceMesh m;
   std::map<std::array<int, 3>, int> ids;  // lattice point → vertex id

@@ -14,6 +14,12 @@ SurfaceMesh make_icosphere(int level, double radius = 1.0,
                            const Eigen::Vector3d& center = Eigen::Vector3d::Zero());
 /// Torus around z: major radius R, minor r, nu × nv quads split into 2·nu·nv triangles (genus 1).
 SurfaceMesh make_torus(double R, double r, int nu, int nv);
+/// NOT free of self-intersections (an immersed surface, for the locally injective shell,
+/// meshing/shell/local_sheets.hpp): a closed tube of radius r around the planar figure eight
+/// (lemniscate of Gerono, x = cos t, y = sin 2t / 2, z = 0), n rings of m vertices, 2·n·m faces,
+/// oriented outward, one component of genus 1. The tube passes through itself where the curve
+/// crosses itself, at the origin (r < 1, the curve's least radius of curvature).
+SurfaceMesh make_figure_eight_tube(int n, int m, double r);
 /// Axis-aligned box [lo, hi] with n × n quads per side, 12·n² faces; tags 1..6 = -x,+x,-y,+y,-z,+z.
 SurfaceMesh make_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n = 1);
 

@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 
+#include "meshing/shell/local_sheets.hpp"
 #include "meshing/shell/prism_location.hpp"
 #include "meshing/shell/section.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -20,10 +22,17 @@ struct ShellProjection::Impl {
   Eigen::Vector3d origin;
   std::unordered_map<std::int64_t, std::vector<int>> grid;
   std::vector<Eigen::AlignedBox3d> boxes;  // per prism
+  std::optional<LocalSheets> sheets;       // a locally injective shell's (local_sheets.hpp)
 
   // With a reference copy (Shell::reference) the fibers cross that copy, and each crossing is
   // reported as the input point with the same face and barycentric coordinates.
-  Impl(const Shell& s, const SurfaceMesh& in) : shell(s), input(in.V, in.F, s.reference) {}
+  Impl(const Shell& s, const SurfaceMesh& in) : shell(s), input(in.V, in.F, s.reference) {
+    if (s.local_sheets) sheets.emplace(input);
+  }
+  // The local sheet of prism f: the input faces its fibers may cross.
+  std::vector<int> local(int f) const {
+    return sheets->sheet({shell.face_parent[std::size_t(f)]}, boxes[std::size_t(f)]);
+  }
 
   // Corner c (0..5) of half `half` (0: base→mid, 1: mid→top) of face f, rotated order.
   Eigen::Vector3d corner(int f, int half, int c) const {
@@ -41,10 +50,12 @@ struct ShellProjection::Impl {
   // The fiber points on the rising facets at barycentric weights w of the rotated face.
   std::array<Eigen::Vector3d, 7> fiber(int f, const std::array<double, 3>& w) const;
   // The input point of the zero-length fiber at pinch point x, or nullopt (x off the input).
-  std::optional<SurfacePoint> at_pinch(const Eigen::Vector3d& x) const;
+  std::optional<SurfacePoint> at_pinch(const Eigen::Vector3d& x,
+                                       const std::vector<int>* among = nullptr) const;
   // The input point on a fiber near pinched corner s of face f (weights w) that the search on
   // the rounded fiber missed.
-  std::optional<SurfacePoint> near_pinch(int f, int s, const std::array<double, 3>& w) const;
+  std::optional<SurfacePoint> near_pinch(int f, int s, const std::array<double, 3>& w,
+                                         const std::vector<int>* among = nullptr) const;
   SurfacePoint surface_point(int face, const Eigen::Vector3d& bary) const {
     SurfacePoint r;
     r.face = face;
@@ -92,11 +103,20 @@ ShellProjection::ShellProjection(const Shell& shell, const SurfaceMesh& input)
 ShellProjection::~ShellProjection() = default;
 
 std::optional<PrismPoint> ShellProjection::locate(const Eigen::Vector3d& p) const {
+  return locate_on(p, -1);
+}
+
+std::optional<PrismPoint> ShellProjection::locate_on(const Eigen::Vector3d& p,
+                                                     int input_face) const {
   const Impl& m = *m_impl;
   auto it = m.grid.find(m.key(p));
   if (it == m.grid.end()) return std::nullopt;
   for (int f : it->second) {
     if (!m.boxes[f].contains(p)) continue;  // exact: the box of the corners holds the prism
+    if (input_face >= 0 && m.sheets) {
+      const std::vector<int> sheet = m.local(f);
+      if (!std::binary_search(sheet.begin(), sheet.end(), input_face)) continue;
+    }
     const Eigen::Vector3i F = m.shell.F.row(f);
     // A pinch point is the whole pillar of its corner: exactly that corner, at h = 0.
     const int r = min_rotation(F);
@@ -174,13 +194,15 @@ Eigen::Vector3d barycentric(const std::array<Eigen::Vector3d, 3>& tri, const Eig
 // or inside an input face or edge. The face of smallest id containing it, exactly; x itself when
 // it is a corner of that face. A pinch point off the surface by rounding only (a singular pinch
 // split's rounded midpoint, a section missing it by rounding) gets the closest surface point.
-std::optional<SurfacePoint> ShellProjection::Impl::at_pinch(const Eigen::Vector3d& x) const {
-  const std::vector<int> star = input.faces_containing(x);
+std::optional<SurfacePoint> ShellProjection::Impl::at_pinch(const Eigen::Vector3d& x,
+                                                            const std::vector<int>* among) const {
+  const std::vector<int> star = input.faces_containing(x, among);
   if (star.empty()) {
     Eigen::Vector3d closest;
     const int f = input.closest_face(x, closest);
-    if (f < 0 || (closest - x).cwiseAbs().maxCoeff() >
-                     16 * std::numeric_limits<double>::epsilon() * x.cwiseAbs().maxCoeff())
+    if (f < 0 || (among && !std::binary_search(among->begin(), among->end(), f)) ||
+        (closest - x).cwiseAbs().maxCoeff() >
+            16 * std::numeric_limits<double>::epsilon() * x.cwiseAbs().maxCoeff())
       return std::nullopt;
     return surface_point(f, barycentric(input.face_triangle(f), closest));
   }
@@ -199,19 +221,20 @@ std::optional<SurfacePoint> ShellProjection::Impl::at_pinch(const Eigen::Vector3
 // x + α (a − x) + β (b − x) exactly where the fiber crosses it at x + t α (a − x) + t β (b − x),
 // which is a point of the face as long as t (α + β) ≤ 1. The crossing is decided by exact
 // predicates on z (segment_crosses_wedge), then solved for (α, β).
-std::optional<SurfacePoint> ShellProjection::Impl::near_pinch(
-    int f, int s, const std::array<double, 3>& w) const {
+std::optional<SurfacePoint> ShellProjection::Impl::near_pinch(int f, int s,
+                                                              const std::array<double, 3>& w,
+                                                              const std::vector<int>* among) const {
   const Eigen::Vector3i F = shell.F.row(f);
   const Eigen::Vector3d x = shell.mid.row(F[(min_rotation(F) + s) % 3]).transpose();
   std::array<double, 3> c{std::max(w[0], 0.0), std::max(w[1], 0.0), std::max(w[2], 0.0)};
   const double rest = c[(s + 1) % 3] + c[(s + 2) % 3];
-  if (!(rest > 0)) return at_pinch(x);
+  if (!(rest > 0)) return at_pinch(x, among);
   const double t = rest / (rest + c[s]);
   std::array<double, 3> wz{0, 0, 0};
   for (int k : {(s + 1) % 3, (s + 2) % 3}) wz[k] = c[k] / rest;
   const auto z = fiber(f, wz);
 
-  const std::vector<int> star = input.faces_containing(x);
+  const std::vector<int> star = input.faces_containing(x, among);
   if (star.empty()) {
     // x is off the input by rounding: only a fiber that is x up to rounding maps to the input
     // point closest to x.
@@ -221,7 +244,7 @@ std::optional<SurfacePoint> ShellProjection::Impl::near_pinch(
       scale = std::max(scale, p.cwiseAbs().maxCoeff());
     }
     if (extent > 16 * std::numeric_limits<double>::epsilon() * scale) return std::nullopt;
-    return at_pinch(x);
+    return at_pinch(x, among);
   }
   struct Wedge {
     int face, k;  // the wedge (x; corner k, corner k + 1) of that face
@@ -272,17 +295,21 @@ std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const 
   int s = -1;
   for (int c = 0; c < 3; ++c)
     if (m.pinched(F[(r + c) % 3]) && (s < 0 || w[c] > w[s])) s = c;
+  // A locally injective shell's fibers cross the prism's local sheet only.
+  std::vector<int> sheet;
+  if (m.sheets) sheet = m.local(q.face);
+  const std::vector<int>* among = m.sheets ? &sheet : nullptr;
   // At the pinched corner itself the fiber is the pinch point.
   if (s >= 0 && w[(s + 1) % 3] <= 0 && w[(s + 2) % 3] <= 0)
-    return m.at_pinch(m.corner(q.face, 1, s));
+    return m.at_pinch(m.corner(q.face, 1, s), among);
   const auto fiber = m.fiber(q.face, w);
   for (const auto& seg : k_fiber_walk) {
     Eigen::Vector3d bary;
-    const int f = m.input.segment_hit(fiber[seg[0]], fiber[seg[1]], bary);
+    const int f = m.input.segment_hit(fiber[seg[0]], fiber[seg[1]], bary, among);
     if (f >= 0) return m.surface_point(f, bary);
   }
   // Rounding can hide the crossing of a fiber shrunk toward a pinch point.
-  if (s >= 0) return m.near_pinch(q.face, s, w);
+  if (s >= 0) return m.near_pinch(q.face, s, w, among);
   return std::nullopt;
 }
 
@@ -294,6 +321,11 @@ std::optional<SurfacePoint> ShellProjection::project(const Eigen::Vector3d& p) c
 
 std::optional<PrismPoint> ShellProjection::unproject(const Eigen::Vector3d& x) const {
   return locate(x);
+}
+
+std::optional<PrismPoint> ShellProjection::unproject(const Eigen::Vector3d& x,
+                                                     int input_face) const {
+  return locate_on(x, input_face);
 }
 
 std::vector<int> ShellProjection::prisms_in_box(const Eigen::Vector3d& lo,

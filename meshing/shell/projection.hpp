@@ -56,6 +56,11 @@ class ShellProjection {
   std::optional<SurfacePoint> project(const Eigen::Vector3d& p) const;
   // P⁻¹: an input point to its prism coordinates (h tells where it sits between base and top).
   std::optional<PrismPoint> unproject(const Eigen::Vector3d& input_point) const;
+  // P⁻¹ of a point of input face `input_face`. A locally injective shell (Shell::local_sheets)
+  // needs the face: where the input passes through itself a point lies in the prisms of each
+  // sheet there, and only those whose local sheet holds the face map it back to it (P crosses
+  // each prism's fibers with its local sheet only). Otherwise the same as above.
+  std::optional<PrismPoint> unproject(const Eigen::Vector3d& input_point, int input_face) const;
 
   // The fiber of (face, u, v) from base to top: its 7 corners on the rising facets of the two
   // halves (index 3 is on the middle triangle). Straight between consecutive corners.
@@ -73,6 +78,8 @@ class ShellProjection {
   bool is_section(const SurfaceMesh& m) const;
 
  private:
+  // locate, restricted to prisms whose local sheet holds input_face (>= 0, local sheets only).
+  std::optional<PrismPoint> locate_on(const Eigen::Vector3d& p, int input_face) const;
   struct Impl;
   std::unique_ptr<Impl> m_impl;
 };

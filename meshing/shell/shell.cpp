@@ -29,6 +29,7 @@
 
 #include "meshing/core/error.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
+#include "meshing/shell/local_sheets.hpp"
 #include "meshing/shell/prism_positivity.hpp"
 #include "meshing/shell/shell_intersection.hpp"
 
@@ -162,6 +163,8 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
 
   // 3. Initial steps by ray casting against the input.
   const InputSurfaceIndex index(input.V, input.F);
+  const std::optional<LocalSheets> sheets =
+      options.local_sheets ? std::optional<LocalSheets>(std::in_place, index) : std::nullopt;
   const double cap = options.max_thickness_rel * unit;
   std::vector<double> step(nv, 0.0);
   std::vector<double> edge_sum(nv, 0.0);
@@ -181,8 +184,16 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
     // Faces to ignore: the input faces whose closure contains this vertex.
     std::vector<int> own;
     for (int f : vertex_faces[v]) own.push_back(parent[f]);
-    const double out = index.ray_distance(V[v], N[v], own),
-                 in = index.ray_distance(V[v], -N[v], own);
+    // Locally injective: only the sheet through v within the cap counts (a farther hit
+    // leaves the step at the cap anyway).
+    std::vector<int> sheet;
+    if (sheets) {
+      const Eigen::Vector3d r = Eigen::Vector3d::Constant(cap);
+      sheet = sheets->sheet(own, Eigen::AlignedBox3d(V[v] - r, V[v] + r));
+    }
+    const std::vector<int>* among = sheets ? &sheet : nullptr;
+    const double out = index.ray_distance(V[v], N[v], own, among),
+                 in = index.ray_distance(V[v], -N[v], own, among);
     step[v] = std::min({cap, 0.8 * out, 0.8 * in});
     if (edge_count[v] > 0)
       step[v] = std::min(step[v], options.max_thickness_per_edge * edge_sum[v] / edge_count[v]);
@@ -248,8 +259,17 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
       changed = true;
       ++stats.shrink_rounds_volume;
     }
+    // Locally injective: separation from the prism's local sheet only.
+    auto local_sheet = [&] {
+      Eigen::AlignedBox3d box;
+      for (int side : {-1, 0, 1})
+        for (const auto& c : corners(f, side)) box.extend(c);
+      return sheets->sheet({parent[f]}, box);
+    };
+    std::vector<int> sheet;
+    if (sheets) sheet = local_sheet();
     for (int side : {-1, 1}) {
-      while (index.triangle_intersects(corners(f, side), sing, F[f])) {
+      while (index.triangle_intersects(corners(f, side), sing, F[f], sheets ? &sheet : nullptr)) {
         for (int k = 0; k < 3; ++k) step[F[f][k]] *= 0.5;
         changed = true;
         ++stats.shrink_rounds_intersection;
@@ -283,6 +303,7 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
   for (int f = 0; f < nf; ++f) shell.F.row(f) = F[f].transpose();
   shell.singular = singular;
   shell.face_parent = parent;
+  shell.local_sheets = options.local_sheets;
   shell.input_vertex.resize(nv);
   for (int v = 0; v < nv; ++v) shell.input_vertex[v] = v < input.num_vertices() ? v : -1;
 

@@ -46,6 +46,9 @@ struct Shell {
     std::vector<SnappedVertex> reference;  // snaps of the refined surface's reference copy
     bool empty() const { return faces.rows() == 0; }
   } refinement;
+  // Locally injective only (local_sheets.hpp): the invariants hold against each prism's local
+  // sheet of the input, which may pass through itself; verification and P check and use that.
+  bool local_sheets = false;
 };
 
 struct ShellOptions {
@@ -57,6 +60,8 @@ struct ShellOptions {
   double max_thickness_per_edge = 0;
   double singularity_tolerance = 1e-2;
   int smoothing_rounds = 3;
+  // Build a locally injective shell (local_sheets.hpp) for an input that may self-intersect.
+  bool local_sheets = false;
   int threads = 0;  // 0: oneTBB default
 };
 

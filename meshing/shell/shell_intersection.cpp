@@ -938,7 +938,8 @@ double coplanar_ray_distance(const Triangle& tri, const V3& o, const V3& d) {
 
 double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
                                        const Eigen::Vector3d& direction,
-                                       const std::vector<int>& ignore) const {
+                                       const std::vector<int>& ignore,
+                                       const std::vector<int>* among) const {
   const K::Ray_3 ray(pt(origin), K::Vector_3(direction.x(), direction.y(), direction.z()));
   // CGAL 5.5's ray/triangle intersection is wrong for a ray in the triangle's plane: a ray
   // pointing away from a coplanar triangle (do_intersect false) got the segment from its own
@@ -951,6 +952,7 @@ double InputSurfaceIndex::ray_distance(const Eigen::Vector3d& origin,
   double coplanar = std::numeric_limits<double>::infinity();
   auto skip = [&](const std::vector<Triangle>::const_iterator& it) {
     if (std::find(ignore.begin(), ignore.end(), m_impl->id(it)) != ignore.end()) return true;
+    if (among && !std::binary_search(among->begin(), among->end(), m_impl->id(it))) return true;
     const Triangle& tri = *it;
     if (CGAL::orientation(tri[0], tri[1], tri[2], ray.source()) != CGAL::COPLANAR ||
         CGAL::orientation(tri[0], tri[1], tri[2], second) != CGAL::COPLANAR)
@@ -1009,7 +1011,8 @@ bool triangles_meet_beyond_pinch(const std::array<V3, 3>& a, int ka, const std::
 
 bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>& c,
                                             const std::array<bool, 3>& singular,
-                                            const Eigen::Vector3i& corner_ids) const {
+                                            const Eigen::Vector3i& corner_ids,
+                                            const std::vector<int>* among) const {
   const Triangle tri(pt(c[0]), pt(c[1]), pt(c[2]));
   if (tri.is_degenerate()) return true;  // never accept a flat base/top triangle
   // Faces whose box overlaps the triangle's, then the exact test on each (the tree's own
@@ -1018,13 +1021,16 @@ bool InputSurfaceIndex::triangle_intersects(const std::array<Eigen::Vector3d, 3>
   std::vector<int> candidates;
   BoxOverlapTraits traits{&m_impl->triangles, &m_impl->boxes, &candidates};
   m_impl->tree.traversal(tri.bbox(), traits);
+  auto counts = [among](int f) {
+    return !among || std::binary_search(among->begin(), among->end(), f);
+  };
   for (int f : candidates) {
-    if (m_impl->is_moved(f)) continue;  // below
+    if (m_impl->is_moved(f) || !counts(f)) continue;  // moved: below
     if (face_contact(c, singular, corner_ids, f, false)) return true;
   }
   // Moved faces of the reference copy, exactly.
   for (int f : m_impl->moved_near(tri.bbox()))
-    if (face_contact(c, singular, corner_ids, f, false)) return true;
+    if (counts(f) && face_contact(c, singular, corner_ids, f, false)) return true;
   return false;
 }
 
@@ -1197,10 +1203,12 @@ std::vector<int> InputSurfaceIndex::faces_in_box(const Eigen::Vector3d& lo,
   return out;
 }
 
-std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p) const {
+std::vector<int> InputSurfaceIndex::faces_containing(const Eigen::Vector3d& p,
+                                                     const std::vector<int>* among) const {
   std::vector<int> out;
   const Eigen::MatrixXd& V = reference_V();
   for (int f : faces_in_box(p, p)) {
+    if (among && !std::binary_search(among->begin(), among->end(), f)) continue;
     const auto r = face_triangle(f);  // rounded where moved
     const Triangle t(pt(r[0]), pt(r[1]), pt(r[2]));
     if (t.is_degenerate()) continue;
@@ -1237,7 +1245,7 @@ int InputSurfaceIndex::closest_face(const Eigen::Vector3d& p, Eigen::Vector3d& c
 }
 
 int InputSurfaceIndex::segment_hit(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                   Eigen::Vector3d& bary) const {
+                                   Eigen::Vector3d& bary, const std::vector<int>* among) const {
   // A zero-length segment (consecutive fiber corners can coincide) crosses nothing; CGAL's
   // segment tests assume a proper segment.
   if (a == b) return -1;
@@ -1247,9 +1255,16 @@ int InputSurfaceIndex::segment_hit(const Eigen::Vector3d& a, const Eigen::Vector
   std::vector<int> candidates;
   for (const auto& it : hits)
     if (!m_impl->is_moved(m_impl->id(it))) candidates.push_back(m_impl->id(it));
+  if (among)
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [among](int f) {
+                                      return !std::binary_search(among->begin(), among->end(), f);
+                                    }),
+                     candidates.end());
   // Moved faces of the reference copy as their rounded triangles (shared corners keep the
   // rounded copy watertight, so a segment crossing near a chain hits one side or the other).
   for (int f : m_impl->moved_near(seg.bbox())) {
+    if (among && !std::binary_search(among->begin(), among->end(), f)) continue;
     const auto t = face_triangle(f);
     if (CGAL::do_intersect(seg, Triangle(pt(t[0]), pt(t[1]), pt(t[2])))) candidates.push_back(f);
   }

@@ -105,15 +105,18 @@ class InputSurfaceIndex {
 
   // Distance from `origin` along `direction` (any length; the distance is Euclidean) to the
   // first input face not in `ignore` (+infinity when the ray leaves without hitting).
+  // `among` (sorted; null: every face): only these faces count (local_sheets.hpp), here and in
+  // triangle_intersects, faces_containing and segment_hit.
   double ray_distance(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
-                      const std::vector<int>& ignore) const;
+                      const std::vector<int>& ignore,
+                      const std::vector<int>* among = nullptr) const;
 
   // Does the triangle intersect the input? Triangle corner k with singular[k] lies on the input
   // at input vertex `corner_ids[k]` (a pinch point): contact at that point alone is allowed
   // (tested exactly with the opposite edges, no constructed points).
   bool triangle_intersects(const std::array<Eigen::Vector3d, 3>& triangle,
-                           const std::array<bool, 3>& singular,
-                           const Eigen::Vector3i& corner_ids) const;
+                           const std::array<bool, 3>& singular, const Eigen::Vector3i& corner_ids,
+                           const std::vector<int>* among = nullptr) const;
 
   // triangle_intersects restricted to input face f: does the triangle meet it (with the same
   // pinch rule)?
@@ -131,7 +134,8 @@ class InputSurfaceIndex {
                                        const std::vector<int>& known = {}) const;
 
   // Non-degenerate input faces whose closed triangle contains p (exact), in increasing order.
-  std::vector<int> faces_containing(const Eigen::Vector3d& p) const;
+  std::vector<int> faces_containing(const Eigen::Vector3d& p,
+                                    const std::vector<int>* among = nullptr) const;
   // Input faces whose bounding box overlaps [lo, hi] (a superset of the faces meeting the box;
   // moved faces of the reference copy are found where they are now, and where they were).
   std::vector<int> faces_in_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
@@ -174,7 +178,8 @@ class InputSurfaceIndex {
   // First input face hit by segment [a, b] (exact do_intersect for the candidates, closest to a
   // by a barycentric solve); -1 if none. bary receives the barycentric coordinates of the hit in
   // that face.
-  int segment_hit(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Eigen::Vector3d& bary) const;
+  int segment_hit(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Eigen::Vector3d& bary,
+                  const std::vector<int>* among = nullptr) const;
 
   const Eigen::MatrixXd& V() const;
   const Eigen::MatrixXi& F() const;

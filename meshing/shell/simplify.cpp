@@ -21,6 +21,7 @@
 #include "meshing/editing/thread_slot.hpp"
 #include "meshing/editing/tri_mesh.hpp"
 #include "meshing/shell/extrusion_direction.hpp"
+#include "meshing/shell/local_sheets.hpp"
 #include "meshing/shell/prism_location.hpp"
 #include "meshing/shell/prism_positivity.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -66,6 +67,9 @@ class ShellMesh : public TriMesh {
     return distance_scale && !distance_scale->empty() ? (*distance_scale)[std::size_t(x)] : 1.0;
   }
   const InputSurfaceIndex* input = nullptr;
+  // A locally injective shell (Shell::local_sheets): I2 and I3 against each new prism's local
+  // sheet (local_sheets.hpp), reached from the tracks of the prisms it replaces.
+  const LocalSheets* sheets = nullptr;
   // Feature chains (SimplifyOptions::collapse_chains). A coarse feature edge carries the input
   // vertices strictly inside it, in order from its end on the smaller input vertex id; they are
   // snapped in `reference` (the same index as `input`, written only by the one-thread chain
@@ -571,13 +575,38 @@ class ShellMesh : public TriMesh {
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
   }
-  Reject prism_check(Id f, std::vector<int>& touching) const {
+  // `seeds` (local sheets only): input faces of the prism's sheet, e.g. the tracks of the prisms
+  // it replaces.
+  Reject prism_check(Id f, std::vector<int>& touching,
+                     const std::vector<int>* seeds = nullptr) const {
     const PrismShape p = prism_shape(f);
     if (!shell_face_positive(p.b, p.m, p.t, p.s)) return positivity;  // I1
-    if (input->triangle_intersects(p.b, p.s, p.ids) || input->triangle_intersects(p.t, p.s, p.ids))
+    std::vector<int> sheet;
+    Eigen::AlignedBox3d box;
+    if (sheets) {
+      for (const auto* side : {&p.b, &p.m, &p.t})
+        for (const auto& c : *side) box.extend(c);
+      sheet = sheets->sheet(seeds ? *seeds : std::vector<int>{}, box);
+    }
+    const std::vector<int>* among = sheets ? &sheet : nullptr;
+    if (input->triangle_intersects(p.b, p.s, p.ids, among) ||
+        input->triangle_intersects(p.t, p.s, p.ids, among))
       return intersection;  // I3
     // I2 for every touching face; the track keeps every touching face.
     touching = input->faces_touching_tets(p.tets, faces_at_owned(f));
+    if (sheets) {
+      std::vector<int> local;
+      std::set_intersection(touching.begin(), touching.end(), sheet.begin(), sheet.end(),
+                            std::back_inserter(local));
+      touching = std::move(local);
+      // P and the verifier reach the sheet from the track's first face (Shell::face_parent):
+      // every touching face must lie in that one.
+      if (!touching.empty()) {
+        const std::vector<int> named = sheets->sheet({touching.front()}, box);
+        if (!std::includes(named.begin(), named.end(), touching.begin(), touching.end()))
+          return section;
+      }
+    }
     for (int x : touching)
       if (!section_ok(p, x)) return section;
     return touching.empty() ? coverage : none;
@@ -685,10 +714,14 @@ class ShellMesh : public TriMesh {
                             std::size_t changed = SIZE_MAX, const std::vector<int>* moved = nullptr,
                             const std::vector<Eigen::AlignedBox3d>* moved_boxes = nullptr) {
     std::vector<int> new_union, touching;
+    if (sheets) {
+      std::sort(old_union.begin(), old_union.end());
+      old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
+    }
     for (std::size_t i = 0; i < cells.size(); ++i) {
       const Id f = cells[i];
       const Reject why = moved && i >= changed ? prism_recheck(f, *moved, *moved_boxes, touching)
-                                               : prism_check(f, touching);
+                                               : prism_check(f, touching, &old_union);
       if (note(why) != none) return false;
       track.set(f, touching);
       new_union.insert(new_union.end(), touching.begin(), touching.end());
@@ -1239,9 +1272,19 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     m.singular.set(Id(v), shell.singular[v]);
     m.input_vertex.set(Id(v), shell.input_vertex[v]);
   }
+  std::optional<LocalSheets> sheets;
+  if (shell.local_sheets) {
+    if (options.collapse_chains || options.max_distance > 0 || !shell.reference.empty())
+      throw MeshingError(
+          "simplify: a locally injective shell (local sheets) is simplified without feature "
+          "chains, distance bound or reference copy");
+    sheets.emplace(index);
+    m.sheets = &*sheets;
+  }
   std::vector<int> touching;
   for (int f = 0; f < nf; ++f) {
-    m.prism_check(Id(f), touching);
+    const std::vector<int> seed{shell.face_parent[std::size_t(f)]};
+    m.prism_check(Id(f), touching, &seed);
     m.track.set(Id(f), touching);
   }
   if (options.collapse_chains) {
@@ -1667,6 +1710,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     out.input_vertex[v] = m.input_vertex[Id(v)];
   }
   out.reference = index.snaps();
+  out.local_sheets = shell.local_sheets;
   stats.snapped_vertices = int(out.reference.size());
   for (const SnappedVertex& q : out.reference) {
     const Eigen::Vector3d a = input.V.row(q.a).transpose(), b = input.V.row(q.b).transpose();

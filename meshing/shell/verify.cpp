@@ -5,8 +5,10 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <set>
 
+#include "meshing/shell/local_sheets.hpp"
 #include "meshing/shell/prism_positivity.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell_geometry.hpp"
@@ -22,6 +24,10 @@ std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input
   // the fibers there belong to the neighbour as well, whose tets see that face. Faces passing
   // the pillar test are skipped before the contact test.
   const InputSurfaceIndex index(input.V, input.F, shell.reference);
+  // A locally injective shell: each prism against its local sheet (local_sheets.hpp), reached
+  // from the input face it names (face_parent) within the prism's box.
+  const std::optional<LocalSheets> sheets =
+      shell.local_sheets ? std::optional<LocalSheets>(std::in_place, index) : std::nullopt;
   const int nf = int(shell.F.rows());
   auto row = [](const Eigen::MatrixXd& M, int v) { return Eigen::Vector3d(M.row(v)); };
   std::vector<char> fails(std::size_t(nf), 0);
@@ -52,7 +58,10 @@ std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input
       half_pillars.emplace_back(row(shell.mid, v), row(shell.top, v));
     }
     bool ok = true;
-    for (int t : index.faces_in_box(box.min(), box.max())) {
+    const std::vector<int> candidates =
+        sheets ? sheets->sheet({shell.face_parent[std::size_t(f)]}, box)
+               : index.faces_in_box(box.min(), box.max());
+    for (int t : candidates) {
       bool transversal = true;
       for (const auto& [from, to] : half_pillars)
         if (index.face_normal_dot_sign(t, from, to) <= 0) {
@@ -142,7 +151,32 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
       r.intersecting_input_faces += hit;
       r.reference_self_intersections += reference.face_self_intersects(f);
     }
-    for (int f = 0; f < input.num_faces(); ++f) {
+    if (shell.local_sheets) {
+      // Each base and top triangle against the input faces of its prism's local sheet only,
+      // still from the input side (the input triangle queried against the cage triangle).
+      const InputSurfaceIndex local_index(input.V, input.F);
+      const LocalSheets sheets(local_index);
+      std::vector<char> hit(std::size_t(input.num_faces()), 0);
+      tbb::parallel_for(0, nf, [&](int f) {
+        Eigen::AlignedBox3d box;
+        for (const Eigen::MatrixXd* M : {&shell.base, &shell.mid, &shell.top})
+          for (int k = 0; k < 3; ++k) box.extend(row(*M, shell.F(f, k)));
+        for (int g : sheets.sheet({shell.face_parent[std::size_t(f)]}, box)) {
+          std::array<Eigen::Vector3d, 3> tri;
+          std::array<bool, 3> s;
+          const Eigen::Vector3i ids = input.F.row(g);
+          for (int k = 0; k < 3; ++k) {
+            tri[k] = input.V.row(input.F(g, k));
+            s[k] = singular_input[input.F(g, k)];
+          }
+          if (cage_index.triangle_meets_face(tri, s, ids, f) ||
+              cage_index.triangle_meets_face(tri, s, ids, nf + f))
+            hit[std::size_t(g)] = 1;  // distinct faces: a byte per face, races write the same
+        }
+      });
+      r.intersecting_input_faces += int(std::count(hit.begin(), hit.end(), 1));
+    }
+    for (int f = 0; f < input.num_faces() && !shell.local_sheets; ++f) {
       if (moved[std::size_t(f)]) continue;
       std::array<Eigen::Vector3d, 3> tri;
       std::array<bool, 3> s;
@@ -166,12 +200,19 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     const ShellProjection projection(shell, input);
     const double unit = bbox_longest_edge(input.V);
     std::vector<char> referenced(input.num_vertices(), 0);
+    // A locally injective shell's P⁻¹ needs the sheet: a face at the vertex names it.
+    std::vector<int> face_at(input.num_vertices(), -1);
     for (int f = 0; f < input.num_faces(); ++f)
-      for (int k = 0; k < 3; ++k) referenced[input.F(f, k)] = 1;
+      for (int k = 0; k < 3; ++k) {
+        referenced[input.F(f, k)] = 1;
+        if (face_at[input.F(f, k)] < 0) face_at[input.F(f, k)] = f;
+      }
     for (int v = 0; v < input.num_vertices(); ++v) {
       if (!referenced[v]) continue;
       const Eigen::Vector3d x = input.V.row(v);
-      const auto q = projection.unproject(projection.reference_vertices().row(v).transpose());
+      const Eigen::Vector3d at = projection.reference_vertices().row(v).transpose();
+      const auto q =
+          shell.local_sheets ? projection.unproject(at, face_at[v]) : projection.unproject(at);
       if (!q) {
         ++r.roundtrip_failures;
         continue;

@@ -14,6 +14,9 @@
 //                 checks above use the copy, exactly
 //   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (pinch
 //                 points, zero-length fibers, included)
+// A locally injective shell (Shell::local_sheets) is checked for what it claims: separation and
+// section per prism against its local sheet (local_sheets.hpp, reached from face_parent), P⁻¹ of
+// a vertex through a face at it.
 
 #include <vector>
 

@@ -479,6 +479,46 @@ TEST(Cli, ShellReportsBeveling) {
   EXPECT_EQ(s["beveled_faces"], 0);
 }
 
+// A self-intersecting input (thesis §4.5): refused by default with the reason and the way out
+// (exit 2, nothing written); with --allow-self-intersections a locally injective shell, verified
+// and reported as such; the applications that need an embedded shell are refused with it.
+TEST(Cli, ShellOfASelfIntersectingInputIsLocallyInjectiveOnRequest) {
+  const auto dir = test::scratch_dir("cli_shell_local_sheets");
+  io::write_surface(dir / "eight.obj", make_figure_eight_tube(96, 10, 0.12),
+                    io::SurfaceFormat::obj);  // 1920 faces
+  const std::string in = (dir / "eight.obj").string();
+  std::string out;
+  EXPECT_EQ(test::run_command(cli() + " shell -q " + in + " -o " + (dir / "plain").string(), &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("self-intersecting face pairs"), std::string::npos) << out;
+  EXPECT_NE(out.find("--allow-self-intersections"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "plain"));
+  ASSERT_EQ(test::run_command(cli() + " shell -q " + in + " -o " + (dir / "local").string() +
+                                  " --allow-self-intersections --threads 2",
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "local" / "report.json");
+  EXPECT_EQ(r["local_sheets"]["locally_injective_only"], true);
+  EXPECT_GT(r["local_sheets"]["input_self_intersecting_pairs"].get<int>(), 0);
+  EXPECT_GT(r["local_sheets"]["middle_self_intersecting_pairs"].get<int>(), 0);
+  EXPECT_LT(r["prisms"].get<int>(), 1920 / 4);
+  EXPECT_EQ(r["positive_verified"], true);
+  EXPECT_EQ(r["intersection_free_verified"], true);
+  EXPECT_EQ(r["is_section_verified"], true);
+  EXPECT_EQ(r["roundtrip_failures"], 0);
+  EXPECT_LT(r["roundtrip_max_error_rel"].get<double>(), 1e-12);
+  EXPECT_EQ(io::read_surface(dir / "local" / "middle.obj").num_faces(), r["prisms"].get<int>());
+  EXPECT_EQ(test::run_command(cli() + " shell -q " + in + " -o " + (dir / "remesh").string() +
+                                  " --allow-self-intersections --remesh-section 0.05",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("need an embedded one"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "remesh"));
+}
+
 // Feature chains (the default): the box's edge vertices go inside coarse feature edges;
 // boundary_map.json carries the feature edges and the reference copy's snapped vertices (with the
 // shell's fibers), and `validate` re-checks both (the map roundtrip through the snapped copy, and

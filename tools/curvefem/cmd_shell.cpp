@@ -25,6 +25,7 @@
 #include <sstream>
 #include <string>
 
+#include "meshing/check/self_intersections.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -57,6 +58,7 @@ struct ShellArgs {
   int cages = 0;               // --cages K; 0: none
   std::string texture;         // --texture TILE; empty: none
   std::string boolean, with;   // --boolean OP --with B
+  bool allow_self_intersections = false;
   GlobalOptions global;
 };
 
@@ -185,6 +187,10 @@ void register_shell(CLI::App& app) {
                        ->check(CLI::ExistingFile);
   boolean_opt->needs(with_opt);
   with_opt->needs(boolean_opt);
+  sub->add_flag("--allow-self-intersections", args->allow_self_intersections,
+                "the input may pass through itself: build a locally injective shell (thesis "
+                "4.5), whose invariants hold against each prism's own sheet of the input; for "
+                "remeshing and attribute transfer, not for volume meshing");
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
@@ -195,12 +201,38 @@ void register_shell(CLI::App& app) {
           prepare_boolean(io::read_surface(args->input), args->with, args->boolean));
     const SurfaceMesh input = boolean ? boolean->result.mesh : io::read_surface(args->input);
     const SurfaceMesh tile = args->texture.empty() ? SurfaceMesh() : load_tile(args->texture);
+    if (args->allow_self_intersections &&
+        (args->remesh_section > 0 || args->displacement_level > 0 || args->cages > 0 ||
+         !args->texture.empty() || !args->boolean.empty()))
+      throw InputError(
+          "--allow-self-intersections builds a locally injective shell; --remesh-section, "
+          "--displacement-map, --cages, --texture and --boolean need an embedded one");
+    int input_pairs = 0;
+    if (args->allow_self_intersections) {
+      std::vector<char> degenerate(std::size_t(input.num_faces()), 0);
+      input_pairs =
+          int(check::find_self_intersections(input.V, input.F, degenerate, true).pairs.size());
+    }
     sh::ShellOptions options;
+    options.local_sheets = args->allow_self_intersections;
     options.max_thickness_rel = args->thickness;
     options.threads = args->global.threads;
     sh::ShellStats stats;
-    sh::BeveledShell beveled =
-        sh::build_beveled_shell(input, options, stats, {}, progress->callback());
+    sh::BeveledShell beveled;
+    try {
+      beveled = sh::build_beveled_shell(input, options, stats, {}, progress->callback());
+    } catch (const MeshingError& e) {
+      // An input passing through itself has no embedded shell: say so, and what to do.
+      if (args->allow_self_intersections) throw;
+      std::vector<char> degenerate(std::size_t(input.num_faces()), 0);
+      const auto pairs = check::find_self_intersections(input.V, input.F, degenerate, true).pairs;
+      if (pairs.empty()) throw;
+      throw InputError(std::string(e.what()) + ": the input has " + std::to_string(pairs.size()) +
+                       " self-intersecting face pairs (faces " +
+                       std::to_string(pairs.front().first) + " and " +
+                       std::to_string(pairs.front().second) +
+                       ", ...); --allow-self-intersections builds a locally injective shell");
+    }
     sh::Shell shell = std::move(beveled.shell);
     const SurfaceMesh& surface = beveled.surface.mesh;  // the input, or its beveled refinement
     sh::SimplifyStats simplify;
@@ -302,6 +334,17 @@ void register_shell(CLI::App& app) {
     if (args->cages > 0) report["nested_cages"] = cages;
     if (!args->texture.empty()) report["geometric_texture"] = texture;
     if (boolean) report["boolean"] = boolean_block;
+    int middle_pairs = 0;
+    if (args->allow_self_intersections) {
+      // What "locally injective" leaves: the middle surface passes through itself where the input
+      // does; each prism's invariants and the roundtrip were verified against its own sheet.
+      std::vector<char> degenerate(std::size_t(shell.F.rows()), 0);
+      middle_pairs =
+          int(check::find_self_intersections(shell.mid, shell.F, degenerate, true).pairs.size());
+      report["local_sheets"] = {{"locally_injective_only", true},
+                                {"input_self_intersecting_pairs", input_pairs},
+                                {"middle_self_intersecting_pairs", middle_pairs}};
+    }
     report["time_s"]["total"] = total.seconds();
     write_text_file_atomic(out.path("report.json"), report.dump(2) + "\n");
     out.commit();
@@ -313,6 +356,11 @@ void register_shell(CLI::App& app) {
         stats.min_thickness_rel, check.positive() ? "yes" : "NO", check.separated() ? "yes" : "NO",
         check.section() ? "yes" : "NO", check.non_section_faces, check.roundtrip_max_error_rel,
         total.seconds(), out.final_path("report.json").string().c_str());
+    if (args->allow_self_intersections)
+      std::printf(
+          "locally injective shell: the input has %d self-intersecting face pairs, the middle "
+          "surface %d; every prism checked against its own sheet of the input\n",
+          input_pairs, middle_pairs);
     const bool remesh_ok =
         args->remesh_section <= 0 || section_remesh.value("is_section_verified", false);
     if (args->remesh_section > 0) {

@@ -1,0 +1,195 @@
+// Locally injective shells of self-intersecting inputs (thesis §4.5, local_sheets.hpp): built,
+// simplified and verified against each prism's own sheet; the global checks fail on the same
+// inputs, and the verifier still sees a fold of a prism's own sheet.
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "meshing/check/self_intersections.hpp"
+#include "meshing/core/error.hpp"
+#include "meshing/core/primitives.hpp"
+#include "meshing/shell/local_sheets.hpp"
+#include "meshing/shell/projection.hpp"
+#include "meshing/shell/shell.hpp"
+#include "meshing/shell/simplify.hpp"
+#include "meshing/shell/verify.hpp"
+
+namespace sh = curvefem::meshing::shell;
+using curvefem::SurfaceMesh;
+
+namespace {
+
+// Two unit icospheres of level 2 (320 faces each), the second shifted so that they cross: one
+// surface with two components passing through each other.
+SurfaceMesh crossing_spheres() {
+  const SurfaceMesh a = curvefem::make_icosphere(2),
+                    b = curvefem::make_icosphere(2, 1.0, Eigen::Vector3d(1.0, 0.13, 0.07));
+  SurfaceMesh m;
+  m.V.resize(a.V.rows() + b.V.rows(), 3);
+  m.V << a.V, b.V;
+  m.F.resize(a.F.rows() + b.F.rows(), 3);
+  m.F << a.F, (b.F.array() + int(a.V.rows())).matrix();
+  return m;
+}
+
+int self_intersecting_pairs(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
+  const std::vector<char> degenerate(std::size_t(F.rows()), 0);
+  return int(curvefem::check::find_self_intersections(V, F, degenerate, true).pairs.size());
+}
+
+void expect_valid(const sh::ShellVerification& v, const std::string& what) {
+  EXPECT_TRUE(v.positive()) << what;
+  EXPECT_TRUE(v.separated()) << what << ": " << v.intersecting_input_faces;
+  EXPECT_TRUE(v.section()) << what << ": " << v.non_section_faces;
+  EXPECT_EQ(v.roundtrip_failures, 0) << what;
+  EXPECT_LT(v.roundtrip_max_error_rel, 1e-12) << what;
+}
+
+sh::Shell local_shell(const SurfaceMesh& s) {
+  sh::ShellOptions o;
+  o.local_sheets = true;
+  sh::ShellStats stats;
+  return sh::build_shell(s, o, stats);
+}
+
+}  // namespace
+
+TEST(LocalSheets, AFaceReachesItsOwnSphereOnlyWhereTheOtherCrossesIt) {
+  const SurfaceMesh m = crossing_spheres();
+  const int na = 320;
+  const sh::InputSurfaceIndex index(m.V, m.F);
+  const sh::LocalSheets sheets(index);
+  // A box around the crossing circle's point nearest +y on sphere A (x = 0.5 is where they meet).
+  const Eigen::Vector3d c(0.5, 0.85, 0.05);
+  const Eigen::AlignedBox3d box(c - Eigen::Vector3d::Constant(0.3),
+                                c + Eigen::Vector3d::Constant(0.3));
+  const std::vector<int> in_box = index.faces_in_box(box.min(), box.max());
+  int seed = -1, of_b = 0;
+  for (int f : in_box) {
+    if (f < na && seed < 0) seed = f;
+    of_b += f >= na;
+  }
+  ASSERT_GE(seed, 0);
+  ASSERT_GT(of_b, 0) << "the box must hold both spheres";
+  const std::vector<int> sheet = sheets.sheet({seed}, box);
+  ASSERT_FALSE(sheet.empty());
+  for (int f : sheet) EXPECT_LT(f, na) << "face " << f << " of the other sphere reached";
+  EXPECT_TRUE(std::is_sorted(sheet.begin(), sheet.end()));
+  // Every face of A in the box is reached: A's part of the box is one patch.
+  EXPECT_EQ(int(sheet.size()), int(in_box.size()) - of_b);
+  // A seed outside the box steps nowhere.
+  EXPECT_TRUE(sheets
+                  .sheet({m.F.rows() - 1}, Eigen::AlignedBox3d(Eigen::Vector3d(-9, -9, -9),
+                                                               Eigen::Vector3d(-8, -8, -8)))
+                  .empty());
+}
+
+TEST(LocalShell, CrossingSpheresGetAVerifiedLocallyInjectiveShellAndCoarsen) {
+  const SurfaceMesh m = crossing_spheres();
+  ASSERT_GT(self_intersecting_pairs(m.V, m.F), 0);
+  {  // The global invariants cannot hold: no prism at the crossing can keep the other sphere out.
+    sh::ShellStats stats;
+    EXPECT_THROW(sh::build_shell(m, sh::ShellOptions{}, stats), curvefem::MeshingError);
+  }
+  const sh::Shell shell = local_shell(m);
+  EXPECT_TRUE(shell.local_sheets);
+  expect_valid(sh::verify_shell(shell, m), "built");
+  // The same prisms claimed globally fail: the other sheet does cross them.
+  sh::Shell claimed = shell;
+  claimed.local_sheets = false;
+  EXPECT_GT(sh::verify_shell(claimed, m).intersecting_input_faces, 0);
+
+  // One sphere alone, with the global invariants and the same options (`curvefem shell`'s zoom).
+  sh::SimplifyOptions o;
+  o.zoom = 0.1 * 3.0;  // 0.1 of the longest bbox edge of both
+  int alone = 0;
+  {
+    const SurfaceMesh one = curvefem::make_icosphere(2);
+    sh::ShellStats built;
+    sh::SimplifyStats stats;
+    alone = int(sh::simplify_shell(sh::build_shell(one, sh::ShellOptions{}, built), one, o, stats)
+                    .F.rows());
+    ASSERT_LT(alone, 320 / 3);
+  }
+  for (int threads : {1, 2}) {
+    o.threads = threads;
+    sh::SimplifyStats stats;
+    const sh::Shell coarse = sh::simplify_shell(shell, m, o, stats);
+    const std::string what = "simplified, " + std::to_string(threads) + " thread(s)";
+    EXPECT_TRUE(coarse.local_sheets) << what;
+    // The crossing costs little: both spheres coarsen about as far as one alone does.
+    EXPECT_LE(coarse.F.rows(), 2 * alone) << what;
+    expect_valid(sh::verify_shell(coarse, m), what);
+    // The coarse middle surface passes through itself too: it is locally injective only.
+    EXPECT_GT(self_intersecting_pairs(coarse.mid, coarse.F), 0) << what;
+    // P⁻¹ of a point on both spheres' prisms takes the face's sheet: an input vertex of B inside
+    // A maps into a prism whose P returns it.
+    const sh::ShellProjection projection(coarse, m);
+    int inside = 0;
+    for (int f = 320; f < m.F.rows(); ++f) {
+      const int v = m.F(f, 0);
+      const Eigen::Vector3d x = m.V.row(v).transpose();
+      if (x.norm() >= 0.98) continue;  // not inside sphere A
+      ++inside;
+      const auto q = projection.unproject(x, f);
+      ASSERT_TRUE(q) << what << ", vertex " << v;
+      const auto back = projection.project(*q);
+      ASSERT_TRUE(back) << what << ", vertex " << v;
+      EXPECT_GE(back->face, 320) << what << ": mapped onto the other sphere";
+      EXPECT_LT((back->position - x).norm(), 1e-12) << what << ", vertex " << v;
+    }
+    EXPECT_GT(inside, 10) << what;
+  }
+}
+
+TEST(LocalShell, AFigureEightTubeCoarsensThroughItsCrossing) {
+  const SurfaceMesh m = curvefem::make_figure_eight_tube(96, 10, 0.12);  // 1920 faces
+  ASSERT_GT(self_intersecting_pairs(m.V, m.F), 0);
+  double volume = 0;  // outward: positive signed volume
+  for (int f = 0; f < m.F.rows(); ++f)
+    volume +=
+        Eigen::Vector3d(m.V.row(m.F(f, 0)))
+            .dot(Eigen::Vector3d(m.V.row(m.F(f, 1))).cross(Eigen::Vector3d(m.V.row(m.F(f, 2))))) /
+        6;
+  EXPECT_GT(volume, 0);
+  {
+    sh::ShellStats stats;
+    EXPECT_THROW(sh::build_shell(m, sh::ShellOptions{}, stats), curvefem::MeshingError);
+  }
+  const sh::Shell shell = local_shell(m);
+  expect_valid(sh::verify_shell(shell, m), "built");
+  sh::SimplifyOptions o;
+  o.threads = 2;
+  o.zoom = 0.1 * 2.24;  // 0.1 of the longest bbox edge, as `curvefem shell` does
+  sh::SimplifyStats stats;
+  const sh::Shell coarse = sh::simplify_shell(shell, m, o, stats);
+  // An embedded torus of the same tube and faces, with the global invariants: the figure eight
+  // is 1.2 times as long and bends more, and the crossing costs little more than that.
+  const SurfaceMesh torus = curvefem::make_torus(0.8, 0.12, 96, 10);
+  sh::ShellStats built;
+  sh::SimplifyStats torus_stats;
+  const int embedded = int(
+      sh::simplify_shell(sh::build_shell(torus, sh::ShellOptions{}, built), torus, o, torus_stats)
+          .F.rows());
+  EXPECT_LT(coarse.F.rows(), m.F.rows() / 4);
+  EXPECT_LE(coarse.F.rows(), 1.6 * embedded) << embedded << " faces for the torus";
+  expect_valid(sh::verify_shell(coarse, m), "simplified");
+}
+
+TEST(LocalShell, TheVerifierStillSeesAFoldOfAPrismsOwnSheet) {
+  const SurfaceMesh m = crossing_spheres();
+  const sh::Shell shell = local_shell(m);
+  expect_valid(sh::verify_shell(shell, m), "built");
+  // Push the input vertex of sphere A farthest from B (its -x pole region) outward past the
+  // tops of its prisms: its faces now cross prisms of the same sheet.
+  int x = 0;
+  for (int v = 1; v < 162; ++v)
+    if (m.V(v, 0) < m.V(x, 0)) x = v;
+  SurfaceMesh spiked = m;
+  const double top = (shell.top.row(x) - shell.mid.row(x)).norm();
+  spiked.V.row(x) *= 1 + 3 * top;
+  const sh::ShellVerification v = sh::verify_shell(shell, spiked);
+  EXPECT_FALSE(v.valid());
+  EXPECT_GT(v.intersecting_input_faces, 0);
+}
