@@ -1,6 +1,7 @@
 #include "meshing/shell/local_sheets.hpp"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace curvefem::meshing::shell {
 
@@ -13,34 +14,43 @@ LocalSheets::LocalSheets(const InputSurfaceIndex& index)
 
 std::vector<int> LocalSheets::sheet(const std::vector<int>& seeds,
                                     const Eigen::AlignedBox3d& box) const {
-  // Candidates: the faces whose box meets `box` (sorted); a face is stepped on once.
-  std::vector<int> candidates = m_index.faces_in_box(box.min(), box.max());
-  std::sort(candidates.begin(), candidates.end());
-  std::vector<char> reached(candidates.size(), 0);
-  auto slot = [&](int f) -> long {
-    const auto it = std::lower_bound(candidates.begin(), candidates.end(), f);
-    return it != candidates.end() && *it == f ? long(it - candidates.begin()) : -1;
+  // Per-thread face marks stamped with a generation that is new for every call: no clearing,
+  // and no search per step (this runs for every prism checked).
+  struct Marks {
+    std::vector<std::uint32_t> in_box, reached;
+    std::uint32_t generation = 0;
   };
-  std::vector<int> stack;
-  for (int f : seeds)
-    if (const long i = slot(f); i >= 0 && !reached[std::size_t(i)]) {
-      reached[std::size_t(i)] = 1;
-      stack.push_back(f);
-    }
+  thread_local Marks marks;
+  const std::size_t nf = std::size_t(m_index.F().rows());
+  if (marks.in_box.size() < nf) {
+    marks.in_box.assign(nf, 0);
+    marks.reached.assign(nf, 0);
+  }
+  if (++marks.generation == 0) {  // wrapped: start over
+    std::fill(marks.in_box.begin(), marks.in_box.end(), 0);
+    std::fill(marks.reached.begin(), marks.reached.end(), 0);
+    marks.generation = 1;
+  }
+  const std::uint32_t g = marks.generation;
+  for (int f : m_index.faces_in_box(box.min(), box.max())) marks.in_box[std::size_t(f)] = g;
+  std::vector<int> out, stack;
+  auto reach = [&](int f) {
+    if (f < 0 || std::size_t(f) >= nf || marks.in_box[std::size_t(f)] != g ||
+        marks.reached[std::size_t(f)] == g)
+      return;
+    marks.reached[std::size_t(f)] = g;
+    out.push_back(f);
+    stack.push_back(f);
+  };
+  for (int f : seeds) reach(f);
   const Eigen::MatrixXi& F = m_index.F();
   while (!stack.empty()) {
     const int f = stack.back();
     stack.pop_back();
     for (int k = 0; k < 3; ++k)
-      for (int g : m_vertex_faces[std::size_t(F(f, k))])
-        if (const long i = slot(g); i >= 0 && !reached[std::size_t(i)]) {
-          reached[std::size_t(i)] = 1;
-          stack.push_back(g);
-        }
+      for (int h : m_vertex_faces[std::size_t(F(f, k))]) reach(h);
   }
-  std::vector<int> out;
-  for (std::size_t i = 0; i < candidates.size(); ++i)
-    if (reached[i]) out.push_back(candidates[i]);
+  std::sort(out.begin(), out.end());
   return out;
 }
 

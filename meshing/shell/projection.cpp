@@ -1,5 +1,7 @@
 #include "meshing/shell/projection.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -23,6 +25,7 @@ struct ShellProjection::Impl {
   std::unordered_map<std::int64_t, std::vector<int>> grid;
   std::vector<Eigen::AlignedBox3d> boxes;  // per prism
   std::optional<LocalSheets> sheets;       // a locally injective shell's (local_sheets.hpp)
+  std::vector<std::vector<int>> sheet_of;  // per prism, with `sheets`
 
   // With a reference copy (Shell::reference) the fibers cross that copy, and each crossing is
   // reported as the input point with the same face and barycentric coordinates.
@@ -30,9 +33,7 @@ struct ShellProjection::Impl {
     if (s.local_sheets) sheets.emplace(input);
   }
   // The local sheet of prism f: the input faces its fibers may cross.
-  std::vector<int> local(int f) const {
-    return sheets->sheet({shell.face_parent[std::size_t(f)]}, boxes[std::size_t(f)]);
-  }
+  const std::vector<int>& local(int f) const { return sheet_of[std::size_t(f)]; }
 
   // Corner c (0..5) of half `half` (0: base→mid, 1: mid→top) of face f, rotated order.
   Eigen::Vector3d corner(int f, int half, int c) const {
@@ -87,6 +88,13 @@ ShellProjection::ShellProjection(const Shell& shell, const SurfaceMesh& input)
     diag += boxes[f].diagonal().norm();
   }
   m.cell = std::max(diag / std::max(nf, 1), 1e-300);
+  if (m.sheets) {
+    m.sheet_of.resize(std::size_t(nf));
+    tbb::parallel_for(0, nf, [&](int f) {
+      m.sheet_of[std::size_t(f)] =
+          m.sheets->sheet({shell.face_parent[std::size_t(f)]}, boxes[std::size_t(f)]);
+    });
+  }
   for (int f = 0; f < nf; ++f) {
     const Eigen::Vector3d lo = (boxes[f].min() - m.origin) / m.cell,
                           hi = (boxes[f].max() - m.origin) / m.cell;
@@ -113,10 +121,9 @@ std::optional<PrismPoint> ShellProjection::locate_on(const Eigen::Vector3d& p,
   if (it == m.grid.end()) return std::nullopt;
   for (int f : it->second) {
     if (!m.boxes[f].contains(p)) continue;  // exact: the box of the corners holds the prism
-    if (input_face >= 0 && m.sheets) {
-      const std::vector<int> sheet = m.local(f);
-      if (!std::binary_search(sheet.begin(), sheet.end(), input_face)) continue;
-    }
+    if (input_face >= 0 && m.sheets &&
+        !std::binary_search(m.local(f).begin(), m.local(f).end(), input_face))
+      continue;
     const Eigen::Vector3i F = m.shell.F.row(f);
     // A pinch point is the whole pillar of its corner: exactly that corner, at h = 0.
     const int r = min_rotation(F);
@@ -296,9 +303,7 @@ std::optional<SurfacePoint> ShellProjection::project(const PrismPoint& q) const 
   for (int c = 0; c < 3; ++c)
     if (m.pinched(F[(r + c) % 3]) && (s < 0 || w[c] > w[s])) s = c;
   // A locally injective shell's fibers cross the prism's local sheet only.
-  std::vector<int> sheet;
-  if (m.sheets) sheet = m.local(q.face);
-  const std::vector<int>* among = m.sheets ? &sheet : nullptr;
+  const std::vector<int>* among = m.sheets ? &m.local(q.face) : nullptr;
   // At the pinched corner itself the fiber is the pinch point.
   if (s >= 0 && w[(s + 1) % 3] <= 0 && w[(s + 2) % 3] <= 0)
     return m.at_pinch(m.corner(q.face, 1, s), among);

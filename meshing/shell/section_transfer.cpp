@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "meshing/core/error.hpp"
+#include "meshing/shell/shell_geometry.hpp"
 
 namespace curvefem::meshing::shell {
 
@@ -44,6 +45,68 @@ FieldRoundtrip field_roundtrip(const ShellProjection& onto_input, const SurfaceM
   for (int v = 0; v < input.num_vertices(); ++v) {
     if (!referenced[std::size_t(v)]) continue;
     const double e = (r.back.row(v) - values.row(v)).cwiseAbs().maxCoeff();
+    if (!std::isfinite(e)) {
+      ++r.failures;
+      continue;
+    }
+    r.max_error = std::max(r.max_error, e);
+    sum += e;
+    ++count;
+  }
+  r.mean_error = count > 0 ? sum / count : 0.0;
+  return r;
+}
+
+FieldRoundtrip middle_field_roundtrip(const ShellProjection& onto_input, const SurfaceMesh& input,
+                                      const Eigen::MatrixXd& values) {
+  const Shell& shell = onto_input.shell();
+  const int nm = int(shell.mid.rows()), k = int(values.cols());
+  FieldRoundtrip r;
+  r.there = Eigen::MatrixXd::Constant(nm, k, std::numeric_limits<double>::quiet_NaN());
+  // A middle vertex: corner c of an incident face in the rotated order P's coordinates use.
+  std::vector<char> done(std::size_t(nm), 0);
+  for (int f = 0; f < shell.F.rows(); ++f) {
+    const Eigen::Vector3i F = shell.F.row(f);
+    const int rot = min_rotation(F);
+    for (int c = 0; c < 3; ++c) {
+      const int v = F[(rot + c) % 3];
+      if (done[std::size_t(v)]) continue;
+      done[std::size_t(v)] = 1;
+      const auto hit =
+          onto_input.project(PrismPoint{f, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0, 0.0});
+      if (!hit) {
+        ++r.failures;
+        continue;
+      }
+      Eigen::RowVectorXd value = Eigen::RowVectorXd::Zero(k);
+      for (int j = 0; j < 3; ++j) value += hit->bary[j] * values.row(input.F(hit->face, j));
+      r.there.row(v) = value;
+    }
+  }
+  // An input vertex: through a face at it.
+  std::vector<int> face_at(std::size_t(input.num_vertices()), -1);
+  for (int f = 0; f < input.num_faces(); ++f)
+    for (int j = 0; j < 3; ++j)
+      if (face_at[std::size_t(input.F(f, j))] < 0) face_at[std::size_t(input.F(f, j))] = f;
+  r.back =
+      Eigen::MatrixXd::Constant(input.num_vertices(), k, std::numeric_limits<double>::quiet_NaN());
+  double sum = 0;
+  int count = 0;
+  for (int x = 0; x < input.num_vertices(); ++x) {
+    const int g = face_at[std::size_t(x)];
+    if (g < 0) continue;
+    const auto q = onto_input.unproject(onto_input.reference_vertices().row(x).transpose(), g);
+    if (!q) {
+      ++r.failures;
+      continue;
+    }
+    const Eigen::Vector3i F = shell.F.row(q->face);
+    const int rot = min_rotation(F);
+    const double w[3] = {1 - q->u - q->v, q->u, q->v};
+    Eigen::RowVectorXd value = Eigen::RowVectorXd::Zero(k);
+    for (int c = 0; c < 3; ++c) value += w[c] * r.there.row(F[(rot + c) % 3]);
+    r.back.row(x) = value;
+    const double e = (value - values.row(x)).cwiseAbs().maxCoeff();
     if (!std::isfinite(e)) {
       ++r.failures;
       continue;

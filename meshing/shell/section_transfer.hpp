@@ -43,6 +43,15 @@ struct FieldRoundtrip {
 FieldRoundtrip field_roundtrip(const ShellProjection& onto_input, const SurfaceMesh& input,
                                const SurfaceMesh& section, const Eigen::MatrixXd& values);
 
+// values (#input.V × k) → the shell's own middle surface → back to the input's vertices, by
+// prism coordinates rather than point location, so that it works on a locally injective shell
+// (Shell::local_sheets) too, whose prisms overlap where the input passes through itself: a
+// middle vertex is a corner of its incident prisms, whose fiber P crosses with the input; an
+// input vertex goes through unproject(x, face) with a face at it. onto_input =
+// ShellProjection(shell, input). `there` is #shell.mid × k.
+FieldRoundtrip middle_field_roundtrip(const ShellProjection& onto_input, const SurfaceMesh& input,
+                                      const Eigen::MatrixXd& values);
+
 // The smooth test field of the section remeshing example, f = sin(3x) cos(2y) + z², in the
 // coordinates (p − center) / scale (#V × 1).
 Eigen::VectorXd smooth_test_field(const Eigen::MatrixXd& V, const Eigen::Vector3d& center,

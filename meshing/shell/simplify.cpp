@@ -575,41 +575,45 @@ class ShellMesh : public TriMesh {
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
   }
-  // `seeds` (local sheets only): input faces of the prism's sheet, e.g. the tracks of the prisms
-  // it replaces.
+  // `seeds` (local sheets only; sorted): input faces of the prism's sheet, e.g. the tracks of the
+  // prisms it replaces.
   Reject prism_check(Id f, std::vector<int>& touching,
                      const std::vector<int>* seeds = nullptr) const {
     const PrismShape p = prism_shape(f);
     if (!shell_face_positive(p.b, p.m, p.t, p.s)) return positivity;  // I1
-    std::vector<int> sheet;
-    Eigen::AlignedBox3d box;
-    if (sheets) {
-      for (const auto* side : {&p.b, &p.m, &p.t})
-        for (const auto& c : *side) box.extend(c);
-      sheet = sheets->sheet(seeds ? *seeds : std::vector<int>{}, box);
-    }
-    const std::vector<int>* among = sheets ? &sheet : nullptr;
-    if (input->triangle_intersects(p.b, p.s, p.ids, among) ||
-        input->triangle_intersects(p.t, p.s, p.ids, among))
+    if (sheets) return local_prism_check(f, p, touching, seeds ? *seeds : std::vector<int>{});
+    if (input->triangle_intersects(p.b, p.s, p.ids) || input->triangle_intersects(p.t, p.s, p.ids))
       return intersection;  // I3
     // I2 for every touching face; the track keeps every touching face.
     touching = input->faces_touching_tets(p.tets, faces_at_owned(f));
-    if (sheets) {
-      std::vector<int> local;
-      std::set_intersection(touching.begin(), touching.end(), sheet.begin(), sheet.end(),
-                            std::back_inserter(local));
-      touching = std::move(local);
-      // P and the verifier reach the sheet from the track's first face (Shell::face_parent):
-      // every touching face must lie in that one.
-      if (!touching.empty()) {
-        const std::vector<int> named = sheets->sheet({touching.front()}, box);
-        if (!std::includes(named.begin(), named.end(), touching.begin(), touching.end()))
-          return section;
-      }
-    }
     for (int x : touching)
       if (!section_ok(p, x)) return section;
     return touching.empty() ? coverage : none;
+  }
+  // I2 and I3 of a locally injective shell: against the sheet reached from the first seed that
+  // touches the prism (the prism's own sheet; P and the verifier reach the same one from the
+  // track's first face, Shell::face_parent), which must hold every seed touching the prism.
+  Reject local_prism_check(Id f, const PrismShape& p, std::vector<int>& touching,
+                           const std::vector<int>& seeds) const {
+    const std::vector<int> all = input->faces_touching_tets(p.tets, faces_at_owned(f));
+    auto seed_of = [&](int x) { return std::binary_search(seeds.begin(), seeds.end(), x); };
+    const auto first = std::find_if(all.begin(), all.end(), seed_of);
+    if (first == all.end()) return coverage;
+    Eigen::AlignedBox3d box;
+    for (const auto* side : {&p.b, &p.m, &p.t})
+      for (const auto& c : *side) box.extend(c);
+    const std::vector<int> sheet = sheets->sheet({*first}, box);
+    touching.clear();
+    std::set_intersection(all.begin(), all.end(), sheet.begin(), sheet.end(),
+                          std::back_inserter(touching));
+    for (int x : all)
+      if (seed_of(x) && !std::binary_search(sheet.begin(), sheet.end(), x)) return section;
+    if (input->triangle_intersects(p.b, p.s, p.ids, &sheet) ||
+        input->triangle_intersects(p.t, p.s, p.ids, &sheet))
+      return intersection;  // I3
+    for (int x : touching)
+      if (!section_ok(p, x)) return section;
+    return none;
   }
   // prism_check of a prism that has not changed since its track was set, while the input faces
   // `moved` (sorted) of the reference copy have: I1 and its verdicts on the other faces stand,

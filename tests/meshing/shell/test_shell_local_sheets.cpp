@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "meshing/check/self_intersections.hpp"
@@ -11,6 +13,7 @@
 #include "meshing/core/primitives.hpp"
 #include "meshing/shell/local_sheets.hpp"
 #include "meshing/shell/projection.hpp"
+#include "meshing/shell/section_transfer.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/simplify.hpp"
 #include "meshing/shell/verify.hpp"
@@ -192,4 +195,44 @@ TEST(LocalShell, TheVerifierStillSeesAFoldOfAPrismsOwnSheet) {
   const sh::ShellVerification v = sh::verify_shell(shell, spiked);
   EXPECT_FALSE(v.valid());
   EXPECT_GT(v.intersecting_input_faces, 0);
+}
+
+// Attribute transfer through a locally injective shell (thesis Fig. 4.28): a field on the input
+// carried to the coarse middle surface and back by prism coordinates. A constant returns exactly;
+// a smooth field with the coarse surface's interpolation error, no worse than on one sphere alone.
+TEST(LocalShell, FieldsGoToTheCoarseMiddleSurfaceAndBack) {
+  const SurfaceMesh m = crossing_spheres();
+  sh::SimplifyOptions o;
+  o.threads = 1;
+  o.zoom = 0.3;
+  sh::SimplifyStats stats;
+  const sh::Shell coarse = sh::simplify_shell(local_shell(m), m, o, stats);
+  const sh::ShellProjection projection(coarse, m);
+  const sh::FieldRoundtrip constant =
+      sh::middle_field_roundtrip(projection, m, Eigen::MatrixXd::Constant(m.V.rows(), 1, 2.5));
+  EXPECT_EQ(constant.failures, 0);
+  EXPECT_LT(constant.max_error, 1e-12);
+  const Eigen::VectorXd f = sh::smooth_test_field(m.V, Eigen::Vector3d(0.5, 0, 0), 1.5);
+  const sh::FieldRoundtrip smooth = sh::middle_field_roundtrip(projection, m, f);
+  EXPECT_EQ(smooth.failures, 0);
+  EXPECT_EQ(smooth.there.rows(), coarse.mid.rows());
+  // Sphere A alone, embedded shell, the same field on its vertices.
+  const SurfaceMesh one = curvefem::make_icosphere(2);
+  sh::ShellStats built;
+  const sh::Shell alone =
+      sh::simplify_shell(sh::build_shell(one, sh::ShellOptions{}, built), one, o, stats);
+  const sh::FieldRoundtrip ref =
+      sh::middle_field_roundtrip(sh::ShellProjection(alone, one), one, f.head(one.V.rows()));
+  EXPECT_EQ(ref.failures, 0);
+  EXPECT_GT(ref.max_error, 0);
+  // The same vertices of A (the first 162) in both runs.
+  double max_a = 0, sum_a = 0;
+  for (int v = 0; v < one.V.rows(); ++v) {
+    const double e = std::abs(smooth.back(v, 0) - f[v]);
+    max_a = std::max(max_a, e);
+    sum_a += e;
+  }
+  EXPECT_LT(max_a, 2 * ref.max_error) << ref.max_error << " on sphere A alone";
+  EXPECT_LT(sum_a / double(one.V.rows()), 2 * ref.mean_error)
+      << ref.mean_error << " on sphere A alone";
 }
