@@ -31,12 +31,11 @@ Eigen::MatrixXd transfer_vertex_field(const ShellProjection& onto_source, const 
   return out;
 }
 
-FieldRoundtrip field_roundtrip(const ShellProjection& onto_input, const SurfaceMesh& input,
-                               const SurfaceMesh& section, const Eigen::MatrixXd& values) {
-  FieldRoundtrip r;
-  r.there = transfer_vertex_field(onto_input, input, values, section.V, &r.failures);
-  const ShellProjection onto_section(onto_input.shell(), section);
-  r.back = transfer_vertex_field(onto_section, section, r.there, input.V);
+namespace {
+// r.back against values over the referenced input vertices: max and mean of the per-vertex max
+// error; a vertex whose value did not come back (NaN) is a failure.
+void count_roundtrip_errors(const SurfaceMesh& input, const Eigen::MatrixXd& values,
+                            FieldRoundtrip& r) {
   std::vector<char> referenced(std::size_t(input.num_vertices()), 0);
   for (int f = 0; f < input.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) referenced[std::size_t(input.F(f, k))] = 1;
@@ -54,6 +53,16 @@ FieldRoundtrip field_roundtrip(const ShellProjection& onto_input, const SurfaceM
     ++count;
   }
   r.mean_error = count > 0 ? sum / count : 0.0;
+}
+}  // namespace
+
+FieldRoundtrip field_roundtrip(const ShellProjection& onto_input, const SurfaceMesh& input,
+                               const SurfaceMesh& section, const Eigen::MatrixXd& values) {
+  FieldRoundtrip r;
+  r.there = transfer_vertex_field(onto_input, input, values, section.V, &r.failures);
+  const ShellProjection onto_section(onto_input.shell(), section);
+  r.back = transfer_vertex_field(onto_section, section, r.there, input.V);
+  count_roundtrip_errors(input, values, r);
   return r;
 }
 
@@ -90,32 +99,19 @@ FieldRoundtrip middle_field_roundtrip(const ShellProjection& onto_input, const S
       if (face_at[std::size_t(input.F(f, j))] < 0) face_at[std::size_t(input.F(f, j))] = f;
   r.back =
       Eigen::MatrixXd::Constant(input.num_vertices(), k, std::numeric_limits<double>::quiet_NaN());
-  double sum = 0;
-  int count = 0;
   for (int x = 0; x < input.num_vertices(); ++x) {
     const int g = face_at[std::size_t(x)];
     if (g < 0) continue;
     const auto q = onto_input.unproject(onto_input.reference_vertices().row(x).transpose(), g);
-    if (!q) {
-      ++r.failures;
-      continue;
-    }
+    if (!q) continue;  // stays NaN: a failure
     const Eigen::Vector3i F = shell.F.row(q->face);
     const int rot = min_rotation(F);
     const double w[3] = {1 - q->u - q->v, q->u, q->v};
     Eigen::RowVectorXd value = Eigen::RowVectorXd::Zero(k);
     for (int c = 0; c < 3; ++c) value += w[c] * r.there.row(F[(rot + c) % 3]);
     r.back.row(x) = value;
-    const double e = (value - values.row(x)).cwiseAbs().maxCoeff();
-    if (!std::isfinite(e)) {
-      ++r.failures;
-      continue;
-    }
-    r.max_error = std::max(r.max_error, e);
-    sum += e;
-    ++count;
   }
-  r.mean_error = count > 0 ? sum / count : 0.0;
+  count_roundtrip_errors(input, values, r);
   return r;
 }
 

@@ -151,6 +151,15 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
       r.intersecting_input_faces += hit;
       r.reference_self_intersections += reference.face_self_intersects(f);
     }
+    // Input face g as a triangle, with its corners at pinch points (singular shell vertices).
+    auto input_face = [&](int g) {
+      std::pair<std::array<Eigen::Vector3d, 3>, std::array<bool, 3>> out;
+      for (int k = 0; k < 3; ++k) {
+        out.first[std::size_t(k)] = input.V.row(input.F(g, k));
+        out.second[std::size_t(k)] = singular_input[std::size_t(input.F(g, k))];
+      }
+      return out;
+    };
     if (shell.local_sheets) {
       // Each base and top triangle against the input faces of its prism's local sheet only,
       // still from the input side (the input triangle queried against the cage triangle).
@@ -162,13 +171,8 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
         for (const Eigen::MatrixXd* M : {&shell.base, &shell.mid, &shell.top})
           for (int k = 0; k < 3; ++k) box.extend(row(*M, shell.F(f, k)));
         for (int g : sheets.sheet({shell.face_parent[std::size_t(f)]}, box)) {
-          std::array<Eigen::Vector3d, 3> tri;
-          std::array<bool, 3> s;
+          const auto [tri, s] = input_face(g);
           const Eigen::Vector3i ids = input.F.row(g);
-          for (int k = 0; k < 3; ++k) {
-            tri[k] = input.V.row(input.F(g, k));
-            s[k] = singular_input[input.F(g, k)];
-          }
           if (cage_index.triangle_meets_face(tri, s, ids, f) ||
               cage_index.triangle_meets_face(tri, s, ids, nf + f))
             hit[std::size_t(g)] = 1;  // distinct faces: a byte per face, races write the same
@@ -178,14 +182,9 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     }
     for (int f = 0; f < input.num_faces() && !shell.local_sheets; ++f) {
       if (moved[std::size_t(f)]) continue;
-      std::array<Eigen::Vector3d, 3> tri;
-      std::array<bool, 3> s;
-      const Eigen::Vector3i ids = input.F.row(f);
-      for (int k = 0; k < 3; ++k) {
-        tri[k] = input.V.row(input.F(f, k));
-        s[k] = singular_input[input.F(f, k)];
-      }
-      if (cage_index.triangle_intersects(tri, s, ids)) ++r.intersecting_input_faces;
+      const auto [tri, s] = input_face(f);
+      if (cage_index.triangle_intersects(tri, s, Eigen::Vector3i(input.F.row(f))))
+        ++r.intersecting_input_faces;
     }
   }
 
