@@ -57,15 +57,22 @@ Eigen::VectorXd solve_cholmod(const SparseMatrix& A, const Eigen::VectorXd& b,
   Llt* llt = &local;
   bool factorized = false;
   if (cache) {
-    SparseMatrix compressed = A;
-    compressed.makeCompressed();
     FactorizationCache::Impl& c = cache->impl();
-    if (c.llt && identical_matrices(c.matrix, compressed)) {  // only successful factors are kept
+    // A compressed A is compared as it is; a copy is made only to compress it, or to keep it.
+    auto same_as_kept = [&] {
+      if (A.isCompressed()) return identical_matrices(c.matrix, A);
+      SparseMatrix compressed = A;
+      compressed.makeCompressed();
+      return identical_matrices(c.matrix, compressed);
+    };
+    if (c.llt && same_as_kept()) {  // only successful factors are kept
       ++c.reuses;
       info.reused_factorization = true;
       llt = c.llt.get();
       factorized = true;
     } else {
+      SparseMatrix compressed = A;
+      compressed.makeCompressed();
       c.llt.reset();
       c.matrix.swap(compressed);  // not std::move: it would copy (linear_solver.hpp)
       auto fresh = std::make_unique<Llt>();
