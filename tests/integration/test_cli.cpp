@@ -488,6 +488,9 @@ TEST(Cli, ShellOfASelfIntersectingInputIsLocallyInjectiveOnRequest) {
                     io::SurfaceFormat::obj);  // 1920 faces
   const std::string in = (dir / "eight.obj").string();
   std::string out;
+  // `check` refuses it and says what still works.
+  EXPECT_EQ(test::run_command(cli() + " check " + in, &out), 2) << out;
+  EXPECT_NE(out.find("--allow-self-intersections"), std::string::npos) << out;
   EXPECT_EQ(test::run_command(cli() + " shell -q " + in + " -o " + (dir / "plain").string(), &out),
             2)
       << out;

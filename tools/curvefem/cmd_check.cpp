@@ -102,6 +102,14 @@ void print_human(const std::string& input, const check::CheckReport& r) {
   for (const check::Defect& d : r.defects)
     std::printf("%s: %s\n", d.kind.c_str(), d.message.c_str());
   std::printf("acceptable for meshing: %s\n", yes_no(r.acceptable));
+  // What a user can still do with a closed, oriented surface whose only defect is that it
+  // passes through itself.
+  if (r.defects.size() == 1 && r.defects.front().kind == "self_intersection")
+    std::printf(
+        "what works: `curvefem shell IN -o DIR --allow-self-intersections` (a locally injective "
+        "shell, for remeshing and attribute transfer); `curvefem deform IN -o OUT.obj --untangle` "
+        "(genus 0: "
+        "a flow that removes the self-intersections)\n");
 }
 
 }  // namespace
