@@ -260,14 +260,13 @@ Shell build_shell_impl(const SurfaceMesh& input, const ExtrusionDirections* give
       ++stats.shrink_rounds_volume;
     }
     // Locally injective: separation from the prism's local sheet only.
-    auto local_sheet = [&] {
+    std::vector<int> sheet;
+    if (sheets) {
       Eigen::AlignedBox3d box;
       for (int side : {-1, 0, 1})
         for (const auto& c : corners(f, side)) box.extend(c);
-      return sheets->sheet({parent[f]}, box);
-    };
-    std::vector<int> sheet;
-    if (sheets) sheet = local_sheet();
+      sheet = sheets->sheet({parent[f]}, box);
+    }
     for (int side : {-1, 1}) {
       while (index.triangle_intersects(corners(f, side), sing, F[f], sheets ? &sheet : nullptr)) {
         for (int k = 0; k < 3; ++k) step[F[f][k]] *= 0.5;

@@ -718,10 +718,11 @@ class ShellMesh : public TriMesh {
                             std::size_t changed = SIZE_MAX, const std::vector<int>* moved = nullptr,
                             const std::vector<Eigen::AlignedBox3d>* moved_boxes = nullptr) {
     std::vector<int> new_union, touching;
-    if (sheets) {
+    auto sort_old_union = [&] {
       std::sort(old_union.begin(), old_union.end());
       old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
-    }
+    };
+    if (sheets) sort_old_union();  // the local checks' seeds; else only once every cell passed
     for (std::size_t i = 0; i < cells.size(); ++i) {
       const Id f = cells[i];
       const Reject why = moved && i >= changed ? prism_recheck(f, *moved, *moved_boxes, touching)
@@ -730,8 +731,7 @@ class ShellMesh : public TriMesh {
       track.set(f, touching);
       new_union.insert(new_union.end(), touching.begin(), touching.end());
     }
-    std::sort(old_union.begin(), old_union.end());
-    old_union.erase(std::unique(old_union.begin(), old_union.end()), old_union.end());
+    if (!sheets) sort_old_union();
     std::sort(new_union.begin(), new_union.end());
     new_union.erase(std::unique(new_union.begin(), new_union.end()), new_union.end());
     if (!std::includes(new_union.begin(), new_union.end(), old_union.begin(), old_union.end())) {

@@ -13,7 +13,8 @@
 //                 snapped corner meet no other face of it beyond common corners and edges; the
 //                 checks above use the copy, exactly
 //   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (pinch
-//                 points, zero-length fibers, included)
+//                 points, zero-length fibers, included); a vertex mapped back farther than
+//                 k_roundtrip_miss_rel counts as a failure
 // A locally injective shell (Shell::local_sheets) is checked for what it claims: separation and
 // section per prism against its local sheet (local_sheets.hpp, reached from face_parent), P⁻¹ of
 // a vertex through a face at it.
@@ -25,6 +26,10 @@
 
 namespace curvefem::meshing::shell {
 
+/// A roundtrip P(P⁻¹(x)) farther than this from x (relative to the longest bbox edge) is a
+/// failure, not rounding.
+inline constexpr double k_roundtrip_miss_rel = 1e-6;
+
 struct ShellVerification {
   int faces = 0;
   int non_positive_faces = 0;
@@ -33,7 +38,8 @@ struct ShellVerification {
   // Faces of the reference copy (Shell::reference) meeting another face beyond their common
   // corners and edge (the section argument needs the copy embedded, as the input is).
   int reference_self_intersections = 0;
-  int roundtrip_failures = 0;  // input vertices P⁻¹ or P could not map
+  // Input vertices P⁻¹ or P could not map, or mapped back farther than k_roundtrip_miss_rel.
+  int roundtrip_failures = 0;
   double roundtrip_max_error_rel = 0;
   double seconds = 0;
   bool positive() const { return non_positive_faces == 0; }
