@@ -15,6 +15,9 @@
 // --boolean the shell is built on INPUT OP B (meshing/shell/boolean.hpp) and both operands'
 // fields are carried onto its coarse remeshing; each is checked by
 // tools/curvefem/shell_applications.hpp.
+// Exit 0 when the shell verifies in full (positive, separated, a section, every input vertex
+// mapped back by P⁻¹ then P) and every requested application checks out, 3 otherwise (the
+// outputs are written and report.json says what failed), 2 for bad input.
 // Where the input's own shell is not a section, the input is first refined by topological
 // beveling (meshing/shell/bevel.hpp; same geometry) and the shell built, simplified and verified
 // on the refined surface; `input_face` in shell.vtu still names faces of the input.
@@ -440,8 +443,8 @@ void register_shell(CLI::App& app) {
           boolean_block["remeshed_faces"].get<int>(), boolean_checks_ok ? "yes" : "NO",
           boolean_block["field_max_error"].get<double>());
     std::fflush(stdout);
-    return boolean_checks_ok && texture_ok && check.positive() && check.separated() && remesh_ok &&
-                   displacement_ok && cages_ok
+    return boolean_checks_ok && texture_ok && check.valid() && remesh_ok && displacement_ok &&
+                   cages_ok
                ? 0
                : 3;
   });
