@@ -1317,6 +1317,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.rotate = options.shell_rotate;
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.zoom_passes = options.shell_zoom_passes;
+  simplify_options.section_cos = options.shell_pillar_cos;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
   if (!options.feature_edges.empty() && surface.num_vertices() > input.num_vertices()) {
@@ -1545,6 +1546,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   const sh::ShellVerification shell_check = sh::verify_shell(shell, surface);
   stats.shell_section_verified = shell_check.section();
   stats.shell_non_section_prisms = shell_check.non_section_faces;
+  stats.shell_min_pillar_cos = shell_check.min_pillar_cos;
   if (!shell_check.positive() || !shell_check.separated() || !shell_check.embedded_reference())
     throw MeshingError("coarsen: the coarse shell failed verification (" +
                        std::to_string(shell_check.non_positive_faces) + " non-positive prisms, " +

@@ -174,6 +174,11 @@ struct CurvedMeshOptions {
   bool shell_flips = true;
   bool shell_rotate = true;
   double shell_zoom_rel = 0.1;
+  // SimplifyOptions::section_cos, the coarse shell's distortion bound: every input face a new
+  // prism covers makes at least this cosine with its half-pillars (0: the bare section
+  // condition, under which a pillar may end tangent to an input face up to rounding and the
+  // floating-point map stop being bijective; meshing/shell/README.md).
+  double shell_pillar_cos = 0.01;
   // SimplifyOptions::zoom_passes: up to this many doublings a round for pillars pinned below
   // 0.05 of their star's edges (1: one, as every pillar). Off by default: at 4, measured on 38
   // dev and 72 corpus runs (benchmarks/results/robustness_zoom.md), the knife discs' worst cells
@@ -291,6 +296,8 @@ struct CurvedMeshStats {
   std::vector<std::pair<std::string, long>> coarsen_rejections;
   bool shell_section_verified = false;
   int shell_non_section_prisms = 0;
+  // verify_shell's distortion: the smallest half-pillar/normal cosine over section-contact pairs.
+  double shell_min_pillar_cos = 1;
   int faces_fully_curved = 0, faces_blended = 0, faces_linear = 0;
   // Faces whose fully curved patch (first curving round) was refused: slab tets not certified
   // positive, or an input vertex farther than eps from the patch (why faces end blended).

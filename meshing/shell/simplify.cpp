@@ -541,13 +541,16 @@ class ShellMesh : public TriMesh {
   bool section_ok(const PrismShape& p, int x) const {
     const auto tri = input->face_triangle(x);
     const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    // The cosine bound on each half-pillar (floating point, as verify_shell measures it), and
+    // the exact sign on both, as the verifier checks it.
+    auto leans_within = [&](const Eigen::Vector3d& half) {
+      const double d = n.dot(half);
+      return d > 0 && d * d >= section_cos * section_cos * n.squaredNorm() * half.squaredNorm();
+    };
     bool seen = true;
     for (int k = 0; k < 3 && seen; ++k) {
       if (p.s[k]) continue;
-      const Eigen::Vector3d pillar = p.t[k] - p.b[k];
-      const double d = n.dot(pillar);
-      // The cosine bound, and the exact sign on both half-pillars as the verifier checks it.
-      seen = d > 0 && d * d > section_cos * section_cos * n.squaredNorm() * pillar.squaredNorm() &&
+      seen = leans_within(p.m[k] - p.b[k]) && leans_within(p.t[k] - p.m[k]) &&
              input->face_normal_dot_sign(x, p.b[k], p.m[k]) > 0 &&
              input->face_normal_dot_sign(x, p.m[k], p.t[k]) > 0;
     }

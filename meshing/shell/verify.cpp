@@ -17,14 +17,24 @@
 
 namespace curvefem::meshing::shell {
 
-std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input) {
+namespace {
+
+struct SectionScan {
+  std::vector<int> failing;  // prisms failing the section condition, increasing
+  // Per prism: the smallest cosine between a non-singular half-pillar and the normal of an input
+  // face in section contact (1 when no face is in contact).
+  std::vector<double> min_cos;
+};
+
+SectionScan scan_section(const Shell& shell, const InputSurfaceIndex& index) {
   // Section condition (the argument is in shell_intersection.cpp): every input face in section
   // contact with a non-degenerate split tet (it meets the open tet, or lies in a facet plane and
   // meets the facet's relative interior) must make a positive dot product, exact sign, with
   // every non-singular half-pillar. Contact with the prism's boundary alone is not checked here:
-  // the fibers there belong to the neighbour as well, whose tets see that face. Faces passing
-  // the pillar test are skipped before the contact test.
-  const InputSurfaceIndex index(input.V, input.F, shell.reference);
+  // the fibers there belong to the neighbour as well, whose tets see that face.
+  // The distortion (thesis §4.4): the smallest half-pillar/normal cosine over the faces in
+  // section contact. Candidates go in increasing cosine; the first in contact gives the minimum,
+  // so faces passing the pillar test beyond it need no contact test.
   // A locally injective shell: each prism against its local sheet (local_sheets.hpp), reached
   // from the input face it names (face_parent) within the prism's box.
   const std::optional<LocalSheets> sheets =
@@ -32,6 +42,8 @@ std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input
   const int nf = int(shell.F.rows());
   auto row = [](const Eigen::MatrixXd& M, int v) { return Eigen::Vector3d(M.row(v)); };
   std::vector<char> fails(std::size_t(nf), 0);
+  SectionScan out;
+  out.min_cos.assign(std::size_t(nf), 1.0);
   tbb::parallel_for(0, nf, [&](int f) {
     const Eigen::Vector3i F = shell.F.row(f);
     const int rot = min_rotation(F);
@@ -58,31 +70,58 @@ std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input
       half_pillars.emplace_back(row(shell.base, v), row(shell.mid, v));
       half_pillars.emplace_back(row(shell.mid, v), row(shell.top, v));
     }
-    bool ok = true;
+    auto in_contact = [&](int t) {
+      for (const auto& tet : tets)
+        if (index.face_section_contact(t, tet)) return true;
+      return false;
+    };
     const std::vector<int> candidates =
         sheets ? sheets->sheet({shell.face_parent[std::size_t(f)]}, box)
                : index.faces_in_box(box.min(), box.max());
+    std::vector<std::pair<double, int>> transversal;  // (smallest cosine, face)
+    bool ok = true;
     for (int t : candidates) {
-      bool transversal = true;
+      bool positive = true;
       for (const auto& [from, to] : half_pillars)
         if (index.face_normal_dot_sign(t, from, to) <= 0) {
-          transversal = false;
+          positive = false;
           break;
         }
-      if (transversal) continue;
-      for (const auto& tet : tets)
-        if (index.face_section_contact(t, tet)) {
+      if (!positive) {
+        if (in_contact(t)) {
           ok = false;
           break;
         }
-      if (!ok) break;
+        continue;
+      }
+      const auto tri = index.face_triangle(t);
+      const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized();
+      double c = 1;
+      for (const auto& [from, to] : half_pillars) c = std::min(c, n.dot((to - from).normalized()));
+      transversal.emplace_back(c, t);
     }
     fails[std::size_t(f)] = !ok;
+    if (!ok) {
+      out.min_cos[std::size_t(f)] = -1;  // some face in contact is not crossed transversally
+      return;
+    }
+    std::sort(transversal.begin(), transversal.end());
+    for (const auto& [c, t] : transversal)
+      if (in_contact(t)) {
+        out.min_cos[std::size_t(f)] = c;
+        break;
+      }
   });
-  std::vector<int> out;
   for (int f = 0; f < nf; ++f)
-    if (fails[std::size_t(f)]) out.push_back(f);
+    if (fails[std::size_t(f)]) out.failing.push_back(f);
   return out;
+}
+
+}  // namespace
+
+std::vector<int> non_section_prisms(const Shell& shell, const SurfaceMesh& input) {
+  const InputSurfaceIndex index(input.V, input.F, shell.reference);
+  return scan_section(shell, index).failing;
 }
 
 ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
@@ -107,6 +146,9 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     }
     if (!shell_face_positive(b, m, t, s)) ++r.non_positive_faces;
   }
+
+  // The input (or its reference copy) for separation, the section and the distortion.
+  const InputSurfaceIndex reference(input.V, input.F, shell.reference);
 
   // Separation, from the input side: an index over all base and top triangles. A singular
   // vertex carries its input vertex id in both, so contact there is recognized as a pinch;
@@ -133,7 +175,6 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
         singular_input[shell.input_vertex[v]] = 1;
     // Faces of the reference copy with a snapped corner, exactly against the cage triangles
     // near them; a pinch at one of their corners counts as a crossing (conservative).
-    const InputSurfaceIndex reference(input.V, input.F, shell.reference);
     std::vector<char> moved(std::size_t(input.num_faces()), 0);
     for (int f : reference.moved_faces()) {
       moved[std::size_t(f)] = 1;
@@ -194,8 +235,12 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
     }
   }
 
-  // Section condition (the argument is in shell_intersection.cpp).
-  r.non_section_faces = int(non_section_prisms(shell, input).size());
+  // Section condition (the argument is in shell_intersection.cpp) and the distortion.
+  {
+    const SectionScan scan = scan_section(shell, reference);
+    r.non_section_faces = int(scan.failing.size());
+    for (double c : scan.min_cos) r.min_pillar_cos = std::min(r.min_pillar_cos, c);
+  }
 
   // Roundtrip of every input vertex through P⁻¹ and P. A pinch point (an input vertex that is
   // a singular shell vertex, base = mid = top) is a zero-length fiber: P⁻¹ must give its corner

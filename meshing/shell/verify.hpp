@@ -12,6 +12,10 @@
 //   reference     with feature chains (Shell::reference): the faces of the reference copy with a
 //                 snapped corner meet no other face of it beyond common corners and edges; the
 //                 checks above use the copy, exactly
+//   distortion    the smallest cosine between a non-singular half-pillar and the normal of an
+//                 input face in section contact with its prism (thesis §4.4's projection
+//                 distortion; reported, not part of valid(): simplification bounds it by
+//                 SimplifyOptions::section_cos, prisms it never touched keep their own)
 //   roundtrip     every input vertex x: P⁻¹ then P returns x; max |x' - x| / bbox edge (pinch
 //                 points, zero-length fibers, included); a vertex mapped back farther than
 //                 k_roundtrip_miss_rel counts as a failure
@@ -41,6 +45,9 @@ struct ShellVerification {
   // Input vertices P⁻¹ or P could not map, or mapped back farther than k_roundtrip_miss_rel.
   int roundtrip_failures = 0;
   double roundtrip_max_error_rel = 0;
+  // Smallest half-pillar/normal cosine over section-contact pairs (1: no pair; -1 with a
+  // non-section prism).
+  double min_pillar_cos = 1;
   double seconds = 0;
   bool positive() const { return non_positive_faces == 0; }
   bool separated() const { return intersecting_input_faces == 0; }

@@ -249,6 +249,34 @@ TEST(Cli, MeshThenValidateAndDetectTampering) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
 
+TEST(Cli, ShellKeepsItsDistortionBoundAndRefusesATangentPillar) {
+  // A thin torus coarsened with a thick zoom (0.224 absolute, the bbox edge is 1.84). Under the
+  // bare section condition (--pillar-cos 0) a pillar on the tube's outer equator ends tangent to
+  // faces on top of the tube up to rounding: every exact check passes, but P maps input vertices
+  // back 0.0093 away, so the verifier fails the shell (exit 3). The default bound keeps every
+  // covered face at cosine >= 0.01 with its pillars, and verify_shell measures it.
+  const auto dir = test::scratch_dir("cli_shell_pillar_cos");
+  io::write_surface(dir / "torus.obj", make_torus(0.8, 0.12, 96, 10), io::SurfaceFormat::obj);
+  const std::string base = cli() + " shell -q " + (dir / "torus.obj").string() +
+                           " --threads 1 --zoom " + std::to_string(0.224 / 1.84) + " -o ";
+  std::string out;
+  EXPECT_EQ(test::run_command(base + (dir / "bare").string() + " --pillar-cos 0", &out), 3)
+      << out;
+  const auto bare = read_json(dir / "bare" / "report.json");
+  EXPECT_EQ(bare["pillar_cos_bound"].get<double>(), 0.0);
+  EXPECT_LT(bare["min_pillar_cos"].get<double>(), 1e-12);
+  EXPECT_GT(bare["roundtrip_failures"].get<int>(), 0);
+  EXPECT_EQ(bare["is_section_verified"], true);  // exact: the fibers still cross once
+
+  ASSERT_EQ(test::run_command(base + (dir / "bounded").string(), &out), 0) << out;
+  const auto bounded = read_json(dir / "bounded" / "report.json");
+  EXPECT_EQ(bounded["pillar_cos_bound"].get<double>(), 0.01);
+  EXPECT_GE(bounded["min_pillar_cos"].get<double>(), 0.01);
+  EXPECT_EQ(bounded["roundtrip_failures"], 0);
+  EXPECT_LT(bounded["roundtrip_max_error_rel"].get<double>(), 1e-12);
+  EXPECT_LT(bounded["prisms"].get<int>(), 300);  // 1920 before coarsening
+}
+
 TEST(Cli, ShellRemeshSectionWritesSurfaceAndReport) {
   const auto dir = test::scratch_dir("cli_shell_remesh_section");
   io::write_surface(dir / "sphere.obj", make_icosphere(3), io::SurfaceFormat::obj);  // 1280 faces
@@ -709,19 +737,23 @@ TEST(Cli, GenerateWritesTheAdversarialSurfacesAndRefusesUnknownNames) {
 
 TEST(Cli, AnUnseenCadPartWhoseRefinedMapMissesItsRoundTripIsMeshedAgainLessRefined) {
   // CGAL's spool.off (libcgal-dev's data, a CAD part nobody here tuned for): with the default
-  // shape refinement, φ of input vertex 31 (on a feature chain) lies on a coarse feature edge,
-  // and pulled back from just inside the triangle across that edge it came back 7.4e-3 of the
-  // bounding box away. The validator refused the mesh (exit 3, "the map round trip misses input
-  // vertex 31"). The mesher now checks the round trip of a refined input itself, on both sides
-  // of such edges, and meshes the input again without the shape refinement.
+  // shape refinement and the bare section condition (--shell-pillar-cos 0), φ of input vertex 31
+  // (on a feature chain) lies on a coarse feature edge, and pulled back from just inside the
+  // triangle across that edge it came back 7.4e-3 of the bounding box away. The validator
+  // refused the mesh (exit 3, "the map round trip misses input vertex 31"). The mesher checks
+  // the round trip of a refined input itself, on both sides of such edges, and meshes the input
+  // again without the shape refinement.
+  // The miss was a pillar of the coarse shell tangent to an input face up to rounding (the
+  // shell's distortion bound, meshing/shell/README.md): with the default bound (cosine 0.01)
+  // the refined input's map round-trips and no fallback is needed.
   const auto dir = test::scratch_dir("cli_spool");
   const auto path = test::cgal_data_mesh("spool", dir);
   if (!path) GTEST_SKIP() << test::k_no_cgal_data_message;
   const std::string in = path->string();
   std::string out;
-  ASSERT_EQ(test::run_command(
-                cli() + " mesh -q " + in + " -o " + (dir / "m").string() + " --order 3 --threads 2",
-                &out),
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + (dir / "m").string() +
+                                  " --order 3 --threads 2 --shell-pillar-cos 0",
+                              &out),
             0)
       << out;
   const auto j = read_json(dir / "m" / "report.json");
@@ -732,5 +764,20 @@ TEST(Cli, AnUnseenCadPartWhoseRefinedMapMissesItsRoundTripIsMeshedAgainLessRefin
   EXPECT_NE(fallback.find("without the shape refinement"), std::string::npos) << fallback;
   EXPECT_EQ(j["shape_refinement"]["bisections"], 0);
   EXPECT_GT(j["time_s"]["refined round trip"].get<double>(), 0);
+  EXPECT_EQ(j["coarsening"]["pillar_cos_bound"].get<double>(), 0.0);
   ASSERT_EQ(test::run_command(cli() + " validate " + (dir / "m").string(), &out), 0) << out;
+
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + (dir / "d").string() +
+                                  " --order 3 --threads 2",
+                              &out),
+            0)
+      << out;
+  const auto d = read_json(dir / "d" / "report.json");
+  EXPECT_TRUE(d["valid"].get<bool>());
+  EXPECT_LE(d["map_roundtrip_max_error_rel"].get<double>(), 1e-6);
+  EXPECT_EQ(d["roundtrip_fallback"].get<std::string>(), "");
+  EXPECT_GT(d["shape_refinement"]["bisections"].get<int>(), 0);  // the refinement is kept
+  EXPECT_EQ(d["coarsening"]["pillar_cos_bound"].get<double>(), 0.01);
+  EXPECT_GE(d["shell_min_pillar_cos"].get<double>(), 0.01);  // measured by verify_shell
+  ASSERT_EQ(test::run_command(cli() + " validate " + (dir / "d").string(), &out), 0) << out;
 }

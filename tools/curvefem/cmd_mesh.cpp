@@ -66,6 +66,7 @@ struct MeshArgs {
   double curve_distortion_floor = meshing::curved::CurvedMeshOptions{}.curve_distortion_floor;
   double curved_min_area_ratio = meshing::curved::CurvedMeshOptions{}.curved_min_area_ratio;
   int shell_zoom_passes = meshing::curved::CurvedMeshOptions{}.shell_zoom_passes;
+  double shell_pillar_cos = meshing::curved::CurvedMeshOptions{}.shell_pillar_cos;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
@@ -280,6 +281,11 @@ void register_mesh(CLI::App& app) {
                   "0.05 of their star's edges, each doubling them (default 1; 4 measured mixed: "
                   "benchmarks/results/robustness_zoom.md)")
       ->check(CLI::Range(1, 16));
+  sub->add_option("--shell-pillar-cos", args->shell_pillar_cos,
+                  "the coarse shell's distortion bound: each input face a coarse prism covers "
+                  "makes at least this cosine with its pillars (default 0.01; 0: the bare "
+                  "section condition)")
+      ->check(CLI::Range(0.0, 0.5));
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -350,6 +356,7 @@ void register_mesh(CLI::App& app) {
     options.curve_distortion_floor = args->curve_distortion_floor;
     options.curved_min_area_ratio = args->curved_min_area_ratio;
     options.shell_zoom_passes = args->shell_zoom_passes;
+    options.shell_pillar_cos = args->shell_pillar_cos;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {

@@ -1,5 +1,6 @@
-// `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--remesh-section L]
-// [--displacement-map L] [--cages K] [--texture TILE] [--boolean OP --with B] [--threads N]`:
+// `curvefem shell INPUT -o DIR [--thickness R] [--no-simplify] [--zoom R] [--pillar-cos C]
+// [--remesh-section L] [--displacement-map L] [--cages K] [--texture TILE] [--boolean OP --with B]
+// [--threads N]`:
 // builds the prismatic shell of a closed surface (meshing/shell), verifies it with independent code
 // and writes shell.vtu (prisms as VTK_WEDGE, cell data `half`: 0 base→mid, 1 mid→top,
 // `input_face`), middle.obj and report.json. Without
@@ -57,6 +58,7 @@ struct ShellArgs {
   bool no_simplify = false;
   double remesh_section = 0;  // target edge relative to the longest bbox edge; 0: no remeshing
   double zoom = 0.1;
+  double pillar_cos = sh::SimplifyOptions{}.section_cos;
   int displacement_level = 0;  // --displacement-map L; 0: none
   int cages = 0;               // --cages K; 0: none
   std::string texture;         // --texture TILE; empty: none
@@ -168,6 +170,10 @@ void register_shell(CLI::App& app) {
                   "simplification may grow each half-pillar up to this length, relative to the "
                   "longest bbox edge (0: never grow)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--pillar-cos", args->pillar_cos,
+                  "distortion bound of simplification: each input face a new prism covers makes "
+                  "at least this cosine with its pillars (0: the bare section condition)")
+      ->check(CLI::Range(0.0, 0.5));
   sub->add_option("--displacement-map", args->displacement_level,
                   "bake a displacement map of this level (samples per coarse face edge) through "
                   "P: writes displacement_map.txt, cage.obj and the rebuilt displaced.obj")
@@ -243,6 +249,7 @@ void register_shell(CLI::App& app) {
       sh::SimplifyOptions so;
       so.threads = args->global.threads > 0 ? args->global.threads : 2;
       so.zoom = args->zoom * bbox_longest_edge(input.V);
+      so.section_cos = args->pillar_cos;
       shell = sh::simplify_shell(shell, surface, so, simplify);
       stats.stage_seconds.emplace_back("simplify", simplify.seconds);
     }
@@ -344,6 +351,8 @@ void register_shell(CLI::App& app) {
         {"input_faces_intersecting_shell", check.intersecting_input_faces},
         {"is_section_verified", check.section()},
         {"non_section_prisms", check.non_section_faces},
+        {"min_pillar_cos", check.min_pillar_cos},
+        {"pillar_cos_bound", args->no_simplify ? 0.0 : args->pillar_cos},
         {"roundtrip_max_error_rel", check.roundtrip_max_error_rel},
         {"roundtrip_failures", check.roundtrip_failures},
         {"time_s", stages},

@@ -585,11 +585,12 @@ TEST(ShellSimplify, ShapeSlackLetsCollapsesThatRaiseTheWorstNeedleByAHairThrough
   EXPECT_THROW(sh::simplify_shell(shell, cyl, o, bad), curvefem::MeshingError);
 }
 
-// The verifier catches a shell whose P is not the inverse of P⁻¹ even though positivity,
-// separation and the section test pass (meshing/shell/README.md, "Known defect"): this thin
-// torus coarsened with a thick zoom maps 3 input vertices back 0.0093 away. When the
-// simplification (or the section test) is fixed, this shell must verify in full instead: turn the
-// roundtrip expectations around.
+// A pillar tangent to an input face up to rounding passes the exact section test, yet P, which
+// walks floating-point fibers, is then no inverse of P⁻¹. Under the bare section condition
+// (section_cos = 0) this thin torus coarsened with a thick zoom ends with a pillar on the outer
+// equator (radial, its z within 9e-18 of 0) covering faces on top of the tube (normal +z): the
+// fiber through input vertex 82 runs inside face 165 for 0.0093 and P finds that face first.
+// The verifier must catch it; the distortion bound (default section_cos 0.01) must prevent it.
 TEST(ShellSimplify, TheVerifierCountsAVertexMappedBackElsewhereAsARoundtripFailure) {
   const SurfaceMesh torus = curvefem::make_torus(0.8, 0.12, 96, 10);
   sh::ShellStats stats;
@@ -597,13 +598,45 @@ TEST(ShellSimplify, TheVerifierCountsAVertexMappedBackElsewhereAsARoundtripFailu
   sh::SimplifyOptions o;
   o.threads = 1;
   o.zoom = 0.224;
+  o.section_cos = 0;
   sh::SimplifyStats s;
   const sh::Shell coarse = sh::simplify_shell(shell, torus, o, s);
   const sh::ShellVerification v = sh::verify_shell(coarse, torus);
   EXPECT_TRUE(v.positive());
   EXPECT_TRUE(v.separated());
   EXPECT_TRUE(v.section());
+  EXPECT_LT(v.min_pillar_cos, 1e-15);  // tangent up to rounding: 4.6e-17
   EXPECT_GT(v.roundtrip_max_error_rel, sh::k_roundtrip_miss_rel);
   EXPECT_GT(v.roundtrip_failures, 0);
   EXPECT_FALSE(v.valid());
+}
+
+TEST(ShellSimplify, TheDistortionBoundKeepsEveryFiberTransversalAndTheShellBijective) {
+  const SurfaceMesh torus = curvefem::make_torus(0.8, 0.12, 96, 10);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(torus, stats);
+  int bare_faces = 0;
+  for (double bound : {0.0, 0.01, 0.05}) {
+    sh::SimplifyOptions o;
+    o.threads = 1;
+    o.zoom = 0.224;
+    o.section_cos = bound;
+    sh::SimplifyStats s;
+    const sh::Shell coarse = sh::simplify_shell(shell, torus, o, s);
+    const sh::ShellVerification v = sh::verify_shell(coarse, torus);
+    if (bound == 0) {
+      bare_faces = int(coarse.F.rows());
+      continue;
+    }
+    // verify_shell measures the bound with its own code (half-pillars against the faces in
+    // section contact, candidates from its own index).
+    EXPECT_GE(v.min_pillar_cos, bound) << bound;
+    EXPECT_TRUE(v.valid()) << bound;
+    EXPECT_EQ(v.roundtrip_failures, 0) << bound;
+    EXPECT_LT(v.roundtrip_max_error_rel, 1e-12) << bound;
+    // The price: a few more prisms (216 bare, 240 at 0.01, 246 at 0.05; 1920 before).
+    EXPECT_GE(int(coarse.F.rows()), bare_faces) << bound;
+    EXPECT_LT(int(coarse.F.rows()), bare_faces * 5 / 4) << bound;
+  }
+  EXPECT_EQ(sh::SimplifyOptions{}.section_cos, 0.01);
 }
