@@ -47,7 +47,7 @@ struct SimplifyOptions {
   // every exact check, yet floating-point P sent 3 vertices 0.0093 away (meshing/shell/README.md).
   // 0.01 (about 89.4°) is bichon's distortion_bound; BPS uses 1e-3.
   double section_cos = 0.01;
-  int rounds = 3;            // collapse passes (a pass re-seeds every edge)
+  int rounds = 3;  // collapse passes (a pass re-seeds every edge)
   // > 0: distance bound. Every input vertex is owned by the prism that contains it; a collapse is
   // accepted only if each owned vertex x lies in one of the new prisms, at prism coordinates
   // (u, v, h), with |x - mid(u, v)| <= max_distance (mid: the linear middle triangle).

@@ -260,8 +260,7 @@ TEST(Cli, ShellKeepsItsDistortionBoundAndRefusesATangentPillar) {
   const std::string base = cli() + " shell -q " + (dir / "torus.obj").string() +
                            " --threads 1 --zoom " + std::to_string(0.224 / 1.84) + " -o ";
   std::string out;
-  EXPECT_EQ(test::run_command(base + (dir / "bare").string() + " --pillar-cos 0", &out), 3)
-      << out;
+  EXPECT_EQ(test::run_command(base + (dir / "bare").string() + " --pillar-cos 0", &out), 3) << out;
   const auto bare = read_json(dir / "bare" / "report.json");
   EXPECT_EQ(bare["pillar_cos_bound"].get<double>(), 0.0);
   EXPECT_LT(bare["min_pillar_cos"].get<double>(), 1e-12);
@@ -767,9 +766,9 @@ TEST(Cli, AnUnseenCadPartWhoseRefinedMapMissesItsRoundTripIsMeshedAgainLessRefin
   EXPECT_EQ(j["coarsening"]["pillar_cos_bound"].get<double>(), 0.0);
   ASSERT_EQ(test::run_command(cli() + " validate " + (dir / "m").string(), &out), 0) << out;
 
-  ASSERT_EQ(test::run_command(cli() + " mesh -q " + in + " -o " + (dir / "d").string() +
-                                  " --order 3 --threads 2",
-                              &out),
+  ASSERT_EQ(test::run_command(
+                cli() + " mesh -q " + in + " -o " + (dir / "d").string() + " --order 3 --threads 2",
+                &out),
             0)
       << out;
   const auto d = read_json(dir / "d" / "report.json");
