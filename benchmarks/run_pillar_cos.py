@@ -36,7 +36,7 @@ for name in names:
     row = {"mesh": name, "runs": []}
     for c in a.bounds:
         out = os.path.join(a.work, f"{name}_{c:g}")
-        cmd = [a.exe, "--quiet", "shell", os.path.join(a.data, name + ".obj"), "-o", out,
+        cmd = [a.exe, "shell", "-q", os.path.join(a.data, name + ".obj"), "-o", out,
                "--pillar-cos", repr(c), "--threads", "1"]
         try:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.timeout)
