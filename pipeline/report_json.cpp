@@ -133,6 +133,7 @@ nlohmann::ordered_json curved_mesh_stats_json(const meshing::curved::CurvedMeshS
           {"shell_section_verified", stats.shell_section_verified},
           {"shell_non_section_prisms", stats.shell_non_section_prisms},
           {"shell_min_pillar_cos", stats.shell_min_pillar_cos},
+          {"shell_reference_collapsed_faces", stats.shell_reference_collapsed_faces},
           {"faces_fully_curved", stats.faces_fully_curved},
           {"faces_blended", stats.faces_blended},
           {"faces_linear", stats.faces_linear},

@@ -1318,6 +1318,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.zoom_passes = options.shell_zoom_passes;
   simplify_options.section_cos = options.shell_pillar_cos;
+  simplify_options.min_reference_area_ratio = options.chain_min_area_ratio;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
   if (!options.feature_edges.empty() && surface.num_vertices() > input.num_vertices()) {
@@ -1547,6 +1548,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   stats.shell_section_verified = shell_check.section();
   stats.shell_non_section_prisms = shell_check.non_section_faces;
   stats.shell_min_pillar_cos = shell_check.min_pillar_cos;
+  stats.shell_reference_collapsed_faces = shell_check.reference_collapsed_faces;
   if (!shell_check.positive() || !shell_check.separated() || !shell_check.embedded_reference())
     throw MeshingError("coarsen: the coarse shell failed verification (" +
                        std::to_string(shell_check.non_positive_faces) + " non-positive prisms, " +

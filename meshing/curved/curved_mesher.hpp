@@ -179,6 +179,10 @@ struct CurvedMeshOptions {
   // condition, under which a pillar may end tangent to an input face up to rounding and the
   // floating-point map stop being bijective; meshing/shell/README.md).
   double shell_pillar_cos = 0.01;
+  // SimplifyOptions::min_reference_area_ratio: a chain collapse may not flatten a face of the
+  // reference copy below this fraction of its input area (0: only exactly degenerate faces are
+  // refused, as before 2026-12-06; CGAL's part.off then lost vertex 18's round trip by 3.1e-3).
+  double chain_min_area_ratio = meshing::shell::k_min_reference_area_ratio;
   // SimplifyOptions::zoom_passes: up to this many doublings a round for pillars pinned below
   // 0.05 of their star's edges (1: one, as every pillar). Off by default: at 4, measured on 38
   // dev and 72 corpus runs (benchmarks/results/robustness_zoom.md), the knife discs' worst cells
@@ -298,6 +302,9 @@ struct CurvedMeshStats {
   int shell_non_section_prisms = 0;
   // verify_shell's distortion: the smallest half-pillar/normal cosine over section-contact pairs.
   double shell_min_pillar_cos = 1;
+  // verify_shell's faces of the feature chains' reference copy flattened below
+  // k_min_reference_area_ratio of their input area (the map's round-trip checks see the harm).
+  int shell_reference_collapsed_faces = 0;
   int faces_fully_curved = 0, faces_blended = 0, faces_linear = 0;
   // Faces whose fully curved patch (first curving round) was refused: slab tets not certified
   // positive, or an input vertex farther than eps from the patch (why faces end blended).

@@ -757,6 +757,16 @@ bool InputSurfaceIndex::face_degenerate(int f) const {
   return exact_collinear(m_impl->exact_face(f));
 }
 
+double InputSurfaceIndex::face_area_ratio(int f) const {
+  const auto r = face_triangle(f);
+  const Eigen::MatrixXd& V = m_impl->V;
+  const Eigen::Vector3d a = V.row(m_impl->F(f, 0)), b = V.row(m_impl->F(f, 1)),
+                        c = V.row(m_impl->F(f, 2));
+  const double input = (b - a).cross(c - a).norm();
+  if (!(input > 0)) return 1;
+  return (r[1] - r[0]).cross(r[2] - r[0]).norm() / input;
+}
+
 namespace {
 // Does the closed segment [p, q] meet the closed triangle t (exact; a segment in t's plane
 // counts as meeting, conservatively)?

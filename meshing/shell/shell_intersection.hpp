@@ -58,6 +58,10 @@ bool segment_crosses_wedge(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
 // V[a] + s (V[b] − V[a]) itself, which is decided on exactly, not for its rounding to doubles.
 // An end that is no vertex of the surface indexed (a = -1 or b = -1: the shell was coarsened on a
 // refinement of the input whose vertex it is, restore_input_ids) is given by its position.
+/// A reference face whose area fell below this fraction of its input face's is collapsed
+/// (InputSurfaceIndex::face_area_ratio).
+inline constexpr double k_min_reference_area_ratio = 1e-6;
+
 struct SnappedVertex {
   int vertex = -1, a = -1, b = -1;
   double s = 0;  // in (0, 1)
@@ -149,6 +153,12 @@ class InputSurfaceIndex {
   int face_normal_dot_sign(int f, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const;
   // Is face f of the reference copy degenerate (collinear corners, exact)?
   bool face_degenerate(int f) const;
+  // Area of face f of the reference copy (rounded where snapped) over the input face's (1 when
+  // the input face has no area). Below k_min_reference_area_ratio the copy has flattened the face
+  // (snapped corners and a rounded one collinear up to rounding: not exactly degenerate, yet P,
+  // which reads a crossing of the copy as the input point with the same barycentric coordinates,
+  // sends points of a segment anywhere across the input face).
+  double face_area_ratio(int f) const;
   // Does face f of the reference copy meet another face of it anywhere but at their common
   // corners and edge (exact; coplanar faces sharing a corner, or overlapping, count as meeting)?
   // Snapping can fold the reference copy over itself, and the section argument needs it embedded.

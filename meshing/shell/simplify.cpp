@@ -120,6 +120,7 @@ class ShellMesh : public TriMesh {
     std::vector<int> path;  // input vertices inside the new edge, from w to u
   } pending;
   double section_cos = 0;
+  double min_reference_area_ratio = 0;
   double max_distance = 0;
   // Curved-aware bound (SimplifyOptions::curved_order): an input vertex not in `strict` may lie
   // up to relaxed_distance from the linear middle triangle when the order-curved_order
@@ -817,8 +818,13 @@ class ShellMesh : public TriMesh {
     moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
     // The reference copy stays embedded (the section argument needs a closed embedded
     // surface; snapping can fold faces next to the chain over their neighbours).
+    // Nor collapses a face: a snapped vertex and a rounded one (a bisection point of a refined
+    // input) collinear up to rounding with the chain make a face of the copy that is not
+    // exactly degenerate but 1e-14 of its input face's area (CGAL's part.off, shape-refined: a
+    // 3e-3-high cap under a feature chain; P then sent the chain vertex 3.1e-3 away).
     for (int g : moved)
-      if (reference->face_degenerate(g) || reference->face_self_intersects(g)) {
+      if (reference->face_degenerate(g) || reference->face_self_intersects(g) ||
+          reference->face_area_ratio(g) < min_reference_area_ratio) {
         note(section);
         return false;
       }
@@ -1233,6 +1239,7 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
   m.input = &index;
   m.reference = &index;
   m.section_cos = options.section_cos;
+  m.min_reference_area_ratio = options.min_reference_area_ratio;
   m.chain_full_recheck = options.chain_full_recheck;
   m.max_distance = options.max_distance;
   m.cancel = options.cancel;

@@ -47,6 +47,10 @@ struct SimplifyOptions {
   // every exact check, yet floating-point P sent 3 vertices 0.0093 away (meshing/shell/README.md).
   // 0.01 (about 89.4°) is bichon's distortion_bound; BPS uses 1e-3.
   double section_cos = 0.01;
+  // A chain collapse may not flatten a face of the reference copy below this fraction of its
+  // input face's area (InputSurfaceIndex::face_area_ratio; k_min_reference_area_ratio). 0: only
+  // exactly degenerate faces are refused.
+  double min_reference_area_ratio = k_min_reference_area_ratio;
   int rounds = 3;  // collapse passes (a pass re-seeds every edge)
   // > 0: distance bound. Every input vertex is owned by the prism that contains it; a collapse is
   // accepted only if each owned vertex x lies in one of the new prisms, at prism coordinates

@@ -194,6 +194,7 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
       }
       r.intersecting_input_faces += hit;
       r.reference_self_intersections += reference.face_self_intersects(f);
+      r.reference_collapsed_faces += reference.face_area_ratio(f) < k_min_reference_area_ratio;
     }
     // Input face g as a triangle, with its corners at pinch points (singular shell vertices).
     auto input_face = [&](int g) {

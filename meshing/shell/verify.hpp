@@ -10,8 +10,9 @@
 //                 normal making a positive dot product with every non-singular pillar, so every
 //                 fiber crosses the input transversally and at most once (thesis §4.4, I2)
 //   reference     with feature chains (Shell::reference): the faces of the reference copy with a
-//                 snapped corner meet no other face of it beyond common corners and edges; the
-//                 checks above use the copy, exactly
+//                 snapped corner meet no other face of it beyond common corners and edges, and
+//                 none is flattened below k_min_reference_area_ratio of its input face's area;
+//                 the checks above use the copy, exactly
 //   distortion    the smallest cosine between a non-singular half-pillar and the normal of an
 //                 input face in section contact with its prism (thesis §4.4's projection
 //                 distortion; reported, not part of valid(): simplification bounds it by
@@ -42,6 +43,9 @@ struct ShellVerification {
   // Faces of the reference copy (Shell::reference) meeting another face beyond their common
   // corners and edge (the section argument needs the copy embedded, as the input is).
   int reference_self_intersections = 0;
+  // Faces of the reference copy flattened below k_min_reference_area_ratio of their input face's
+  // area (the copy-to-input correspondence is then not one-to-one up to rounding).
+  int reference_collapsed_faces = 0;
   // Input vertices P⁻¹ or P could not map, or mapped back farther than k_roundtrip_miss_rel.
   int roundtrip_failures = 0;
   double roundtrip_max_error_rel = 0;
@@ -55,7 +59,7 @@ struct ShellVerification {
   bool embedded_reference() const { return reference_self_intersections == 0; }
   bool valid() const {
     return positive() && separated() && section() && embedded_reference() &&
-           roundtrip_failures == 0;
+           reference_collapsed_faces == 0 && roundtrip_failures == 0;
   }
 };
 

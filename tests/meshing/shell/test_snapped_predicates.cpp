@@ -737,3 +737,37 @@ TEST(SnappedPredicates, BadSnapsThrow) {
   EXPECT_EQ(index.snap_of(2)->s, 0.25);
   EXPECT_EQ(index.face_triangle(2)[1], sh::ExactPoint::on_segment(surf.e.a, surf.e.b, 0.25).p);
 }
+
+// A snapped vertex and a rounded point of the same line: the face they make with the line's end
+// is not exactly degenerate, yet flattened to rounding (CGAL's part.off, shape-refined: a
+// bisection point p of the input edge a–b next to a 3e-3-high cap whose chain vertex x snaps onto
+// a–b). face_degenerate cannot see it; face_area_ratio does.
+TEST(SnappedPredicates, AFaceFlattenedToRoundingIsCollapsedThoughNotExactlyDegenerate) {
+  const Vector3d a(0, 0, 0), b(1, 1.0 / 3.0, 0.2);
+  // p: b scaled by 0.7 and rounded, off the exact line a–b unless the rounding happens to
+  // vanish (checked below), x: 3e-3 off the line.
+  Eigen::MatrixXd V(4, 3);
+  V.row(0) = a.transpose();
+  V.row(1) = b.transpose();
+  V.row(2) = (0.7 * b).transpose();
+  V.row(3) = (0.4 * b + Vector3d(0, 3e-3, -2e-3)).transpose();
+  Eigen::MatrixXi F(2, 3);
+  F << 0, 3, 2,  // x between a and p: flattened once x snaps onto a–b
+      2, 3, 1;   // p, x, b: flattened too
+  const sh::SnappedVertex snap{3, 0, 1, 0.4};
+  const sh::InputSurfaceIndex before(V, F);
+  EXPECT_GT(before.face_area_ratio(0), 0.999);
+  EXPECT_LT(before.face_area_ratio(0), 1.001);
+  const sh::InputSurfaceIndex after(V, F, {snap});
+  int rounded_off_line = 0;
+  for (int f = 0; f < 2; ++f) {
+    rounded_off_line += !after.face_degenerate(f);
+    EXPECT_LT(after.face_area_ratio(f), sh::k_min_reference_area_ratio) << f;
+  }
+  // The point of the test: at least one of them is not exactly degenerate.
+  EXPECT_GT(rounded_off_line, 0);
+  // A face without a snapped corner keeps its area.
+  Eigen::MatrixXi G(1, 3);
+  G << 0, 1, 3;
+  EXPECT_DOUBLE_EQ(sh::InputSurfaceIndex(V, G).face_area_ratio(0), 1.0);
+}
