@@ -30,6 +30,16 @@ a = ap.parse_args()
 
 if not os.path.isdir(a.data):
     raise SystemExit(f"no dev meshes at {a.data} (../shared is absent): nothing to measure")
+
+
+def read_report(path):
+    """The run's report.json, or {} when the run wrote none."""
+    if not os.path.isfile(path):
+        return {}
+    with open(path) as fh:
+        return json.load(fh)
+
+
 names = a.meshes or sorted(f[:-4] for f in os.listdir(a.data) if f.endswith(".obj"))
 rows = []
 for name in names:
@@ -43,12 +53,7 @@ for name in names:
             code = p.returncode
         except subprocess.TimeoutExpired:
             code = "timeout"
-        rep = {}
-        try:
-            with open(os.path.join(out, "report.json")) as fh:
-                rep = json.load(fh)
-        except (OSError, ValueError):
-            pass
+        rep = read_report(os.path.join(out, "report.json"))
         row["runs"].append({"bound": c, "exit": code, "prisms": rep.get("prisms"),
                             "min_cos": rep.get("min_pillar_cos"),
                             "rt": rep.get("roundtrip_max_error_rel"),
