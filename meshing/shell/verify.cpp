@@ -22,7 +22,7 @@ namespace {
 struct SectionScan {
   std::vector<int> failing;  // prisms failing the section condition, increasing
   // Per prism: the smallest cosine between a non-singular half-pillar and the normal of an input
-  // face in section contact (1 when no face is in contact).
+  // face in section contact (1 when no face is in contact, -1 when the prism fails).
   std::vector<double> min_cos;
 };
 
@@ -41,7 +41,6 @@ SectionScan scan_section(const Shell& shell, const InputSurfaceIndex& index) {
       shell.local_sheets ? std::optional<LocalSheets>(std::in_place, index) : std::nullopt;
   const int nf = int(shell.F.rows());
   auto row = [](const Eigen::MatrixXd& M, int v) { return Eigen::Vector3d(M.row(v)); };
-  std::vector<char> fails(std::size_t(nf), 0);
   SectionScan out;
   out.min_cos.assign(std::size_t(nf), 1.0);
   tbb::parallel_for(0, nf, [&](int f) {
@@ -100,7 +99,6 @@ SectionScan scan_section(const Shell& shell, const InputSurfaceIndex& index) {
       for (const auto& [from, to] : half_pillars) c = std::min(c, n.dot((to - from).normalized()));
       transversal.emplace_back(c, t);
     }
-    fails[std::size_t(f)] = !ok;
     if (!ok) {
       out.min_cos[std::size_t(f)] = -1;  // some face in contact is not crossed transversally
       return;
@@ -113,7 +111,7 @@ SectionScan scan_section(const Shell& shell, const InputSurfaceIndex& index) {
       }
   });
   for (int f = 0; f < nf; ++f)
-    if (fails[std::size_t(f)]) out.failing.push_back(f);
+    if (out.min_cos[std::size_t(f)] < 0) out.failing.push_back(f);
   return out;
 }
 
@@ -194,7 +192,12 @@ ShellVerification verify_shell(const Shell& shell, const SurfaceMesh& input) {
       }
       r.intersecting_input_faces += hit;
       r.reference_self_intersections += reference.face_self_intersects(f);
-      r.reference_collapsed_faces += reference.face_area_ratio(f) < k_min_reference_area_ratio;
+      // Flattened far below the input face (the simplifier's bound, measured here on its own).
+      const Eigen::Vector3d a = input.V.row(input.F(f, 0)), b = input.V.row(input.F(f, 1)),
+                            c = input.V.row(input.F(f, 2));
+      const double area = (b - a).cross(c - a).norm(),
+                   copy = (tri[1].p - tri[0].p).cross(tri[2].p - tri[0].p).norm();
+      r.reference_collapsed_faces += area > 0 && copy < k_min_reference_area_ratio * area;
     }
     // Input face g as a triangle, with its corners at pinch points (singular shell vertices).
     auto input_face = [&](int g) {
