@@ -1318,6 +1318,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
   simplify_options.zoom = options.shell_zoom_rel * unit;
   simplify_options.zoom_passes = options.shell_zoom_passes;
   simplify_options.section_cos = options.shell_pillar_cos;
+  simplify_options.section_cos_relative = options.shell_pillar_cos_relative;
   simplify_options.min_reference_area_ratio = options.chain_min_area_ratio;
   simplify_options.frozen_input_vertices = frozen;
   simplify_options.frozen_input_vertices.resize(std::size_t(surface.num_vertices()), 0);
@@ -1508,6 +1509,8 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     stats.coarsen_pans = simplify_stats.pans;
     stats.coarsen_splits = simplify_stats.splits;
     stats.coarsen_chain_collapses = simplify_stats.chain_collapses;
+    stats.coarsen_relaxed_pillars = simplify_stats.relaxed_pillars;
+    stats.coarsen_min_section_bound = simplify_stats.min_section_bound;
     stats.snapped_vertices = simplify_stats.snapped_vertices;
     stats.chain_max_distance_rel = simplify_stats.chain_max_distance / unit;
     for (const auto& [name, pass] : simplify_stats.passes) {

@@ -178,7 +178,10 @@ struct CurvedMeshOptions {
   // prism covers makes at least this cosine with its half-pillars (0: the bare section
   // condition, under which a pillar may end tangent to an input face up to rounding and the
   // floating-point map stop being bijective; meshing/shell/README.md).
-  double shell_pillar_cos = 0.01;
+  double shell_pillar_cos = meshing::shell::k_section_cos;
+  // SimplifyOptions::section_cos_relative: where the input's shell already leans further than
+  // shell_pillar_cos from an input face (knife edges), this fraction of its own cosine instead.
+  double shell_pillar_cos_relative = meshing::shell::k_section_cos_relative;
   // SimplifyOptions::min_reference_area_ratio: a chain collapse may not flatten a face of the
   // reference copy below this fraction of its input area (0: only exactly degenerate faces are
   // refused, as before 2026-12-06; CGAL's part.off then lost vertex 18's round trip by 3.1e-3).
@@ -290,6 +293,9 @@ struct CurvedMeshStats {
   // (the smaller half-pillar per vertex) relative to the longest bbox edge.
   int coarsen_collapses = 0, coarsen_flips = 0, coarsen_rotations = 0, coarsen_zooms = 0,
       coarsen_pans = 0, coarsen_splits = 0, coarsen_chain_collapses = 0;
+  // SimplifyStats::relaxed_pillars and min_section_bound of the coarsening.
+  int coarsen_relaxed_pillars = 0;
+  double coarsen_min_section_bound = 0;
   // Input feature vertices inside coarse feature edges (snapped in the reference copy), and the
   // largest distance between one and its snapped point, relative to the longest bbox edge.
   int snapped_vertices = 0;

@@ -19,6 +19,13 @@
 
 namespace curvefem::meshing::shell {
 
+/// The coarse shell's projection distortion bound (SimplifyOptions::section_cos): bichon's
+/// distortion_bound, about 89.4°.
+inline constexpr double k_section_cos = 0.01;
+/// Where the starting shell leans further than that, the bound is this fraction of its own
+/// cosine (SimplifyOptions::section_cos_relative).
+inline constexpr double k_section_cos_relative = 0.5;
+
 struct Shell {
   Eigen::MatrixXd base, mid, top;  // #V × 3 each
   Eigen::MatrixXi F;               // #F × 3, same orientation as the input

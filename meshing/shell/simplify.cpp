@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -48,6 +49,9 @@ class ShellMesh : public TriMesh {
   Attribute<Eigen::Vector3d> top{*this, 0, Eigen::Vector3d::Zero()};
   Attribute<char> singular{*this, 0, 0};
   Attribute<int> input_vertex{*this, 0, -1};
+  // The distortion bound of the vertex's pillar where it is below section_cos
+  // (SimplifyOptions::section_cos_relative), else negative.
+  Attribute<double> lean_bound{*this, 0, -1.0};
   Attribute<std::vector<int>> track{*this, 2, {}};  // input faces touching the prism
   // Distance points located in the prism: input vertex x, or extra point x - #input V.
   Attribute<std::vector<int>> owned{*this, 2, {}};
@@ -120,6 +124,13 @@ class ShellMesh : public TriMesh {
     std::vector<int> path;  // input vertices inside the new edge, from w to u
   } pending;
   double section_cos = 0;
+  double pillar_bound(Id v) const { return lean_bound[v] < 0 ? section_cos : lean_bound[v]; }
+  // A new vertex between a and b (splits): the smaller of their bounds.
+  void inherit_bound(Id v, Id a, Id b) {
+    lean_bound.set(v, lean_bound[a] < 0   ? lean_bound[b]
+                      : lean_bound[b] < 0 ? lean_bound[a]
+                                          : std::min(lean_bound[a], lean_bound[b]));
+  }
   double min_reference_area_ratio = 0;
   double max_distance = 0;
   // Curved-aware bound (SimplifyOptions::curved_order): an input vertex not in `strict` may lie
@@ -508,7 +519,8 @@ class ShellMesh : public TriMesh {
   struct PrismShape {
     std::array<Eigen::Vector3d, 3> b, m, t;
     std::array<bool, 3> s;
-    Eigen::Vector3i ids;  // input vertices of the corners
+    std::array<double, 3> bound;  // the corners' distortion bounds (pillar_bound)
+    Eigen::Vector3i ids;          // input vertices of the corners
     std::vector<std::array<Eigen::Vector3d, 4>> tets;
   };
   PrismShape prism_shape(Id f) const {
@@ -519,6 +531,7 @@ class ShellMesh : public TriMesh {
       p.m[k] = mid[c[k]];
       p.t[k] = top[c[k]];
       p.s[k] = singular[c[k]];
+      p.bound[k] = pillar_bound(c[k]);
       p.ids[k] = input_vertex[c[k]];
     }
     const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
@@ -544,14 +557,15 @@ class ShellMesh : public TriMesh {
     const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
     // The cosine bound on each half-pillar (floating point, as verify_shell measures it), and
     // the exact sign on both, as the verifier checks it.
-    auto leans_within = [&](const Eigen::Vector3d& half) {
+    auto leans_within = [&](const Eigen::Vector3d& half, double bound) {
       const double d = n.dot(half);
-      return d > 0 && d * d >= section_cos * section_cos * n.squaredNorm() * half.squaredNorm();
+      return d > 0 && d * d >= bound * bound * n.squaredNorm() * half.squaredNorm();
     };
     bool seen = true;
     for (int k = 0; k < 3 && seen; ++k) {
       if (p.s[k]) continue;
-      seen = leans_within(p.m[k] - p.b[k]) && leans_within(p.t[k] - p.m[k]) &&
+      seen = leans_within(p.m[k] - p.b[k], p.bound[k]) &&
+             leans_within(p.t[k] - p.m[k], p.bound[k]) &&
              input->face_normal_dot_sign(x, p.b[k], p.m[k]) > 0 &&
              input->face_normal_dot_sign(x, p.m[k], p.t[k]) > 0;
     }
@@ -559,6 +573,12 @@ class ShellMesh : public TriMesh {
     for (const auto& q : p.tets)
       if (input->face_section_contact(x, q)) return false;
     return true;
+  }
+  // Is input face x in section contact with p (meets one of its split tets as section_ok asks)?
+  bool in_section_contact(const PrismShape& p, int x) const {
+    for (const auto& q : p.tets)
+      if (input->face_section_contact(x, q)) return true;
+    return false;
   }
   // The input faces at the input vertices f owns: each such vertex lies in a closed split tet of
   // f's prism (owned_place located it there with exact predicates), so its faces touch the prism.
@@ -953,6 +973,7 @@ class ShellMesh : public TriMesh {
     top.set(v, p + lt * d);
     base.set(v, p - lb * d);
     singular.set(v, 0);
+    inherit_bound(v, a, b);
     input_vertex.set(v, best);
     occupied[std::size_t(best)].store(1, std::memory_order_relaxed);
     return true;
@@ -1043,6 +1064,7 @@ class ShellMesh : public TriMesh {
           top.set(v, p + scale * lt * dir);
           base.set(v, p - scale * lb * dir);
           singular.set(v, 0);
+          inherit_bound(v, a, b);
           input_vertex.set(v, x);
           // The guards the invariants apply first, so that a refused choice tries the next one.
           if (max_mips > 0 && !shape_ok(r)) break;
@@ -1300,6 +1322,39 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     const std::vector<int> seed{shell.face_parent[std::size_t(f)]};
     m.prism_check(Id(f), touching, &seed);
     m.track.set(Id(f), touching);
+  }
+  stats.min_section_bound = options.section_cos;
+  if (options.section_cos > 0 && options.section_cos_relative > 0) {
+    // Each pillar's smallest cosine with the input faces in section contact with its prisms in
+    // the starting shell, where that is below the bound: a knife edge's pillar is as tangent to
+    // both sides as the edge's wedge makes it.
+    std::vector<double> own(std::size_t(nv), std::numeric_limits<double>::infinity());
+    for (int f = 0; f < nf; ++f) {
+      const auto& tr = m.track[Id(f)];
+      if (tr.empty()) continue;
+      const auto p = m.prism_shape(Id(f));
+      const auto& c = m.cell(Id(f));
+      for (int x : tr) {
+        const auto tri = index.face_triangle(x);
+        const Eigen::Vector3d n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized();
+        int contact = -1;  // unknown
+        for (int k = 0; k < 3; ++k) {
+          if (p.s[k]) continue;
+          const double ck = std::min(n.dot((p.m[k] - p.b[k]).normalized()),
+                                     n.dot((p.t[k] - p.m[k]).normalized()));
+          if (!(ck < options.section_cos) || !(ck < own[std::size_t(c[k])])) continue;
+          if (contact < 0) contact = m.in_section_contact(p, x) ? 1 : 0;
+          if (contact == 1) own[std::size_t(c[k])] = ck;
+        }
+      }
+    }
+    for (int v = 0; v < nv; ++v) {
+      if (!(own[std::size_t(v)] < options.section_cos)) continue;
+      const double b = std::max(0.0, options.section_cos_relative * own[std::size_t(v)]);
+      m.lean_bound.set(Id(v), b);
+      ++stats.relaxed_pillars;
+      stats.min_section_bound = std::min(stats.min_section_bound, b);
+    }
   }
   if (options.collapse_chains) {
     if (!(options.max_distance > 0))

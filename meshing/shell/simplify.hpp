@@ -46,7 +46,15 @@ struct SimplifyOptions {
   // may end up tangent to an input face up to rounding: a torus shell coarsened that way passed
   // every exact check, yet floating-point P sent 3 vertices 0.0093 away (meshing/shell/README.md).
   // 0.01 (about 89.4°) is bichon's distortion_bound; BPS uses 1e-3.
-  double section_cos = 0.01;
+  double section_cos = k_section_cos;
+  // A pillar of the starting shell that already leans further than that from an input face in
+  // section contact with its prisms (a knife edge's pillar: no direction crosses knife_disc's
+  // 0.5° wedge at 0.01 with both sides, its rim pillars make 0.0074) has this fraction of its
+  // smallest such cosine as its bound instead, kept through the operations (a split's new
+  // pillar takes the smaller of its ends'). The absolute bound refused every operation that let
+  // such a pillar cover one more face (knife_disc: 416 -> 526 coarse prisms), yet the fraction
+  // keeps each cosine as far from rounding as the input allows. 0: the absolute bound.
+  double section_cos_relative = k_section_cos_relative;
   // A chain collapse may not flatten a face of the reference copy below this fraction of its
   // input face's area (InputSurfaceIndex::face_area_ratio; k_min_reference_area_ratio). 0: only
   // exactly degenerate faces are refused.
@@ -212,6 +220,10 @@ struct SimplifyStats {
   int violating_points = 0;    // repair mode: strict points still beyond max_distance at the end
   int repair_passes = 0;       // repair mode: split passes run
   long replayed_refusals = 0;  // collapse refusals replayed (SimplifyOptions::replay_refusals)
+  // Pillars whose distortion bound is SimplifyOptions::section_cos_relative × the starting
+  // shell's cosine (below section_cos), and the smallest such bound (section_cos if none).
+  int relaxed_pillars = 0;
+  double min_section_bound = 0;
   double seconds = 0;
 };
 

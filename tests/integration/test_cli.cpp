@@ -276,6 +276,36 @@ TEST(Cli, ShellKeepsItsDistortionBoundAndRefusesATangentPillar) {
   EXPECT_LT(bounded["prisms"].get<int>(), 300);  // 1920 before coarsening
 }
 
+TEST(Cli, AKnifeEdgeMeshesWithItsPillarsHeldToHalfTheirOwnCosine) {
+  // knife_disc's rim is a 0.5° wedge: no pillar makes 0.01 with both sides (its pinch pillars
+  // start at 0.0074). Under the absolute bound the coarsening kept 1,030 coarse faces (478
+  // under the bare condition) and the min scaled Jacobian fell from 7.9e-4 to 1e-4; the rim's
+  // 64 pillars now keep half their own starting cosine, every other pillar 0.01.
+  const auto dir = test::scratch_dir("cli_mesh_knife_pillar_cos");
+  std::string out;
+  ASSERT_EQ(
+      test::run_command(cli() + " generate knife_disc -o " + (dir / "knife.obj").string(), &out), 0)
+      << out;
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + (dir / "knife.obj").string() +
+                                  " --order 3 --threads 1 -o " + (dir / "m").string(),
+                              &out),
+            0)
+      << out;
+  const auto r = read_json(dir / "m" / "report.json");
+  const auto& c = r["coarsening"];
+  EXPECT_EQ(c["pillar_cos_bound"].get<double>(), 0.01);
+  EXPECT_EQ(c["pillar_cos_relative"].get<double>(), 0.5);
+  EXPECT_EQ(c["pillar_cos_relaxed_pillars"].get<int>(), 64);
+  const double floor = c["min_pillar_cos_bound"].get<double>();
+  EXPECT_GT(floor, 0.003);
+  EXPECT_LT(floor, 0.004);
+  // verify_shell's own measure of the coarse shell, over every covered pair.
+  EXPECT_GE(r["shell_min_pillar_cos"].get<double>(), floor);
+  EXPECT_LT(r["coarse_faces"].get<int>(), 600);
+  EXPECT_EQ(r["valid"], true);
+  EXPECT_GT(r["min_scaled_jacobian"].get<double>(), 5e-4);
+}
+
 TEST(Cli, ShellRemeshSectionWritesSurfaceAndReport) {
   const auto dir = test::scratch_dir("cli_shell_remesh_section");
   io::write_surface(dir / "sphere.obj", make_icosphere(3), io::SurfaceFormat::obj);  // 1280 faces

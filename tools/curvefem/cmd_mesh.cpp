@@ -67,6 +67,7 @@ struct MeshArgs {
   double curved_min_area_ratio = meshing::curved::CurvedMeshOptions{}.curved_min_area_ratio;
   int shell_zoom_passes = meshing::curved::CurvedMeshOptions{}.shell_zoom_passes;
   double shell_pillar_cos = meshing::curved::CurvedMeshOptions{}.shell_pillar_cos;
+  double shell_pillar_cos_relative = meshing::curved::CurvedMeshOptions{}.shell_pillar_cos_relative;
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
@@ -286,6 +287,11 @@ void register_mesh(CLI::App& app) {
                   "makes at least this cosine with its pillars (default 0.01; 0: the bare "
                   "section condition)")
       ->check(CLI::Range(0.0, 0.5));
+  sub->add_option("--shell-pillar-cos-relative", args->shell_pillar_cos_relative,
+                  "where the input's own shell leans further than --shell-pillar-cos from an "
+                  "input face (a knife edge), the bound there is this fraction of its cosine "
+                  "(default 0.5; 0: the absolute bound everywhere)")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_flag("--no-recurve", args->no_recurve,
                 "keep the curving decided on the shell's slabs (no second try on the deeper slab "
                 "layer)");
@@ -357,6 +363,7 @@ void register_mesh(CLI::App& app) {
     options.curved_min_area_ratio = args->curved_min_area_ratio;
     options.shell_zoom_passes = args->shell_zoom_passes;
     options.shell_pillar_cos = args->shell_pillar_cos;
+    options.shell_pillar_cos_relative = args->shell_pillar_cos_relative;
     options.exterior_padding = args->padding;
     std::string feature_source = "none";
     if (!args->features.empty()) {

@@ -59,6 +59,7 @@ struct ShellArgs {
   double remesh_section = 0;  // target edge relative to the longest bbox edge; 0: no remeshing
   double zoom = 0.1;
   double pillar_cos = sh::SimplifyOptions{}.section_cos;
+  double pillar_cos_relative = sh::SimplifyOptions{}.section_cos_relative;
   int displacement_level = 0;  // --displacement-map L; 0: none
   int cages = 0;               // --cages K; 0: none
   std::string texture;         // --texture TILE; empty: none
@@ -174,6 +175,11 @@ void register_shell(CLI::App& app) {
                   "distortion bound of simplification: each input face a new prism covers makes "
                   "at least this cosine with its pillars (0: the bare section condition)")
       ->check(CLI::Range(0.0, 0.5));
+  sub->add_option("--pillar-cos-relative", args->pillar_cos_relative,
+                  "where the input's own shell leans further than --pillar-cos from an input "
+                  "face (a knife edge), the bound there is this fraction of its cosine (0: the "
+                  "absolute bound everywhere)")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--displacement-map", args->displacement_level,
                   "bake a displacement map of this level (samples per coarse face edge) through "
                   "P: writes displacement_map.txt, cage.obj and the rebuilt displaced.obj")
@@ -250,6 +256,7 @@ void register_shell(CLI::App& app) {
       so.threads = args->global.threads > 0 ? args->global.threads : 2;
       so.zoom = args->zoom * bbox_longest_edge(input.V);
       so.section_cos = args->pillar_cos;
+      so.section_cos_relative = args->pillar_cos_relative;
       shell = sh::simplify_shell(shell, surface, so, simplify);
       stats.stage_seconds.emplace_back("simplify", simplify.seconds);
     }
@@ -353,6 +360,9 @@ void register_shell(CLI::App& app) {
         {"non_section_prisms", check.non_section_faces},
         {"min_pillar_cos", check.min_pillar_cos},
         {"pillar_cos_bound", args->no_simplify ? 0.0 : args->pillar_cos},
+        {"pillar_cos_relative", args->no_simplify ? 0.0 : args->pillar_cos_relative},
+        {"pillar_cos_relaxed_pillars", simplify.relaxed_pillars},
+        {"min_pillar_cos_bound", args->no_simplify ? 0.0 : simplify.min_section_bound},
         {"roundtrip_max_error_rel", check.roundtrip_max_error_rel},
         {"roundtrip_failures", check.roundtrip_failures},
         {"time_s", stages},
