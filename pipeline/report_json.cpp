@@ -1,6 +1,7 @@
 #include "pipeline/report_json.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace curvefem::pipeline {
 
@@ -291,6 +292,24 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
           {"boundary_min_area_ratio", v.min_boundary_area_ratio},
           {"boundary_faces_folded", v.boundary_faces_folded},
           {"boundary_faces_area_ratio_below_0.1", v.boundary_faces_distorted},
+          {"boundary_limits",
+           {{"what",
+             "bounds for straight tets on the boundary's corner triangles "
+             "(meshing/curved/boundary_limits.hpp)"},
+            {"mips_floor", std::isfinite(v.boundary_limits.mips_floor)
+                               ? nlohmann::ordered_json(v.boundary_limits.mips_floor)
+                               : nlohmann::ordered_json(nullptr)},
+            {"mips_floor_face", v.boundary_limits.mips_floor_face},
+            {"mips_floor_at",
+             {v.boundary_limits.mips_floor_at.x(), v.boundary_limits.mips_floor_at.y(),
+              v.boundary_limits.mips_floor_at.z()}},
+            {"faces_mips_floor_above_1e4", v.boundary_limits.faces_mips_floor_above_1e4},
+            {"sj_ceiling", v.boundary_limits.sj_ceiling},
+            {"faces_sj_ceiling_below_0.01", v.boundary_limits.faces_sj_ceiling_below_1e2},
+            {"faces_sj_ceiling_below_0.001", v.boundary_limits.faces_sj_ceiling_below_1e3},
+            {"min_dihedral_deg", v.boundary_limits.min_dihedral_deg},
+            {"edges_sj_ceiling_below_0.01", v.boundary_limits.edges_sj_ceiling_below_1e2},
+            {"edges_sj_ceiling_below_0.001", v.boundary_limits.edges_sj_ceiling_below_1e3}}},
           {"unmapped_vertices", v.unmapped_vertices},
           {"max_distance_rel", v.max_distance_rel},
           {"max_distance_vertex", v.max_distance_vertex},

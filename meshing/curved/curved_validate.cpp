@@ -156,16 +156,28 @@ CurvedValidation validate_curved_mesh(const LagrangeMesh& mesh, const BoundaryMa
     const bool has_tags = mesh.cell_tags.size() == nt;
     for (int c = 0; c < nt && has_tags; ++c) r.exterior |= mesh.cell_tags[c] >= 3;
     std::map<std::array<int, 3>, int> count, count_all;
-    static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    // Outward for a positively oriented tet (corner 0 at the origin of its frame).
+    static const int faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    std::map<std::array<int, 3>, std::array<int, 3>> outward;
     for (int c = 0; c < nt; ++c)
       for (const auto& fc : faces) {
-        const auto f = sorted3(mesh.cells(c, fc[0]), mesh.cells(c, fc[1]), mesh.cells(c, fc[2]));
+        const std::array<int, 3> t{mesh.cells(c, fc[0]), mesh.cells(c, fc[1]),
+                                   mesh.cells(c, fc[2])};
+        const auto f = sorted3(t[0], t[1], t[2]);
         ++count_all[f];
-        if (!r.exterior || mesh.cell_tags[c] <= 2) ++count[f];
+        if (!r.exterior || mesh.cell_tags[c] <= 2) {
+          ++count[f];
+          outward[f] = t;
+        }
       }
     std::set<std::array<int, 3>> volume_boundary;
+    std::vector<std::array<int, 3>> oriented_boundary;
     for (const auto& [f, n] : count)
-      if (n == 1) volume_boundary.insert(f);
+      if (n == 1) {
+        volume_boundary.insert(f);
+        oriented_boundary.push_back(outward.at(f));
+      }
+    r.boundary_limits = boundary_limits(mesh.nodes, oriented_boundary);
     if (r.exterior) {
       const auto [lo, hi] = vertex_bounding_box(mesh);
       for (const auto& [f, n] : count_all) {

@@ -27,6 +27,7 @@
 #include "meshing/core/boundary_map.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/surface_mesh.hpp"
+#include "meshing/curved/boundary_limits.hpp"
 
 namespace curvefem::meshing::curved {
 
@@ -60,6 +61,10 @@ struct CurvedValidation {
   // flat boundary tets); the worst, the folded ones and those below 0.1.
   double min_boundary_area_ratio = 1;
   int boundary_faces_folded = 0, boundary_faces_distorted = 0;
+  // Diagnostic, not part of `valid`: what the boundary's straight corner triangles allow any
+  // straight tet on them (boundary_limits.hpp): a floor for the max MIPS, a ceiling for the min
+  // scaled Jacobian. With an exterior, the curved surface (the inside region's boundary).
+  BoundaryLimits boundary_limits;
   int unmapped_vertices = 0;
   double max_distance_rel = 0;
   int max_distance_vertex = -1;

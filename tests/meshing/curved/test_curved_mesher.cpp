@@ -104,9 +104,17 @@ TEST(CurvedMesher, SphereIsValidAtEveryOrder) {
     EXPECT_LT(r.stats.coarse_faces, 1280 / 2);
     EXPECT_EQ(r.mesh.mesh.num_cells(), r.stats.slab_tets + r.stats.interior_tets);
     const double mean = mean_distance_rel(sphere, r.mesh.map);
+    // The boundary's bounds cover every boundary triangle and edge once.
+    const cv::BoundaryLimits& b = r.check.boundary_limits;
+    EXPECT_EQ(b.faces, r.stats.coarse_faces);
+    EXPECT_EQ(2 * b.edges, 3 * b.faces);
+    EXPECT_GT(b.mips_floor, 0.3);  // above an equilateral face's 1/3
     if (k == 1) {
       linear_mean = mean;
       EXPECT_EQ(r.stats.faces_fully_curved, r.stats.coarse_faces);  // nothing to blend
+      // Straight tets: the validator's own measures respect the boundary's bounds.
+      EXPECT_GE(r.check.max_mips, b.mips_floor);
+      EXPECT_LE(r.check.min_scaled_jacobian, b.sj_ceiling);
     } else {
       EXPECT_GT(r.stats.faces_fully_curved, r.stats.coarse_faces / 2);
       EXPECT_LT(mean, 0.5 * linear_mean) << "curving must bring the boundary closer";
