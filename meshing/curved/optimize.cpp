@@ -443,7 +443,15 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     std::vector<Eigen::MatrixXd> nodes_of(cells.size(), Eigen::MatrixXd(mesh.cells.cols(), 3));
     // by_mips: no cell's scaled Jacobian at or below sj_floor; the value is minus the worst MIPS
     // (from the nodes value() gathered).
-    const double sj_floor = std::min(cells.front().first, options.worst_scaled_jacobian);
+    // (by_mips, a star whose worst cell is above the goal's 1e4: the slack below.)
+    double star_max_mips = 0;
+    if (by_mips)
+      for (const auto& [q, c] : cells) star_max_mips = std::max(star_max_mips, mips_of(c));
+    const double sj_keep = std::min(cells.front().first, options.worst_scaled_jacobian);
+    const double sj_floor = by_mips && star_max_mips > options.worst_mips_slack_above
+                                ? std::max((1 - options.worst_mips_sj_slack) * sj_keep,
+                                           std::min(cells.front().first, 2e-3))
+                                : sj_keep;
     auto mips_value = [&](double bar) {
       double worst = 0;
       for (std::size_t i = 0; i < cells.size(); ++i) {

@@ -72,6 +72,7 @@ struct MeshArgs {
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
   double optimize_worst_mips = meshing::curved::OptimizeOptions{}.worst_mips;
+  double optimize_worst_mips_sj_slack = meshing::curved::OptimizeOptions{}.worst_mips_sj_slack;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
   double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
   double optimize_edit_locked_mips = meshing::curved::CurvedEditOptions{}.locked_mips;
@@ -171,8 +172,15 @@ void register_mesh(CLI::App& app) {
   sub->add_option("--optimize-worst-mips", args->optimize_worst_mips,
                   "then the same sweeps lower the worst curved MIPS of stars holding a cell "
                   "above M, at most 100 stars a sweep, keeping their scaled Jacobians above "
-                  "min(before, 0.02) (default 2000; 0: off)")
+                  "min(before, 0.02) less the slack below (default 2000; 0: off)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option(
+         "--optimize-worst-mips-sj-slack", args->optimize_worst_mips_sj_slack,
+         "in that search, the fraction by which a star's smallest scaled Jacobian may "
+         "fall where its worst cell is above 1e4, never below the smaller of 0.002 and its "
+         "value before (default 0.1; 0: it "
+         "may not fall)")
+      ->check(CLI::Range(0.0, 0.5));
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
                   "node phase: move only nodes of stars with a sample whose "
                   "conformal AMIPS energy (1 for a regular tet) exceeds E (default 10)")
@@ -334,6 +342,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.node_sweeps = args->optimize_node_sweeps;
     options.optimize.worst_sweeps = args->optimize_worst_sweeps;
     options.optimize.worst_mips = args->optimize_worst_mips;
+    options.optimize.worst_mips_sj_slack = args->optimize_worst_mips_sj_slack;
     options.optimize.node_energy = args->optimize_node_energy;
     options.optimize.edits.passes = args->optimize_edit_passes;
     options.optimize.edits.energy = args->optimize_edit_energy;
