@@ -441,14 +441,17 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // 1.8 million trials rejected that way, the same mesh.
     std::vector<double> trial_sj(cells.size()), trial_mips(cells.size());
     std::vector<Eigen::MatrixXd> nodes_of(cells.size(), Eigen::MatrixXd(mesh.cells.cols(), 3));
-    // by_mips: no cell's scaled Jacobian at or below sj_floor; the value is minus the worst MIPS
-    // (from the nodes value() gathered).
-    // (by_mips, a star whose worst cell is above the goal's 1e4: the slack below.)
-    double star_max_mips = 0;
-    if (by_mips)
-      for (const auto& [q, c] : cells) star_max_mips = std::max(star_max_mips, mips_of(c));
+    // (At the start position: the search below moves the nodes.)
+    double mips_sum_before = 0, mips_max_before = 0;
+    for (const auto& [q, c] : cells) {
+      mips_sum_before += mips_of(c);
+      mips_max_before = std::max(mips_max_before, mips_of(c));
+    }
+    // by_mips: no cell's scaled Jacobian at or below sj_floor (with the slack where the star's
+    // worst cell is above worst_mips_slack_above); the value is minus the worst MIPS (from the
+    // nodes value() gathered).
     const double sj_keep = std::min(cells.front().first, options.worst_scaled_jacobian);
-    const double sj_floor = by_mips && star_max_mips > options.worst_mips_slack_above
+    const double sj_floor = by_mips && mips_max_before > options.worst_mips_slack_above
                                 ? std::max((1 - options.worst_mips_sj_slack) * sj_keep,
                                            std::min(cells.front().first, 2e-3))
                                 : sj_keep;
@@ -507,12 +510,6 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
             Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1) / std::sqrt(3.0);
       return d;
     }();
-    // (At the start position: the search below moves the nodes.)
-    double mips_sum_before = 0, mips_max_before = 0;
-    for (const auto& [q, c] : cells) {
-      mips_sum_before += mips_of(c);
-      mips_max_before = std::max(mips_max_before, mips_of(c));
-    }
     const double before = by_mips ? -mips_max_before : cells.front().first;
     double best = before;
     Eigen::Vector3d delta = Eigen::Vector3d::Zero();

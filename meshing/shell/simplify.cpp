@@ -569,12 +569,9 @@ class ShellMesh : public TriMesh {
              input->face_normal_dot_sign(x, p.b[k], p.m[k]) > 0 &&
              input->face_normal_dot_sign(x, p.m[k], p.t[k]) > 0;
     }
-    if (seen) return true;
-    for (const auto& q : p.tets)
-      if (input->face_section_contact(x, q)) return false;
-    return true;
+    return seen || !in_section_contact(p, x);
   }
-  // Is input face x in section contact with p (meets one of its split tets as section_ok asks)?
+  // Is input face x in section contact with p (meets one of its split tets)?
   bool in_section_contact(const PrismShape& p, int x) const {
     for (const auto& q : p.tets)
       if (input->face_section_contact(x, q)) return true;
