@@ -305,6 +305,7 @@ nlohmann::ordered_json curved_validation_json(const meshing::curved::CurvedValid
               v.boundary_limits.mips_floor_at.z()}},
             {"faces_mips_floor_above_1e4", v.boundary_limits.faces_mips_floor_above_1e4},
             {"sj_ceiling", v.boundary_limits.sj_ceiling},
+            {"sj_ceiling_face", v.boundary_limits.sj_ceiling_face},
             {"faces_sj_ceiling_below_0.01", v.boundary_limits.faces_sj_ceiling_below_1e2},
             {"faces_sj_ceiling_below_0.001", v.boundary_limits.faces_sj_ceiling_below_1e3},
             {"min_dihedral_deg", v.boundary_limits.min_dihedral_deg},

@@ -84,7 +84,6 @@ BoundaryLimits boundary_limits(const Eigen::MatrixXd& X,
     r.edges_sj_ceiling_below_1e2 += ceiling < 1e-2;
     r.edges_sj_ceiling_below_1e3 += ceiling < 1e-3;
   }
-  if (r.faces == 0) r.mips_floor_face = -1;
   return r;
 }
 
