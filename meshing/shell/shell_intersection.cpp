@@ -250,10 +250,61 @@ int simplified_column(const ExactPoint& q1, const ExactPoint& q0,
   out = {&b_store, &a_store};
   return sign;
 }
+// A floating-point filter with snapped arguments: the determinant of the rounded points, each
+// snapped one recomputed here as a + s (b − a) (for s in [0, 1] every coordinate is then within
+// 4u (|a|∞ + |b|∞) of the exact point, u the unit roundoff: three roundings of terms bounded
+// by |a| + |b|), decided when it exceeds the evaluation bound of sign_det's static filter plus
+// a bound on what moving the points to their exact positions can change: a column c moves by
+// at most √3 e_c in length (e_c the sum of its two points' coordinate errors), and by
+// multilinearity and Hadamard's inequality |det(c + dc) − det(c)| is at most the sum over the
+// non-empty subsets S of the columns of the products of |dc| over S and |c| off S. Returns 2
+// where it cannot decide (near-degenerate configurations, e.g. a point snapped onto the line
+// of the others, which the exact stages below handle).
+int filtered_snapped_sign(const std::array<const ExactPoint*, 6>& q) {
+  constexpr double u = std::numeric_limits<double>::epsilon() / 2;
+  std::array<V3, 6> p;
+  std::array<double, 6> e{};
+  for (std::size_t i = 0; i < 6; ++i) {
+    const ExactPoint& x = *q[i];
+    if (!x.snapped) {
+      p[i] = x.p;
+      continue;
+    }
+    if (!(x.s >= 0 && x.s <= 1)) return 2;
+    p[i] = x.a + x.s * (x.b - x.a);
+    e[i] = 4 * u * (x.a.cwiseAbs().maxCoeff() + x.b.cwiseAbs().maxCoeff());
+  }
+  const V3 cu = p[0] - p[1], cv = p[2] - p[3], cw = p[4] - p[5];
+  const double a = cv.y() * cw.z() - cv.z() * cw.y(), b = cv.x() * cw.z() - cv.z() * cw.x(),
+               c = cv.x() * cw.y() - cv.y() * cw.x();
+  const double det = cu.x() * a - cu.y() * b + cu.z() * c;
+  const double permanent =
+      std::abs(cu.x()) * (std::abs(cv.y() * cw.z()) + std::abs(cv.z() * cw.y())) +
+      std::abs(cu.y()) * (std::abs(cv.x() * cw.z()) + std::abs(cv.z() * cw.x())) +
+      std::abs(cu.z()) * (std::abs(cv.x() * cw.y()) + std::abs(cv.y() * cw.x()));
+  if (!(permanent > 1e-250 && permanent < 1e250)) return 2;
+  // Column lengths and their possible changes, rounded up generously (each computed value is
+  // within a few u of its exact one).
+  constexpr double up = 1 + 1e-10;
+  const double nu = cu.norm() * up, nv = cv.norm() * up, nw = cw.norm() * up;
+  const double du = std::sqrt(3.0) * (e[0] + e[1]) * up, dv = std::sqrt(3.0) * (e[2] + e[3]) * up,
+               dw = std::sqrt(3.0) * (e[4] + e[5]) * up;
+  const double moved = (du * nv * nw + nu * dv * nw + nu * nv * dw + du * dv * nw + du * nv * dw +
+                        nu * dv * dw + du * dv * dw) *
+                       up;
+  // The rounded differences of sign_det's filter: their error is inside its bound, whose
+  // permanent is taken of the rounded columns, as there.
+  const double bound = (7.0 + 56.0 * u) * u * permanent * up + moved;
+  if (!(bound < 1e250)) return 2;
+  if (det > bound) return 1;
+  if (det < -bound) return -1;
+  return 2;
+}
 int sign_det(const ExactPoint& u1, const ExactPoint& u0, const ExactPoint& v1, const ExactPoint& v0,
              const ExactPoint& w1, const ExactPoint& w0) {
   if (!u1.snapped && !u0.snapped && !v1.snapped && !v0.snapped && !w1.snapped && !w0.snapped)
     return sign_det(u1.p, u0.p, v1.p, v0.p, w1.p, w0.p);
+  if (const int s = filtered_snapped_sign({&u1, &u0, &v1, &v0, &w1, &w0}); s != 2) return s;
   {
     std::array<const ExactPoint*, 6> q{&u1, &u0, &v1, &v0, &w1, &w0};
     std::array<ExactPoint, 6> store;
@@ -488,6 +539,38 @@ bool triangle_meets_open_facet(const std::array<V3, 3>& t, const std::array<V3, 
 bool triangle_section_contact(const std::array<V3, 3>& t, const std::array<V3, 4>& T) {
   return section_contact(t, T);
 }
+// The orientation of each corner of T against its opposite facet (k_tet_facets order): the side
+// a point of the closed tet is on, or 0 for all four when T is degenerate.
+std::array<int, 4> tet_sides(const std::array<V3, 4>& T) {
+  std::array<int, 4> side{};
+  for (std::size_t j = 0; j < 4; ++j) {
+    const auto& f = k_tet_facets[j];
+    const V3& a = T[std::size_t(f[0])];
+    side[j] = sign_det(T[std::size_t(f[1])], a, T[std::size_t(f[2])], a, T[std::size_t(f[3])], a);
+    if (side[j] == 0) return {0, 0, 0, 0};
+  }
+  return side;
+}
+// Does a corner of tri lie in the closed tet T (sides: tet_sides(T))? Exact; false for a
+// degenerate T. A sufficient condition for meets_tet<true>, far cheaper where it holds: a few
+// orientations of one point instead of the separating-plane search, which must try every
+// candidate plane before it can answer "meets" (the common answer in faces_touching_tets, whose
+// candidates mostly lie in the prism).
+bool corner_in_closed_tet(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& T,
+                          const std::array<int, 4>& side) {
+  if (side[0] == 0) return false;
+  for (const ExactPoint& q : tri) {
+    bool inside = true;
+    for (std::size_t j = 0; j < 4 && inside; ++j) {
+      const auto& f = k_tet_facets[j];
+      const V3& a = T[std::size_t(f[0])];
+      const int s = sdet(T[std::size_t(f[1])], a, T[std::size_t(f[2])], a, q, a);
+      inside = s == 0 || s == side[j];
+    }
+    if (inside) return true;
+  }
+  return false;
+}
 bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::array<V3, 4>& tet) {
   // A corner that is a tet corner touches the closed tet (the coarse corners of a chain are
   // input vertices, so the faces around them share corners with their prisms' tets).
@@ -495,7 +578,7 @@ bool exact_triangle_meets_tet(const std::array<ExactPoint, 3>& tri, const std::a
     if (!q.snapped)
       for (const V3& c : tet)
         if (q.p == c) return true;
-  return meets_tet<true>(tri, tet);
+  return corner_in_closed_tet(tri, tet, tet_sides(tet)) || meets_tet<true>(tri, tet);
 }
 bool exact_triangles_meet(const std::array<ExactPoint, 3>& a, const std::array<V3, 3>& b) {
   return triangles_meet_closed(a, b);
@@ -1153,14 +1236,24 @@ std::vector<int> InputSurfaceIndex::faces_touching_tets(
   std::vector<int> candidates;
   BoxOverlapTraits traits{&m_impl->triangles, &m_impl->boxes, &candidates};
   m_impl->tree.traversal(all, traits);
-  for (int f : m_impl->moved_near(all)) {
+  // Faces of the reference copy with a snapped corner: exact tests on their exact corners. A
+  // corner inside one of the tets is looked for first, in all of them (most such faces lie in
+  // the prism), before the complete test tet by tet.
+  const std::vector<int> moved = m_impl->moved_near(all);
+  std::vector<std::array<int, 4>> sides;
+  if (!moved.empty()) {
+    sides.reserve(tets.size());
+    for (const auto& t : tets) sides.push_back(tet_sides(t));
+  }
+  for (int f : moved) {
     const CGAL::Bbox_3 fb = m_impl->face_box(f);
     const auto tri = m_impl->exact_face(f);
-    for (std::size_t i = 0; i < T.size(); ++i)
-      if (CGAL::do_overlap(fb, tb[i]) && exact_triangle_meets_tet(tri, tets[i])) {
-        out.push_back(f);
-        break;
-      }
+    bool meets = false;
+    for (std::size_t i = 0; i < T.size() && !meets; ++i)
+      meets = CGAL::do_overlap(fb, tb[i]) && corner_in_closed_tet(tri, tets[i], sides[i]);
+    for (std::size_t i = 0; i < T.size() && !meets; ++i)
+      meets = CGAL::do_overlap(fb, tb[i]) && meets_tet<true>(tri, tets[i]);
+    if (meets) out.push_back(f);
   }
   for (int f : known)
     if (!m_impl->is_moved(f)) out.push_back(f);

@@ -449,6 +449,58 @@ TEST(SnappedPredicates, SnappedPointsOfOneSegmentMatchExactRationalReference) {
       same_segment_faces, degen, closed, open, zero_dots, pairs.meet, pairs.miss);
 }
 
+// The floating-point filter in front of the exact stages (sign_det with snapped arguments) must
+// never decide a sign the exact point does not have: real coordinates far from the origin (where
+// a snapped point's rounding is largest against the triangle's size), segments of every length,
+// and the end `to` of the tested direction placed within a few units of rounding of the exact
+// triangle's plane, on either side, so that the rounded and the exact configurations disagree
+// in sign on a share of the trials.
+TEST(SnappedPredicates, SnappedPointsNearAPlaneAtRealScalesMatchExactRationalReference) {
+  std::mt19937 rng(977);
+  std::uniform_real_distribution<double> unit(-1, 1), s01(0, 1);
+  int positive = 0, negative = 0, zero = 0, rounding_flips = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double offset = std::pow(10.0, double(rng() % 7)),
+                 size = std::pow(10.0, -double(rng() % 7));
+    const Vector3d centre = offset * Vector3d(unit(rng), unit(rng), unit(rng));
+    auto near = [&] { return Vector3d(centre + size * Vector3d(unit(rng), unit(rng), unit(rng))); };
+    auto snapped = [&] {
+      const Vector3d a = near(), b = near();
+      return sh::ExactPoint::on_segment(a, b, rng() % 8 == 0 ? 0.5 : s01(rng));
+    };
+    ExactTri t;
+    for (auto& q : t) q = rng() % 3 == 0 ? sh::ExactPoint(near()) : snapped();
+    const std::array<EP, 3> et = exact(t);
+    if (degenerate(et)) continue;
+    // `to`: the rounded centroid moved along the rounded normal by a multiple of the rounding
+    // unit, often not at all.
+    const Vector3d p0 = t[0].p, p1 = t[1].p, p2 = t[2].p;
+    const Vector3d n = (p1 - p0).cross(p2 - p0).normalized();
+    const double ulp =
+        std::numeric_limits<double>::epsilon() * (centre.cwiseAbs().maxCoeff() + size);
+    const int k = int(rng() % 9) - 4;
+    const Vector3d to = (p0 + p1 + p2) / 3 + double(k) * ulp * n;
+    const Vector3d from = rng() % 2 ? p0 : Vector3d(near());
+    const int expected = normal_dot_sign_exact(et, exact(from), exact(to));
+    ASSERT_EQ(sh::exact_normal_dot_sign(t, from, to), expected)
+        << "trial " << trial << " offset " << offset << " size " << size << " k " << k;
+    // The sign the rounded corners alone give (CGAL's exact orientation on them).
+    const int rounded_sign = int(CGAL::orientation(inexact(p0), inexact(p1), inexact(p2),
+                                                   inexact(Vector3d(p0 + to - from))));
+    rounding_flips += from == p0 && rounded_sign != expected;
+    positive += expected > 0;
+    negative += expected < 0;
+    zero += expected == 0;
+  }
+  // Both signs often, and the rounded corners alone wrong on some trials (the filter must not
+  // decide those).
+  EXPECT_GT(positive, 3000);
+  EXPECT_GT(negative, 3000);
+  EXPECT_GT(rounding_flips, 50);
+  std::printf("positive %d, negative %d, zero %d, rounded corners giving another sign %d\n",
+              positive, negative, zero, rounding_flips);
+}
+
 // ---------------------------------------------------------------- a snapped point on a tet edge
 
 namespace {
