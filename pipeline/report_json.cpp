@@ -212,6 +212,7 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
         {"splits", s.edits.splits},
         {"attempted", s.edits.attempted},
         {"replayed", s.edits.replayed},
+        {"energy_prechecked", s.edits.energy_prechecked},
         {"rejected",
          {{"certificate", s.edits.rejected_certificate},
           {"energy", s.edits.rejected_energy},

@@ -95,6 +95,7 @@ class CurvedEditMesh : public TetMesh {
   // engine refused for its topology (the link condition of v w, or no cell left) read only the
   // cells around v: it is replayed the same way (`remember_topology`).
   bool replay = false;
+  bool precheck = true;     // CurvedEditOptions::precheck_collapse_energy
   bool collapsing = false;  // the operation under way is a collapse
   struct Refusal {
     bool certificate = false;  // counted as rejected_certificate (else rejected_energy)
@@ -115,7 +116,7 @@ class CurvedEditMesh : public TetMesh {
     collapsing = true;
     if (vertex_fixed[t.vid]) return false;
     const Refusal* x = replay ? memo.replay(t.vid, other_vertex(t)) : nullptr;
-    if (!x) return !collapse_energy_refused(t.vid, other_vertex(t));
+    if (!x) return !(precheck && collapse_energy_refused(t.vid, other_vertex(t)));
     if (x->topology) {
       ++stats->rejected_topology;  // (the engine counts this refusal as its user's)
       return false;
@@ -150,6 +151,7 @@ class CurvedEditMesh : public TetMesh {
       if (!(cell_energy(k, X) < before * (1.0 - 1e-9))) {
         ++stats->attempted;
         ++stats->rejected_energy;
+        ++stats->energy_prechecked;
         if (replay) memo.remember(v, w, Refusal{false});
         return true;
       }
@@ -478,6 +480,7 @@ void accumulate(CurvedEditStats& total, const CurvedEditStats& next) {
   total.rejected_energy += next.rejected_energy;
   total.rejected_topology += next.rejected_topology;
   total.rejected_locked += next.rejected_locked;
+  total.energy_prechecked += next.energy_prechecked;
   total.cells_after = next.cells_after;
   total.targets_after = next.targets_after;
   total.max_energy_after = next.max_energy_after;
@@ -524,6 +527,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   m.mips_guard = options.mips_guard;
   m.locked_mips = options.locked_mips;
   m.replay = options.replay_refusals;
+  m.precheck = options.precheck_collapse_energy;
   m.initialize(node_of_vertex.size(), cells);
   m.corner_node = node_of_vertex;
   m.pos.resize(std::size_t(mesh.num_nodes()));

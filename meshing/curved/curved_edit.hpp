@@ -70,6 +70,11 @@ struct CurvedEditOptions {
   // A refused collapse is replayed while none of the cells it read changed (the same result,
   // fewer checks; curved_edit.cpp CurvedEditMesh::replay); false runs every check.
   bool replay_refusals = true;
+  // A collapse's energy check (the first check, which most collapses fail) runs before the
+  // editing engine carries the collapse out, on the same new cells built by the same code, so
+  // the link condition and the engine's replacement and rollback are skipped where it refuses;
+  // false runs it after (the same meshes; kept to test that).
+  bool precheck_collapse_energy = true;
   // At most this share of the cells at the start of a pass is split in that pass.
   double max_split_share = 0.2;
 };
@@ -85,6 +90,9 @@ struct CurvedEditStats {
   // Refused collapses replayed, counted again in rejected_* (and in attempted, except those
   // refused for their topology, which the engine refuses before the checks).
   long long replayed = 0;
+  // Collapses refused by their energy before the engine carried them out
+  // (CurvedEditOptions::precheck_collapse_energy), counted in attempted and rejected_energy too.
+  long long energy_prechecked = 0;
   int cells_before = 0, cells_after = 0;
   int targets_before = 0, targets_after = 0;  // cells above `energy`
   double max_energy_before = 0, max_energy_after = 0;

@@ -118,6 +118,9 @@ struct SimplifyOptions {
   // against the snapped faces (their verdicts on the others stand). true: every such prism in
   // full, as before; the same result, slower (kept to test that).
   bool chain_full_recheck = false;
+  // A chain collapse finds the live prisms near the faces it snaps through a uniform grid over
+  // the prisms' boxes; false tests every live prism's box (the same prisms; kept to test that).
+  bool chain_grid = true;
   // >= 2 (needs max_distance): the curved-aware bound. An input vertex not marked in
   // strict_input_vertices may lie up to relaxed_distance (>= max_distance) from the linear middle
   // triangle, provided every new prism owning such a vertex passes within curved_distance
@@ -220,6 +223,9 @@ struct SimplifyStats {
   int violating_points = 0;    // repair mode: strict points still beyond max_distance at the end
   int repair_passes = 0;       // repair mode: split passes run
   long replayed_refusals = 0;  // collapse refusals replayed (SimplifyOptions::replay_refusals)
+  // Chain collapses: live prisms whose boxes were tested against the snapped faces, and the
+  // live prisms there were (SimplifyOptions::chain_grid), summed over the attempts.
+  long long chain_prisms_tested = 0, chain_prisms_live = 0;
   // Pillars whose distortion bound is SimplifyOptions::section_cos_relative × the starting
   // shell's cosine (below section_cos), and the smallest such bound (section_cos if none).
   int relaxed_pillars = 0;

@@ -518,6 +518,33 @@ TEST(CurvedEdit, ReplayedRefusalsGiveTheSameMesh) {
   EXPECT_EQ(a.mesh.nodes, b.mesh.nodes);
 }
 
+TEST(CurvedEdit, TheCollapseEnergyCheckBeforeTheEngineGivesTheSameMesh) {
+  // The energy check of a collapse run before the editing engine carries it out must refuse
+  // exactly the collapses the same check refuses after it: same mesh, same operations.
+  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  for (int k : {2, 3}) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    cv::CurvedMeshOptions o;
+    o.order = k;
+    o.curved_coarsening = false;
+    o.optimize.edits.passes = 2;
+    o.optimize.edits.energy = 1.5;
+    cv::CurvedMeshStats before, after;
+    const cv::CurvedMesh a = cv::build_curved_mesh(sphere, o, before);
+    o.optimize.edits.precheck_collapse_energy = false;
+    const cv::CurvedMesh b = cv::build_curved_mesh(sphere, o, after);
+    const cv::CurvedEditStats &x = before.optimize.edits, &y = after.optimize.edits;
+    EXPECT_GT(x.energy_prechecked, 100);
+    EXPECT_EQ(y.energy_prechecked, 0);
+    EXPECT_GT(x.collapses, 0);
+    EXPECT_EQ(x.collapses, y.collapses);
+    EXPECT_EQ(x.flips, y.flips);
+    EXPECT_EQ(x.rejected_certificate, y.rejected_certificate);
+    EXPECT_EQ(a.mesh.cells, b.mesh.cells);
+    EXPECT_EQ(a.mesh.nodes, b.mesh.nodes);
+  }
+}
+
 TEST(Optimize, TheWorstCellSearchLiftsACornerOffABoundaryFace) {
   // The centre almost on the face x + y + z = 1: the tet on that face is a sliver.
   const Eigen::Vector3d near_face(0.3, 0.33, 0.355);

@@ -56,7 +56,7 @@ struct Coarse {
   sh::SimplifyStats stats;
 };
 Coarse coarsen(const SurfaceMesh& m, const std::vector<std::array<int, 2>>& features, bool chains,
-               double eps_rel, bool full_recheck = false) {
+               double eps_rel, bool full_recheck = false, bool grid = true) {
   const double unit = curvefem::bbox_longest_edge(m.V);
   sh::ShellStats build_stats;
   sh::ShellOptions so;
@@ -71,6 +71,7 @@ Coarse coarsen(const SurfaceMesh& m, const std::vector<std::array<int, 2>>& feat
   o.feature_edges = features;
   o.collapse_chains = chains;
   o.chain_full_recheck = full_recheck;
+  o.chain_grid = grid;
   Coarse r;
   r.coarse = sh::simplify_shell(shell, m, o, r.stats);
   return r;
@@ -185,6 +186,43 @@ TEST(ShellChains, RecheckingOnlyTheSnappedFacesGivesTheFullChecksShell) {
     const auto& b = full.stats.collapse_rejections;
     EXPECT_EQ(a.shape, b.shape);
     EXPECT_EQ(a.distance, b.distance);
+    EXPECT_EQ(a.positivity, b.positivity);
+    EXPECT_EQ(a.intersection, b.intersection);
+    EXPECT_EQ(a.section, b.section);
+    EXPECT_EQ(a.coverage, b.coverage);
+  }
+}
+
+TEST(ShellChains, TheGridOverThePrismsFindsThePrismsEveryBoxTestFinds) {
+  // A chain collapse re-checks every live prism whose box meets a face it snaps; the grid over
+  // the prisms' boxes must hand it the same prisms as testing every live prism's box.
+  for (const auto& [name, mesh] :
+       {std::pair{"cylinder", curvefem::make_cylinder(48, 8, 4, 2.0)},
+        std::pair{"plate", curvefem::make_box(Vector3d(0, 0, 0), Vector3d(1, 1, 0.02), 12)},
+        std::pair{"box", curvefem::make_box(Vector3d(0, 0, 0), Vector3d(1, 2, 1), 6)}}) {
+    SCOPED_TRACE(name);
+    const auto features = sharp_edges(mesh, 60);
+    const Coarse grid = coarsen(mesh, features, true, 0.01);
+    const Coarse scan = coarsen(mesh, features, true, 0.01, false, false);
+    EXPECT_GT(grid.stats.chain_collapses, 20);
+    EXPECT_EQ(grid.stats.chain_collapses, scan.stats.chain_collapses);
+    // The scan tests every live prism; the grid far fewer.
+    EXPECT_EQ(scan.stats.chain_prisms_tested, scan.stats.chain_prisms_live);
+    EXPECT_EQ(grid.stats.chain_prisms_live, scan.stats.chain_prisms_live);
+    EXPECT_LT(grid.stats.chain_prisms_tested, scan.stats.chain_prisms_live / 2);
+    std::cout << name << ": prisms tested " << grid.stats.chain_prisms_tested << " of "
+              << grid.stats.chain_prisms_live << "\n";
+    EXPECT_EQ(grid.coarse.F, scan.coarse.F);
+    EXPECT_EQ(grid.coarse.mid, scan.coarse.mid);
+    EXPECT_EQ(grid.coarse.base, scan.coarse.base);
+    EXPECT_EQ(grid.coarse.top, scan.coarse.top);
+    ASSERT_EQ(grid.coarse.reference.size(), scan.coarse.reference.size());
+    for (std::size_t i = 0; i < grid.coarse.reference.size(); ++i) {
+      EXPECT_EQ(grid.coarse.reference[i].vertex, scan.coarse.reference[i].vertex);
+      EXPECT_EQ(grid.coarse.reference[i].s, scan.coarse.reference[i].s);
+    }
+    const auto& a = grid.stats.collapse_rejections;
+    const auto& b = scan.stats.collapse_rejections;
     EXPECT_EQ(a.positivity, b.positivity);
     EXPECT_EQ(a.intersection, b.intersection);
     EXPECT_EQ(a.section, b.section);
