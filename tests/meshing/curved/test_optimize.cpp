@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <functional>
 
 #include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/core/primitives.hpp"
@@ -491,57 +492,60 @@ TEST(CurvedEdit, TheDefaultTargetEnergyGivesFewerTetsAndALowerMeanMips) {
   EXPECT_GE(now.v.min_scaled_jacobian, 1e-3);  // issue 21's quality goal
 }
 
-// Replaying refused collapses (CurvedEditOptions::replay_refusals) changes nothing: the same
-// mesh bit for bit and the same counts, with the replays counted in them.
-TEST(CurvedEdit, ReplayedRefusalsGiveTheSameMesh) {
+namespace {
+// An icosphere meshed at order k with the curved edits on, twice: with the edit options as given
+// and with `change` applied to them. Both meshes, and both runs' edit statistics.
+struct EditPair {
+  cv::CurvedMesh a, b;
+  cv::CurvedEditStats x, y;
+};
+EditPair mesh_sphere_twice(int k, const std::function<void(cv::CurvedEditOptions&)>& change) {
   const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
   cv::CurvedMeshOptions o;
-  o.order = 3;
+  o.order = k;
   o.curved_coarsening = false;
   o.optimize.edits.passes = 2;
   o.optimize.edits.energy = 1.5;
-  cv::CurvedMeshStats on, off;
-  const cv::CurvedMesh a = cv::build_curved_mesh(sphere, o, on);
-  o.optimize.edits.replay_refusals = false;
-  const cv::CurvedMesh b = cv::build_curved_mesh(sphere, o, off);
-  const cv::CurvedEditStats &x = on.optimize.edits, &y = off.optimize.edits;
-  EXPECT_GT(x.replayed, 10);
-  EXPECT_EQ(y.replayed, 0);
-  EXPECT_GT(x.collapses, 0);
-  EXPECT_EQ(x.collapses, y.collapses);
-  EXPECT_EQ(x.flips, y.flips);
-  EXPECT_EQ(x.attempted, y.attempted);
-  EXPECT_EQ(x.rejected_energy, y.rejected_energy);
-  EXPECT_EQ(x.rejected_certificate, y.rejected_certificate);
-  EXPECT_EQ(x.rejected_topology, y.rejected_topology);
-  EXPECT_EQ(a.mesh.cells, b.mesh.cells);
-  EXPECT_EQ(a.mesh.nodes, b.mesh.nodes);
+  cv::CurvedMeshStats first, second;
+  EditPair r;
+  r.a = cv::build_curved_mesh(sphere, o, first);
+  change(o.optimize.edits);
+  r.b = cv::build_curved_mesh(sphere, o, second);
+  r.x = first.optimize.edits;
+  r.y = second.optimize.edits;
+  // Whatever the change: the same operations kept and the same mesh bit for bit.
+  EXPECT_GT(r.x.collapses, 0);
+  EXPECT_EQ(r.x.collapses, r.y.collapses);
+  EXPECT_EQ(r.x.flips, r.y.flips);
+  EXPECT_EQ(r.x.rejected_certificate, r.y.rejected_certificate);
+  EXPECT_EQ(r.a.mesh.cells, r.b.mesh.cells);
+  EXPECT_EQ(r.a.mesh.nodes, r.b.mesh.nodes);
+  return r;
+}
+}  // namespace
+
+// Replaying refused collapses (CurvedEditOptions::replay_refusals) changes nothing: the same
+// mesh bit for bit and the same counts, with the replays counted in them.
+TEST(CurvedEdit, ReplayedRefusalsGiveTheSameMesh) {
+  const EditPair r =
+      mesh_sphere_twice(3, [](cv::CurvedEditOptions& e) { e.replay_refusals = false; });
+  EXPECT_GT(r.x.replayed, 10);
+  EXPECT_EQ(r.y.replayed, 0);
+  EXPECT_EQ(r.x.attempted, r.y.attempted);
+  EXPECT_EQ(r.x.rejected_energy, r.y.rejected_energy);
+  EXPECT_EQ(r.x.rejected_topology, r.y.rejected_topology);
 }
 
+// The energy check of a collapse run before the editing engine carries it out
+// (CurvedEditOptions::precheck_collapse_energy) refuses exactly the collapses the same check
+// refuses after it: the same mesh and the same operations.
 TEST(CurvedEdit, TheCollapseEnergyCheckBeforeTheEngineGivesTheSameMesh) {
-  // The energy check of a collapse run before the editing engine carries it out must refuse
-  // exactly the collapses the same check refuses after it: same mesh, same operations.
-  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
   for (int k : {2, 3}) {
     SCOPED_TRACE("order " + std::to_string(k));
-    cv::CurvedMeshOptions o;
-    o.order = k;
-    o.curved_coarsening = false;
-    o.optimize.edits.passes = 2;
-    o.optimize.edits.energy = 1.5;
-    cv::CurvedMeshStats before, after;
-    const cv::CurvedMesh a = cv::build_curved_mesh(sphere, o, before);
-    o.optimize.edits.precheck_collapse_energy = false;
-    const cv::CurvedMesh b = cv::build_curved_mesh(sphere, o, after);
-    const cv::CurvedEditStats &x = before.optimize.edits, &y = after.optimize.edits;
-    EXPECT_GT(x.energy_prechecked, 100);
-    EXPECT_EQ(y.energy_prechecked, 0);
-    EXPECT_GT(x.collapses, 0);
-    EXPECT_EQ(x.collapses, y.collapses);
-    EXPECT_EQ(x.flips, y.flips);
-    EXPECT_EQ(x.rejected_certificate, y.rejected_certificate);
-    EXPECT_EQ(a.mesh.cells, b.mesh.cells);
-    EXPECT_EQ(a.mesh.nodes, b.mesh.nodes);
+    const EditPair r =
+        mesh_sphere_twice(k, [](cv::CurvedEditOptions& e) { e.precheck_collapse_energy = false; });
+    EXPECT_GT(r.x.energy_prechecked, 100);
+    EXPECT_EQ(r.y.energy_prechecked, 0);
   }
 }
 

@@ -105,6 +105,28 @@ void expect_chains_kept(const Coarse& r, const SurfaceMesh& m,
   for (int x : feature_vertices) EXPECT_TRUE(corners.count(x) || snapped.count(x)) << x;
 }
 
+// Two coarsenings that must agree: the same chain collapses, shells, snaps and refusals.
+void expect_same_coarsening(const Coarse& a, const Coarse& b) {
+  EXPECT_EQ(a.stats.chain_collapses, b.stats.chain_collapses);
+  EXPECT_EQ(a.coarse.F, b.coarse.F);
+  EXPECT_EQ(a.coarse.mid, b.coarse.mid);
+  EXPECT_EQ(a.coarse.base, b.coarse.base);
+  EXPECT_EQ(a.coarse.top, b.coarse.top);
+  ASSERT_EQ(a.coarse.reference.size(), b.coarse.reference.size());
+  for (std::size_t i = 0; i < a.coarse.reference.size(); ++i) {
+    EXPECT_EQ(a.coarse.reference[i].vertex, b.coarse.reference[i].vertex);
+    EXPECT_EQ(a.coarse.reference[i].s, b.coarse.reference[i].s);
+  }
+  const auto& x = a.stats.collapse_rejections;
+  const auto& y = b.stats.collapse_rejections;
+  EXPECT_EQ(x.shape, y.shape);
+  EXPECT_EQ(x.distance, y.distance);
+  EXPECT_EQ(x.positivity, y.positivity);
+  EXPECT_EQ(x.intersection, y.intersection);
+  EXPECT_EQ(x.section, y.section);
+  EXPECT_EQ(x.coverage, y.coverage);
+}
+
 }  // namespace
 
 TEST(ShellChains, ABoxCoarsensAlongItsEdges) {
@@ -172,24 +194,7 @@ TEST(ShellChains, RecheckingOnlyTheSnappedFacesGivesTheFullChecksShell) {
     const Coarse fast = coarsen(mesh, features, true, 0.01);
     const Coarse full = coarsen(mesh, features, true, 0.01, true);
     EXPECT_GT(fast.stats.chain_collapses, 20);
-    EXPECT_EQ(fast.stats.chain_collapses, full.stats.chain_collapses);
-    EXPECT_EQ(fast.coarse.F, full.coarse.F);
-    EXPECT_EQ(fast.coarse.mid, full.coarse.mid);
-    EXPECT_EQ(fast.coarse.base, full.coarse.base);
-    EXPECT_EQ(fast.coarse.top, full.coarse.top);
-    ASSERT_EQ(fast.coarse.reference.size(), full.coarse.reference.size());
-    for (std::size_t i = 0; i < fast.coarse.reference.size(); ++i) {
-      EXPECT_EQ(fast.coarse.reference[i].vertex, full.coarse.reference[i].vertex);
-      EXPECT_EQ(fast.coarse.reference[i].s, full.coarse.reference[i].s);
-    }
-    const auto& a = fast.stats.collapse_rejections;
-    const auto& b = full.stats.collapse_rejections;
-    EXPECT_EQ(a.shape, b.shape);
-    EXPECT_EQ(a.distance, b.distance);
-    EXPECT_EQ(a.positivity, b.positivity);
-    EXPECT_EQ(a.intersection, b.intersection);
-    EXPECT_EQ(a.section, b.section);
-    EXPECT_EQ(a.coverage, b.coverage);
+    expect_same_coarsening(fast, full);
   }
 }
 
@@ -205,27 +210,12 @@ TEST(ShellChains, TheGridOverThePrismsFindsThePrismsEveryBoxTestFinds) {
     const Coarse grid = coarsen(mesh, features, true, 0.01);
     const Coarse scan = coarsen(mesh, features, true, 0.01, false, false);
     EXPECT_GT(grid.stats.chain_collapses, 20);
-    EXPECT_EQ(grid.stats.chain_collapses, scan.stats.chain_collapses);
     // The scan tests every live prism; the grid far fewer.
     EXPECT_EQ(scan.stats.chain_prisms_tested, scan.stats.chain_prisms_live);
     EXPECT_EQ(grid.stats.chain_prisms_live, scan.stats.chain_prisms_live);
     EXPECT_LT(grid.stats.chain_prisms_tested, scan.stats.chain_prisms_live / 2);
     std::cout << name << ": prisms tested " << grid.stats.chain_prisms_tested << " of "
               << grid.stats.chain_prisms_live << "\n";
-    EXPECT_EQ(grid.coarse.F, scan.coarse.F);
-    EXPECT_EQ(grid.coarse.mid, scan.coarse.mid);
-    EXPECT_EQ(grid.coarse.base, scan.coarse.base);
-    EXPECT_EQ(grid.coarse.top, scan.coarse.top);
-    ASSERT_EQ(grid.coarse.reference.size(), scan.coarse.reference.size());
-    for (std::size_t i = 0; i < grid.coarse.reference.size(); ++i) {
-      EXPECT_EQ(grid.coarse.reference[i].vertex, scan.coarse.reference[i].vertex);
-      EXPECT_EQ(grid.coarse.reference[i].s, scan.coarse.reference[i].s);
-    }
-    const auto& a = grid.stats.collapse_rejections;
-    const auto& b = scan.stats.collapse_rejections;
-    EXPECT_EQ(a.positivity, b.positivity);
-    EXPECT_EQ(a.intersection, b.intersection);
-    EXPECT_EQ(a.section, b.section);
-    EXPECT_EQ(a.coverage, b.coverage);
+    expect_same_coarsening(grid, scan);
   }
 }
