@@ -561,8 +561,10 @@ class Builder {
         bool any = false;
         for (int i = 0; i < layers; ++i)
           for (int c = 0; c < 3; ++c)
-            if (L[std::size_t(i)].depth[F(f, c)] > L[std::size_t(i)].shell_depth[F(f, c)])
-              any = shrink[std::size_t(i)][F(f, c)] = 1;
+            if (L[std::size_t(i)].depth[F(f, c)] > L[std::size_t(i)].shell_depth[F(f, c)]) {
+              shrink[std::size_t(i)][F(f, c)] = 1;
+              any = true;
+            }
         if (!any) lower_for(f);
       }
       for (int i = 0; i < layers; ++i) {

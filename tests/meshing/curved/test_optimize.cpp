@@ -86,6 +86,16 @@ bool all_certified(const LagrangeMesh& m) {
   return true;
 }
 
+// The nodes on the unit octahedron's surface (|x| + |y| + |z| = 1: its 6 corners and every node
+// on its faces) are bit-identical to `before`'s.
+void expect_octahedron_surface_kept(const LagrangeMesh& m, const Eigen::MatrixXd& before) {
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12) {
+      EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
+    }
+  }
+}
+
 }  // namespace
 
 TEST(Optimize, RegularTetScoresOneAndEnergyIsScaleInvariant) {
@@ -119,9 +129,7 @@ TEST(Optimize, OffCentreVertexOfAnOctahedronReturnsToTheCentreAtEveryOrder) {
     EXPECT_LT(s.max_energy_after, s.max_energy_before);
     EXPECT_TRUE(all_certified(m));
     // The 6 boundary corners and every node on the octahedron's faces stay bit-identical.
-    for (int i = 0; i < m.num_nodes(); ++i)
-      if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12)
-        EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
+    expect_octahedron_surface_kept(m, before);
     // Straight tets stay straight: every edge midpoint-type node is the linear interpolant.
     expect_straight(m);
   }
@@ -178,9 +186,7 @@ TEST(Optimize, ABentInteriorEdgeNodeIsStraightenedAndStraightMeshesAreNotBent) {
     bent_mesh.nodes = before;
     EXPECT_GT(worst_sj(m), worst_sj(bent_mesh));
     // Boundary nodes stay bit-identical.
-    for (int i = 0; i < m.num_nodes(); ++i)
-      if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12)
-        EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
+    expect_octahedron_surface_kept(m, before);
 
     // Without the variation guard (node_free_energy 0: every star counts as distorted) the
     // same bend is removed too.
@@ -588,9 +594,7 @@ TEST(Optimize, TheWorstCellSearchLiftsACornerOffABoundaryFace) {
     // No move raises its star's summed curved MIPS, so the mesh's cannot rise either.
     EXPECT_LT(mips_sum(m), mips_before);
     expect_straight(m);
-    for (int i = 0; i < m.num_nodes(); ++i)
-      if (std::abs(before.row(i).cwiseAbs().sum() - 1.0) < 1e-12)
-        EXPECT_EQ(m.nodes.row(i), before.row(i)) << "node " << i;
+    expect_octahedron_surface_kept(m, before);
 
     // Off, or no cell below the threshold: nothing moves.
     for (const auto& [sweeps, threshold] : {std::pair{0, 0.1}, std::pair{3, 0.5 * sliver}}) {
