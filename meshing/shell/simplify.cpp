@@ -587,7 +587,8 @@ class ShellMesh : public TriMesh {
     Eigen::Vector3i ids;          // input vertices of the corners
     std::vector<std::array<Eigen::Vector3d, 4>> tets;
   };
-  PrismShape prism_shape(Id f) const {
+  // The prism's corners alone (no split tets): enough for I1.
+  PrismShape prism_corners(Id f) const {
     const Cell& c = cell(f);
     PrismShape p;
     for (int k = 0; k < 3; ++k) {
@@ -598,6 +599,11 @@ class ShellMesh : public TriMesh {
       p.bound[k] = pillar_bound(c[k]);
       p.ids[k] = input_vertex[c[k]];
     }
+    return p;
+  }
+  PrismShape prism_shape(Id f) const {
+    const Cell& c = cell(f);
+    PrismShape p = prism_corners(f);
     const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
     const int rot = min_rotation(F);
     for (int half = 0; half < 2; ++half)
@@ -813,16 +819,8 @@ class ShellMesh : public TriMesh {
     // growths fail I1 on one prism of the star (cheese: 8,657 of 8,940), after the others had
     // passed their contact tests. (The refusal is then counted as positivity.)
     for (std::size_t i = 0; i < std::min(changed, cells.size()); ++i) {
-      const Cell& c = cell(cells[i]);
-      std::array<Eigen::Vector3d, 3> b, m, t;
-      std::array<bool, 3> s;
-      for (int k = 0; k < 3; ++k) {
-        b[k] = base[c[k]];
-        m[k] = mid[c[k]];
-        t[k] = top[c[k]];
-        s[k] = singular[c[k]];
-      }
-      if (!shell_face_positive(b, m, t, s)) {
+      const PrismShape p = prism_corners(cells[i]);
+      if (!shell_face_positive(p.b, p.m, p.t, p.s)) {
         note(positivity);
         return false;
       }

@@ -178,8 +178,7 @@ void register_mesh(CLI::App& app) {
          "--optimize-worst-mips-sj-slack", args->optimize_worst_mips_sj_slack,
          "in that search, the fraction by which a star's smallest scaled Jacobian may "
          "fall where its worst cell is above 1e4, never below the smaller of 0.002 and its "
-         "value before (default 0.1; 0: it "
-         "may not fall)")
+         "value before (default 0.1; 0: it may not fall)")
       ->check(CLI::Range(0.0, 0.5));
   sub->add_option("--optimize-node-energy", args->optimize_node_energy,
                   "node phase: move only nodes of stars with a sample whose "
