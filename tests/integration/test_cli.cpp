@@ -764,13 +764,14 @@ TEST(Cli, GenerateWritesTheAdversarialSurfacesAndRefusesUnknownNames) {
   EXPECT_FALSE(std::filesystem::exists(none));
 }
 
-// `curvefem mesh -q IN -o OUT --order 3 --threads 1`: its report.json (a failure is recorded
-// and an empty report returned when the run does not exit 0).
-nlohmann::json mesh_k3_one_thread(const std::filesystem::path& in,
-                                  const std::filesystem::path& out) {
+// `curvefem mesh -q IN -o OUT --order 3 --threads 1 [EXTRA]`: its report.json (a failure is
+// recorded and an empty report returned when the run does not exit 0).
+nlohmann::json mesh_k3_one_thread(const std::filesystem::path& in, const std::filesystem::path& out,
+                                  const std::string& extra = "") {
   std::string log;
   const int rc = test::run_command(
-      cli() + " mesh -q " + in.string() + " -o " + out.string() + " --order 3 --threads 1", &log);
+      cli() + " mesh -q " + in.string() + " -o " + out.string() + " --order 3 --threads 1 " + extra,
+      &log);
   if (rc != 0) {
     ADD_FAILURE() << "exit " << rc << ": " << log;
     return nlohmann::json{{"valid", false}, {"roundtrip_fallback", "?"}, {"validation", {}}};
@@ -815,6 +816,10 @@ TEST(Cli, TheWorstMipsSearchMayLowerACurvedNeighboursScaledJacobianALittle) {
   EXPECT_GT(v["min_scaled_jacobian"].get<double>(), 0.005);
   EXPECT_LE(v["tets_scaled_jacobian_below_0.01"].get<int>(), 2);
   EXPECT_GT(j["optimize"]["worst"]["mips_moves"].get<int>(), 0);
+  // Without the slack the cell stays above the goal.
+  const auto strict = mesh_k3_one_thread(*path, dir / "strict", "--optimize-worst-mips-sj-slack 0");
+  EXPECT_TRUE(strict["valid"].get<bool>());
+  EXPECT_GT(strict["validation"]["max_mips"].get<double>(), 1e4);
 }
 
 TEST(Cli, AnUnseenCadPartsShapeRefinedMapRoundTripsAtEitherPillarBound) {
