@@ -9,7 +9,6 @@
 #include <map>
 #include <set>
 #include <string>
-#include <unordered_map>
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -31,7 +30,6 @@ using editing::TetMesh;
 constexpr double k_inf = std::numeric_limits<double>::infinity();
 
 using NodeKey = curved::NodeKey<Id>;
-using NodeKeyHash = curved::NodeKeyHash<Id>;
 
 using Face = std::array<Id, 3>;  // sorted
 using Edge = std::array<Id, 2>;  // sorted
@@ -57,12 +55,12 @@ class CurvedEditMesh : public TetMesh {
   double locked_mips = 0;   // CurvedEditOptions::locked_mips
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
-  std::vector<Eigen::Vector3d> pos;                       // node positions (grows)
-  std::unordered_map<NodeKey, int, NodeKeyHash> node_of;  // current node of every key
-  editing::Attribute<char> vertex_fixed{*this, 0, 0};     // per vertex: never removed
-  editing::Attribute<char> surface_vertex{*this, 0, 0};   // per vertex: on the frozen surface
-  std::set<Face> curved_faces;                            // frozen faces (sorted vertices)
-  std::map<Edge, Face> curved_edge_face;                  // a curved face of each curved edge
+  std::vector<Eigen::Vector3d> pos;                      // node positions (grows)
+  NodeKeyMap<Id> node_of;                                // current node of every key
+  editing::Attribute<char> vertex_fixed{*this, 0, 0};    // per vertex: never removed
+  editing::Attribute<char> surface_vertex{*this, 0, 0};  // per vertex: on the frozen surface
+  std::set<Face> curved_faces;                           // frozen faces (sorted vertices)
+  std::map<Edge, Face> curved_edge_face;                 // a curved face of each curved edge
   CurvedEditStats* stats = nullptr;
 
   CurvedEditMesh() = default;
@@ -85,26 +83,57 @@ class CurvedEditMesh : public TetMesh {
     return X;
   }
 
-  // Refused collapses replayed (CurvedEditOptions::replay_refusals). A collapse v -> w reads
-  // the cells around v and w (their corners, nodes, energies and scaled Jacobians) and fixed
-  // data (tags, the frozen surface, the options); every accepted operation stamps the corners of
-  // the cells it removes, creates or reshapes, and a face shared with a cell around v or w has
-  // its corners among theirs. So while no corner of a cell around v or w carries a stamp later
-  // than a refusal, the checks would refuse again for the same reason: the refusal is counted
-  // again and nothing is run. One thread (the edits are sequential). A collapse the editing
-  // engine refused for its topology (the link condition of v w, or no cell left) read only the
-  // cells around v: it is replayed the same way (`remember_topology`).
+  // Refused collapses and swaps replayed (CurvedEditOptions::replay_refusals). A collapse
+  // v -> w reads the cells around v and w (their corners, nodes, energies and scaled Jacobians)
+  // and fixed data (tags, the frozen surface, the options); every accepted operation stamps the
+  // corners of the cells it removes, creates or reshapes, and a face shared with a cell around v
+  // or w has its corners among theirs. So while no corner of a cell around v or w carries a
+  // stamp later than a refusal, the checks would refuse again for the same reason: the refusal
+  // is counted again and nothing is run. One thread (the edits are sequential). A collapse the
+  // editing engine refused for its topology (the link condition of v w, or no cell left) read
+  // only the cells around v: it is replayed the same way (`remember_topology`).
+  // A swap of a face (f0 f1 f2) or of an edge (a b) reads the cells holding that face or edge,
+  // all around f0 (a), and its topology test looks for a new edge or face among their corners
+  // (a cell created with it stamps them): remembered under (f0, f1) or (a, b) and a tag naming
+  // the kind and, where the new cells depend on it, the tuple's third vertex (the order of the
+  // new cells follows the tuple's, so the tuple is remembered as given).
   bool replay = false;
-  bool precheck = true;     // CurvedEditOptions::precheck_collapse_energy
-  bool collapsing = false;  // the operation under way is a collapse
+  bool precheck = true;  // CurvedEditOptions::precheck_collapse_energy
   struct Refusal {
     bool certificate = false;  // counted as rejected_certificate (else rejected_energy)
     bool topology = false;     // counted as rejected_topology
+    bool locked = false;       // also counted as rejected_locked
   };
+  // The operation under way as the memo keeps it (`kept` false: a split, not remembered).
+  struct MemoKey {
+    Id v = editing::k_no_id, w = editing::k_no_id;
+    std::uint64_t tag = 0;  // 0: the collapse v -> w
+    bool kept = false;
+  } current;
+  enum SwapKind : std::uint64_t { swap23 = 1, swap32 = 2, swap44 = 3 };
+  SwapKind next_edge_swap = swap32;  // the edge swap the pass runs next
+  static std::uint64_t swap_tag(SwapKind kind, Id third) {
+    return (std::uint64_t(kind) << 32) | std::uint64_t(third);
+  }
   void remember_topology(Id v, Id w) {
     if (replay) memo.remember(v, w, Refusal{false, true});
   }
   editing::RefusalMemo<TetMesh, Refusal> memo{*this};
+  // Counts a replayed refusal of the checks as the checks would have.
+  void count_replayed(const Refusal& x) {
+    ++stats->attempted;
+    ++(x.certificate ? stats->rejected_certificate : stats->rejected_energy);
+    if (x.locked) ++stats->rejected_locked;
+  }
+  // Makes `key` the operation under way; true where it is a remembered refusal (counted again).
+  bool replayed(const MemoKey& key) {
+    current = key;
+    if (!replay) return false;
+    const Refusal* x = memo.replay(key.v, key.w, key.tag);
+    if (!x) return false;
+    count_replayed(*x);
+    return true;
+  }
 
   bool is_target(Id t, double threshold) const { return energy[t] > threshold; }
   bool is_split_target(Id t, double threshold, double flat) const {
@@ -113,16 +142,16 @@ class CurvedEditMesh : public TetMesh {
 
  protected:
   bool collapse_edge_before(const Tuple& t) override {
-    collapsing = true;
+    current = MemoKey{};
     if (vertex_fixed[t.vid]) return false;
+    current = MemoKey{t.vid, other_vertex(t), 0, true};
     const Refusal* x = replay ? memo.replay(t.vid, other_vertex(t)) : nullptr;
     if (!x) return !(precheck && collapse_energy_refused(t.vid, other_vertex(t)));
     if (x->topology) {
       ++stats->rejected_topology;  // (the engine counts this refusal as its user's)
       return false;
     }
-    ++stats->attempted;
-    ++(x->certificate ? stats->rejected_certificate : stats->rejected_energy);
+    count_replayed(*x);
     return false;
   }
   // The energy check of invariants() for the collapse v -> w, before the engine carries it out:
@@ -152,30 +181,41 @@ class CurvedEditMesh : public TetMesh {
         ++stats->attempted;
         ++stats->rejected_energy;
         ++stats->energy_prechecked;
-        if (replay) memo.remember(v, w, Refusal{false});
+        if (replay) memo.remember(v, w, Refusal{});
         return true;
       }
     }
     return false;
   }
-  // Counts a refusal of the checks and remembers a collapse's.
-  bool refuse(const OperationRecord& r, bool certificate) {
+  // Counts a refusal of the checks and remembers a collapse's or a swap's.
+  bool refuse(bool certificate, bool locked = false) {
     ++(certificate ? stats->rejected_certificate : stats->rejected_energy);
-    if (replay && collapsing) memo.remember(r.v0, r.v1, Refusal{certificate});
+    if (locked) ++stats->rejected_locked;
+    if (replay && current.kept)
+      memo.remember(current.v, current.w, Refusal{certificate, false, locked}, current.tag);
     return false;
   }
   bool swap_face_before(const Tuple& t) override {
-    collapsing = false;
+    current = MemoKey{};
     const auto f = face_vertices(t);
-    return !curved_faces.count(sorted_face(f[0], f[1], f[2]));
+    if (curved_faces.count(sorted_face(f[0], f[1], f[2]))) return false;
+    return !replayed(MemoKey{f[0], f[1], swap_tag(swap23, f[2]), true});
   }
+  // (swap_edge_32 and swap_edge_44 share this hook; the tag tells them apart by the kind the
+  // pass asked for, `next_edge_swap`.)
   bool swap_edge_before(const Tuple& t) override {
-    collapsing = false;
-    return !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
+    current = MemoKey{};
+    const Id a = t.vid, b = other_vertex(t);
+    if (curved_edge_face.count(sorted_edge(a, b))) return false;
+    Id third = editing::k_no_id;
+    if (next_edge_swap == swap44)
+      for (Id v : face_vertices(t))
+        if (v != a && v != b) third = v;
+    return !replayed(MemoKey{a, b, swap_tag(next_edge_swap, third), true});
   }
   // Splits: interior edges only (neither on a boundary face nor on the frozen surface).
   bool split_edge_before(const Tuple& t) override {
-    collapsing = false;
+    current = MemoKey{};
     return !is_boundary_edge(t) && !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
   }
 
@@ -251,14 +291,14 @@ class CurvedEditMesh : public TetMesh {
     for (std::size_t i = 0; i < nn; ++i) {
       build_cell(r.new_cells[i]);
       new_energy[i] = cell_energy(k, Xs[i]);
-      if (!(new_energy[i] < before * (1.0 - 1e-9))) return refuse(r, false);
+      if (!(new_energy[i] < before * (1.0 - 1e-9))) return refuse(false);
     }
     // A split adds cells, so it must also raise the cavity's worst scaled Jacobian.
     const double sj_needed =
         r.new_vertex != editing::k_no_id ? sj_before * (1 + split_sj_gain) : sj_before;
     for (std::size_t i = 0; i < nn; ++i) {
       new_sj[i] = min_scaled_jacobian(k, Xs[i]);
-      if (!(new_sj[i] >= sj_needed)) return refuse(r, false);
+      if (!(new_sj[i] >= sj_needed)) return refuse(false);
     }
     // ... and not raise its worst curved MIPS (the quality goal's measure, which the conformal
     // energy above weighs differently: a split that trades a flat cell for a needle passes
@@ -280,25 +320,22 @@ class CurvedEditMesh : public TetMesh {
       const double locked_bound = std::max(locked_mips, locked_before);
       for (std::size_t i = 0; i < nn; ++i) {
         new_mips[i] = curved_mips(k, Xs[i]);
-        if (guard_mips && !(new_mips[i] <= mips_before)) return refuse(r, false);
+        if (guard_mips && !(new_mips[i] <= mips_before)) return refuse(false);
       }
       if (locked_mips > 0)
         for (std::size_t i = 0; i < nn; ++i)
-          if (locked(cell(r.new_cells[i])) && !(new_mips[i] <= locked_bound)) {
-            ++stats->rejected_locked;
-            return refuse(r, false);
-          }
+          if (locked(cell(r.new_cells[i])) && !(new_mips[i] <= locked_bound))
+            return refuse(false, true);
     }
     for (std::size_t i = 0; i < nn; ++i)
-      if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive)
-        return refuse(r, true);
+      if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive) return refuse(true);
     for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
       energy.set(r.new_cells[i], new_energy[i]);
       scaled_jacobian.set(r.new_cells[i], new_sj[i]);
       mips.set(r.new_cells[i], new_mips[i]);
     }
     for (const auto& [key, x] : staged) {
-      node_of[key] = int(pos.size());
+      node_of.assign(key, int(pos.size()));
       pos.push_back(x);
     }
     memo.stamp({&r.old_cells, &r.new_cells, &r.affected_cells});
@@ -363,19 +400,27 @@ class CurvedEditMesh : public TetMesh {
     for (int j = 0; j < 4; ++j) P[j] = corner(c[std::size_t(j)]);
     for (std::size_t n = 0; n < lattice->size(); ++n) {
       const auto& alpha = (*lattice)[n];
-      const NodeKey key = make_node_key(c.data(), alpha, 4);
       Id support[4];
-      int size = 0;
+      int size = 0, first = 0;
       for (int j = 0; j < 4; ++j)
-        if (alpha[std::size_t(j)] > 0) support[size++] = c[std::size_t(j)];
+        if (alpha[std::size_t(j)] > 0) {
+          if (size == 0) first = j;
+          support[size++] = c[std::size_t(j)];
+        }
+      // A corner's node: its corner (the node of a vertex never changes), without a key.
+      if (size == 1 && support[0] != split_vertex) {
+        X.row(Eigen::Index(n)) = P[first].transpose();
+        continue;
+      }
+      const NodeKey key = make_node_key(c.data(), alpha, 4);
       Eigen::Vector3d x;
-      if (size == 1 && support[0] == split_vertex) {
+      if (size == 1) {
         x = split_x;
         staged.emplace(key, x);
       } else if (cavity.on_boundary(support, size)) {
-        const auto it = node_of.find(key);
-        CF_VERIFY(it != node_of.end(), "curved edit: a cavity-boundary node has no position");
-        x = pos[std::size_t(it->second)];
+        const int* node = node_of.find(key);
+        CF_VERIFY(node, "curved edit: a cavity-boundary node has no position");
+        x = pos[std::size_t(*node)];
       } else if (const auto it = staged.find(key); it != staged.end()) {
         x = it->second;
       } else {
@@ -399,25 +444,28 @@ class CurvedEditMesh : public TetMesh {
                         const Eigen::Vector3d* P) const {
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
     for (int j = 0; j < 4; ++j) x += (double(alpha[std::size_t(j)]) / k) * P[j];
-    std::vector<int> on;
+    int on[4], n_on = 0;  // (fixed arrays: this runs for every new node of every attempt)
     for (int j = 0; j < 4; ++j)
-      if (alpha[std::size_t(j)] > 0 && surface_vertex[c[std::size_t(j)]]) on.push_back(j);
-    if (on.size() < 2) return x;
-    std::vector<std::array<int, 3>> faces;
-    for (std::size_t a = 0; a < on.size(); ++a)
-      for (std::size_t b = a + 1; b < on.size(); ++b)
-        for (std::size_t d = b + 1; d < on.size(); ++d)
+      if (alpha[std::size_t(j)] > 0 && surface_vertex[c[std::size_t(j)]]) on[n_on++] = j;
+    if (n_on < 2) return x;
+    std::array<std::array<int, 3>, 4> faces;
+    int n_faces = 0;
+    for (int a = 0; a < n_on; ++a)
+      for (int b = a + 1; b < n_on; ++b)
+        for (int d = b + 1; d < n_on; ++d)
           if (curved_faces.count(
                   sorted_face(c[std::size_t(on[a])], c[std::size_t(on[b])], c[std::size_t(on[d])])))
-            faces.push_back({on[a], on[b], on[d]});
-    for (const auto& f : faces) x += blend(c, alpha, f.data(), 3);
-    for (std::size_t a = 0; a < on.size(); ++a)
-      for (std::size_t b = a + 1; b < on.size(); ++b) {
+            faces[std::size_t(n_faces++)] = {on[a], on[b], on[d]};
+    for (int i = 0; i < n_faces; ++i) x += blend(c, alpha, faces[std::size_t(i)].data(), 3);
+    for (int a = 0; a < n_on; ++a)
+      for (int b = a + 1; b < n_on; ++b) {
         if (!curved_edge_face.count(sorted_edge(c[std::size_t(on[a])], c[std::size_t(on[b])])))
           continue;
         int holding = 0;
-        for (const auto& f : faces)
+        for (int i = 0; i < n_faces; ++i) {
+          const auto& f = faces[std::size_t(i)];
           holding += std::count(f.begin(), f.end(), on[a]) && std::count(f.begin(), f.end(), on[b]);
+        }
         if (holding == 1) continue;
         const int pair[2] = {on[a], on[b]};
         x += double(1 - holding) * blend(c, alpha, pair, 2);
@@ -536,11 +584,11 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     for (std::size_t n = 0; n < lattice.size(); ++n) {
       const auto key = make_node_key(cells[std::size_t(c)].data(), lattice[n], 4);
       const int node = mesh.cells(c, Eigen::Index(n));
-      const auto [it, inserted] = m.node_of.emplace(key, node);
-      if (!inserted && it->second != node)
+      const auto [kept, inserted] = m.node_of.insert(key, node);
+      if (!inserted && kept != node)
         throw MeshingError("edit_curved_mesh: cell " + std::to_string(c) +
                            " has a second node for one lattice point (node " +
-                           std::to_string(node) + " and " + std::to_string(it->second) + ")");
+                           std::to_string(node) + " and " + std::to_string(kept) + ")");
     }
 
   // Fixed vertices: on the frozen surface or on a boundary face. Curved faces: every node
@@ -679,10 +727,12 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
       pass.operations["swap23"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
         return mm.swap_face_23(t);
       };
-      pass.operations["swap32"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
+      pass.operations["swap32"] = [&m](TetMesh& mm, const TetMesh::Tuple& t) {
+        m.next_edge_swap = CurvedEditMesh::swap32;
         return mm.swap_edge_32(t);
       };
-      pass.operations["swap44"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
+      pass.operations["swap44"] = [&m](TetMesh& mm, const TetMesh::Tuple& t) {
+        m.next_edge_swap = CurvedEditMesh::swap44;
         return mm.swap_edge_44(t);
       };
     }
@@ -691,8 +741,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     // the target cell that asked for it).
     auto star_energy = [&m](Id v) {
       double e = 0;
-      const Id vv[1] = {v};
-      for (Id c : m.cells_containing(std::span<const Id>(vv, 1))) e = std::max(e, m.energy[c]);
+      for (Id c : m.vertex_cells(v)) e = std::max(e, m.energy[c]);
       return e;
     };
     pass.priority = [&m, mode, &star_energy](const TetMesh&, const std::string&,

@@ -7,8 +7,10 @@
 // stamp. That this means "the checks would refuse again" is the user's argument: it holds when
 // the checks read only the cells around v and w, cells sharing a face or an edge with them (whose
 // corners are among theirs) and data that does not change during the pass.
-// Stamping may run on several threads (each on the vertices it has locked); remember/replay are
-// for one-thread passes (the lists are not locked).
+// Several kinds of operation on one edge (a collapse, the swaps of a face or an edge through it)
+// are told apart by a `tag` the user picks (0 for the plain v -> w). Stamping may run on several
+// threads (each on the vertices it has locked); remember/replay are for one-thread passes (the
+// lists are not locked).
 
 #include <algorithm>
 #include <atomic>
@@ -33,12 +35,12 @@ class RefusalMemo {
       for (Id c : *cells)
         for (Id u : m_mesh.cell(c)) m_changed.set(u, now);
   }
-  void remember(Id v, Id w, const Payload& payload) {
+  void remember(Id v, Id w, const Payload& payload, std::uint64_t tag = 0) {
     if (m_refusals.size() <= std::size_t(v)) m_refusals.resize(std::size_t(v) + 1);
     auto& list = m_refusals[std::size_t(v)];
-    const Entry e{w, m_clock.load(std::memory_order_relaxed), payload};
-    const auto it =
-        std::find_if(list.begin(), list.end(), [w](const Entry& x) { return x.to == w; });
+    const Entry e{w, tag, m_clock.load(std::memory_order_relaxed), payload};
+    const auto it = std::find_if(list.begin(), list.end(),
+                                 [w, tag](const Entry& x) { return x.to == w && x.tag == tag; });
     if (it != list.end())
       *it = e;
     else
@@ -46,11 +48,11 @@ class RefusalMemo {
   }
   // The payload of v -> w's refusal while nothing around v and w changed since (a stale entry is
   // dropped); nullptr otherwise.
-  const Payload* replay(Id v, Id w) {
+  const Payload* replay(Id v, Id w, std::uint64_t tag = 0) {
     if (std::size_t(v) >= m_refusals.size()) return nullptr;
     auto& list = m_refusals[std::size_t(v)];
-    const auto it =
-        std::find_if(list.begin(), list.end(), [w](const Entry& x) { return x.to == w; });
+    const auto it = std::find_if(list.begin(), list.end(),
+                                 [w, tag](const Entry& x) { return x.to == w && x.tag == tag; });
     if (it == list.end()) return nullptr;
     if (std::max(latest_change_near(v), latest_change_near(w)) > it->at) {
       list.erase(it);
@@ -65,6 +67,7 @@ class RefusalMemo {
  private:
   struct Entry {
     Id to = k_no_id;
+    std::uint64_t tag = 0;
     std::uint64_t at = 0;
     Payload payload;
   };

@@ -20,8 +20,12 @@ std::optional<PrismCoordinates> locate_in_prism(const Eigen::Vector3i& F,
                                                 const std::array<Eigen::Vector3d, 3>& mid,
                                                 const std::array<Eigen::Vector3d, 3>& top,
                                                 const Eigen::Vector3d& p) {
-  // Outside the box of the nine points, p is in no closed split tet (each lies in its corners'
-  // box); compared exactly, so the answer is the one the orientation tests below would give.
+  return PrismLocator(F, base, mid, top).locate(p);
+}
+
+PrismLocator::PrismLocator(const Eigen::Vector3i& F, const std::array<Eigen::Vector3d, 3>& base,
+                           const std::array<Eigen::Vector3d, 3>& mid,
+                           const std::array<Eigen::Vector3d, 3>& top) {
   for (int a = 0; a < 3; ++a) {
     double lo = base[0][a], hi = lo;
     for (const auto* layer : {&base, &mid, &top})
@@ -29,47 +33,64 @@ std::optional<PrismCoordinates> locate_in_prism(const Eigen::Vector3i& F,
         lo = std::min(lo, c[a]);
         hi = std::max(hi, c[a]);
       }
-    if (p[a] < lo || p[a] > hi) return std::nullopt;
+    m_lo[a] = lo;
+    m_hi[a] = hi;
   }
   const int r = min_rotation(F);
   const bool type_a = is_type_a(F);
-  const K::Point_3 q = pt(p);
+  int n = 0;
   for (int half = 0; half < 2; ++half)
     for (const auto& tet : split_tets(type_a)) {
-      Eigen::Vector3d e[4];
+      Tet& t = m_tets[std::size_t(n++)];
+      t.half = half;
       K::Point_3 c[4];
       for (int k = 0; k < 4; ++k) {
         const int local = (r + tet[k] % 3) % 3;
-        e[k] = tet[k] < 3 ? (half == 0 ? base[local] : mid[local])
-                          : (half == 0 ? mid[local] : top[local]);
-        c[k] = pt(e[k]);
+        t.corner[std::size_t(k)] = tet[k];
+        t.e[std::size_t(k)] = tet[k] < 3 ? (half == 0 ? base[local] : mid[local])
+                                         : (half == 0 ? mid[local] : top[local]);
+        c[k] = pt(t.e[std::size_t(k)]);
       }
-      const auto o = CGAL::orientation(c[0], c[1], c[2], c[3]);
-      if (o == CGAL::COPLANAR) continue;
-      // Facet i (opposite corner i) and the side corner i lies on: orientation(facet, c[i]) is
-      // o times the sign of the permutation (facet, i) of (0, 1, 2, 3) (the predicate is exactly
-      // antisymmetric).
-      static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-      static const int parity[4] = {-1, 1, -1, 1};
-      bool inside = true;
-      for (int i = 0; i < 4 && inside; ++i) {
-        const auto& fc = faces[i];
-        const auto side = CGAL::orientation(c[fc[0]], c[fc[1]], c[fc[2]], q);
-        inside = side == CGAL::COPLANAR || int(side) == parity[i] * int(o);
-      }
-      if (!inside) continue;
-      Eigen::Matrix3d A;
-      A << e[1] - e[0], e[2] - e[0], e[3] - e[0];
-      const Eigen::Vector3d l = A.colPivHouseholderQr().solve(p - e[0]);
-      const double w[4] = {1 - l.sum(), l[0], l[1], l[2]};
-      PrismCoordinates out;
-      for (int k = 0; k < 4; ++k) {
-        out.u += w[k] * k_xy[tet[k] % 3][0];
-        out.v += w[k] * k_xy[tet[k] % 3][1];
-        out.h += w[k] * ((tet[k] < 3 ? -1.0 : 0.0) + half);
-      }
-      return out;
+      t.orientation = int(CGAL::orientation(c[0], c[1], c[2], c[3]));
     }
+}
+
+std::optional<PrismCoordinates> PrismLocator::locate(const Eigen::Vector3d& p) const {
+  // Outside the box of the nine points, p is in no closed split tet (each lies in its corners'
+  // box); compared exactly, so the answer is the one the orientation tests below would give.
+  for (int a = 0; a < 3; ++a)
+    if (p[a] < m_lo[a] || p[a] > m_hi[a]) return std::nullopt;
+  const K::Point_3 q = pt(p);
+  for (const Tet& t : m_tets) {
+    const int o = t.orientation;
+    if (o == 0) continue;  // pinched
+    // Facet i (opposite corner i) and the side corner i lies on: orientation(facet, c[i]) is
+    // o times the sign of the permutation (facet, i) of (0, 1, 2, 3) (the predicate is exactly
+    // antisymmetric).
+    static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    static const int parity[4] = {-1, 1, -1, 1};
+    bool inside = true;
+    for (int i = 0; i < 4 && inside; ++i) {
+      const auto& fc = faces[i];
+      const auto side = CGAL::orientation(pt(t.e[std::size_t(fc[0])]), pt(t.e[std::size_t(fc[1])]),
+                                          pt(t.e[std::size_t(fc[2])]), q);
+      inside = side == CGAL::COPLANAR || int(side) == parity[i] * o;
+    }
+    if (!inside) continue;
+    const auto& e = t.e;
+    Eigen::Matrix3d A;
+    A << e[1] - e[0], e[2] - e[0], e[3] - e[0];
+    const Eigen::Vector3d l = A.colPivHouseholderQr().solve(p - e[0]);
+    const double w[4] = {1 - l.sum(), l[0], l[1], l[2]};
+    PrismCoordinates out;
+    for (int k = 0; k < 4; ++k) {
+      const int corner = t.corner[std::size_t(k)];
+      out.u += w[k] * k_xy[corner % 3][0];
+      out.v += w[k] * k_xy[corner % 3][1];
+      out.h += w[k] * ((corner < 3 ? -1.0 : 0.0) + t.half);
+    }
+    return out;
+  }
   return std::nullopt;
 }
 

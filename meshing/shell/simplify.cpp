@@ -347,22 +347,31 @@ class ShellMesh : public TriMesh {
   // (u, v) of distance point x in face f (rotated to its smallest id) and the distance to the
   // linear middle triangle there, divided by scale(x).
   std::optional<Eigen::Vector3d> owned_place(Id f, int point) const {
-    const Eigen::Vector3d x = distance_point(point);
-    const Cell& c = cell(f);
-    const Eigen::Vector3i F{int(c[0]), int(c[1]), int(c[2])};
-    std::array<Eigen::Vector3d, 3> b, m, t;
-    for (int k = 0; k < 3; ++k) {
-      b[k] = base[c[k]];
-      m[k] = mid[c[k]];
-      t[k] = top[c[k]];
-    }
-    const auto q = locate_in_prism(F, b, m, t, x);
-    if (!q) return std::nullopt;
-    const int r = min_rotation(F);
-    const Eigen::Vector3d p =
-        (1 - q->u - q->v) * m[r] + q->u * m[(r + 1) % 3] + q->v * m[(r + 2) % 3];
-    return Eigen::Vector3d(q->u, q->v, (p - x).norm() / scale(point));
+    return Placer(*this, f).place(*this, point);
   }
+  // owned_place for many points in one face: its prism's locator built once.
+  struct Placer {
+    std::array<Eigen::Vector3d, 3> m;
+    int r = 0;
+    PrismLocator locator;
+    Placer(const ShellMesh& s, Id f) : Placer(s, s.cell(f)) {}
+    std::optional<Eigen::Vector3d> place(const ShellMesh& s, int point) const {
+      const Eigen::Vector3d x = s.distance_point(point);
+      const auto q = locator.locate(x);
+      if (!q) return std::nullopt;
+      const Eigen::Vector3d p =
+          (1 - q->u - q->v) * m[r] + q->u * m[(r + 1) % 3] + q->v * m[(r + 2) % 3];
+      return Eigen::Vector3d(q->u, q->v, (p - x).norm() / s.scale(point));
+    }
+
+   private:
+    Placer(const ShellMesh& s, const Cell& c)
+        : m{s.mid[c[0]], s.mid[c[1]], s.mid[c[2]]},
+          r(min_rotation(Eigen::Vector3i{int(c[0]), int(c[1]), int(c[2])})),
+          locator(Eigen::Vector3i{int(c[0]), int(c[1]), int(c[2])},
+                  {s.base[c[0]], s.base[c[1]], s.base[c[2]]}, m,
+                  {s.top[c[0]], s.top[c[1]], s.top[c[2]]}) {}
+  };
 
   // The curved-aware bound. A face is *needed* when it owns a point farther than max_distance
   // from its linear middle triangle; its fully curved patch is the order-curved_order Lagrange
@@ -554,12 +563,15 @@ class ShellMesh : public TriMesh {
     }
     std::vector<std::vector<int>> next(r.new_cells.size());
     std::vector<std::vector<Eigen::Vector3d>> where(r.new_cells.size());
+    std::vector<Placer> placers;
+    placers.reserve(r.new_cells.size());
+    for (Id f : r.new_cells) placers.emplace_back(*this, f);
     for (std::size_t j = 0; j < points.size(); ++j) {
       const int x = points[j];
       if (!on_chain.empty() && is_input_vertex(x) && on_chain[std::size_t(x)]) continue;
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
-        const auto q = owned_place(r.new_cells[i], x);
+        const auto q = placers[i].place(*this, x);
         if (!q) continue;
         // Repair mode: a violating point may stay beyond the bound, no farther than the
         // farthest one was.
@@ -1530,11 +1542,12 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     const int np = input.num_vertices() + int(options.extra_points.size());
     for (int f = 0; f < nf; ++f) {
       std::vector<Eigen::Vector3d> where;
+      const ShellMesh::Placer placer(m, Id(f));
       for (int x : options.owned_points[std::size_t(f)]) {
         if (x < 0 || x >= np)
           throw MeshingError("simplify: owned point " + std::to_string(x) + " of shell face " +
                              std::to_string(f) + " is not an input vertex or extra point");
-        const auto q = m.owned_place(Id(f), x);
+        const auto q = placer.place(m, x);
         where.push_back(q ? *q : Eigen::Vector3d(0, 0, HUGE_VAL));
       }
       m.owned.set(Id(f), options.owned_points[std::size_t(f)]);
@@ -1579,8 +1592,9 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (int f = 0; f < nf; ++f) {
       m.owned.set(Id(f), own[f]);
       std::vector<Eigen::Vector3d> where;
+      const ShellMesh::Placer placer(m, Id(f));
       for (int x : own[f]) {
-        const auto q = m.owned_place(Id(f), x);
+        const auto q = placer.place(m, x);
         where.push_back(q ? *q : Eigen::Vector3d(0, 0, HUGE_VAL));
       }
       m.place.set(Id(f), where);
@@ -1918,8 +1932,10 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     stats.owned_points.resize(faces.size());
     for (std::size_t f = 0; f < faces.size(); ++f) {
       stats.owned_points[f] = m.owned[Id(f)];
+      const ShellMesh::Placer placer(m, Id(f));
       for (int x : m.owned[Id(f)]) {
-        const auto d = m.owned_distance(Id(f), x);
+        const auto q = placer.place(m, x);
+        const auto d = q ? std::optional<double>((*q)[2]) : std::nullopt;
         stats.max_distance = std::max(stats.max_distance, d ? *d : HUGE_VAL);
         const bool bad = m.violating(x, d ? *d : HUGE_VAL);
         stats.violating_points += bad;

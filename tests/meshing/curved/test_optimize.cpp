@@ -530,8 +530,8 @@ EditPair mesh_sphere_twice(int k, const std::function<void(cv::CurvedEditOptions
 }
 }  // namespace
 
-// Replaying refused collapses (CurvedEditOptions::replay_refusals) changes nothing: the same
-// mesh bit for bit and the same counts, with the replays counted in them.
+// Replaying refused collapses and swaps (CurvedEditOptions::replay_refusals) changes nothing:
+// the same mesh bit for bit and the same counts, with the replays counted in them.
 TEST(CurvedEdit, ReplayedRefusalsGiveTheSameMesh) {
   const EditPair r =
       mesh_sphere_twice(3, [](cv::CurvedEditOptions& e) { e.replay_refusals = false; });
@@ -540,6 +540,7 @@ TEST(CurvedEdit, ReplayedRefusalsGiveTheSameMesh) {
   EXPECT_EQ(r.x.attempted, r.y.attempted);
   EXPECT_EQ(r.x.rejected_energy, r.y.rejected_energy);
   EXPECT_EQ(r.x.rejected_topology, r.y.rejected_topology);
+  EXPECT_EQ(r.x.rejected_locked, r.y.rejected_locked);
 }
 
 // The energy check of a collapse run before the editing engine carries it out

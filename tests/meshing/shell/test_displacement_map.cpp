@@ -85,7 +85,6 @@ TEST(DisplacementMap, FoldsNowhereWhereTheNormalProjectionFolds) {
   const sh::Shell shell = curvefem::test::coarse_shell(input);
   ASSERT_TRUE(sh::verify_shell(shell, input).valid());
   const sh::ShellProjection onto_input(shell, input);
-  const double unit = curvefem::bbox_longest_edge(input.V);
   const sh::DisplacementMap map = sh::bake_displacement_map(onto_input, 4);
   ASSERT_EQ(map.failures, 0);
   const sh::Reconstruction ours = sh::reconstruct(shell, map);

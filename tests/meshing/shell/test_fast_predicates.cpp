@@ -114,10 +114,20 @@ TEST(FastPredicates, LocateInPrismMatchesTheReference) {
         for (const Vector3d& c : *layer) queries.push_back(c);  // corners: on the boundary
       queries.push_back((m[0] + m[1]) / 2);
       queries.push_back((b[0] + t[1] + m[2]) / 3);
+      // One locator for all the queries (what the coarsening's re-homing uses) and the
+      // one-point function give the reference's answers.
+      const sh::PrismLocator locator(F, b, m, t);
       for (const Vector3d& q : queries) {
         const auto got = sh::locate_in_prism(F, b, m, t, q);
         const auto want = reference_locate(F, b, m, t, q);
+        const auto reused = locator.locate(q);
         ASSERT_EQ(got.has_value(), want.has_value()) << "trial " << trial;
+        ASSERT_EQ(reused.has_value(), want.has_value()) << "trial " << trial;
+        if (reused) {
+          EXPECT_EQ(reused->u, want->u);
+          EXPECT_EQ(reused->v, want->v);
+          EXPECT_EQ(reused->h, want->h);
+        }
         if (!got) {
           ++outside;
           continue;
