@@ -5,12 +5,15 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <functional>
+#include <map>
+#include <random>
 
 #include "meshing/core/lagrange_nodes.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
+#include "meshing/curved/node_key.hpp"
 #include "meshing/curved/optimize.hpp"
 
 namespace cv = curvefem::meshing::curved;
@@ -638,4 +641,44 @@ TEST(Optimize, TheWorstCellSearchNeverRaisesTheMeshsMipsNorLowersItsMinimum) {
   EXPECT_GT(on_stats.optimize.worst_seconds, 0);
   EXPECT_EQ(off_stats.optimize.worst_seconds, 0);
   EXPECT_LE(b.mean_mips, a.mean_mips * (1 + 1e-12));
+}
+
+// The curved edits' node map (open addressing) answers as std::map does: inserts that keep the
+// first id, assignments that replace it, lookups of present and absent keys, through growth.
+TEST(NodeKeyMap, AnswersAsAnOrderedMap) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<unsigned> id(0, 400), op(0, 2);
+  cv::NodeKeyMap<unsigned> map;
+  std::map<cv::NodeKey<unsigned>, int> want;
+  for (int step = 0; step < 20000; ++step) {
+    const unsigned gid[4] = {id(rng), id(rng), id(rng), id(rng)};
+    const std::array<int, 4> alpha{1, 1, 1, 0};
+    const auto key = cv::make_node_key(gid, alpha, 4);
+    const int value = step;
+    switch (op(rng)) {
+      case 0: {
+        const auto [kept, added] = map.insert(key, value);
+        const auto [it, inserted] = want.emplace(key, value);
+        ASSERT_EQ(added, inserted);
+        ASSERT_EQ(kept, it->second);
+        break;
+      }
+      case 1:
+        map.assign(key, value);
+        want[key] = value;
+        break;
+      default: {
+        const int* got = map.find(key);
+        const auto it = want.find(key);
+        ASSERT_EQ(got != nullptr, it != want.end());
+        if (got) ASSERT_EQ(*got, it->second);
+        break;
+      }
+    }
+  }
+  ASSERT_EQ(map.size(), want.size());
+  EXPECT_GT(want.size(), 5000u);
+  for (const auto& [key, value] : want) ASSERT_EQ(map.at(key), value);
+  const unsigned absent[4] = {9999, 9999, 9999, 9999};
+  EXPECT_THROW(map.at(cv::make_node_key(absent, {1, 1, 1, 0}, 4)), std::out_of_range);
 }
