@@ -563,15 +563,14 @@ class ShellMesh : public TriMesh {
     }
     std::vector<std::vector<int>> next(r.new_cells.size());
     std::vector<std::vector<Eigen::Vector3d>> where(r.new_cells.size());
-    std::vector<Placer> placers;
-    placers.reserve(r.new_cells.size());
-    for (Id f : r.new_cells) placers.emplace_back(*this, f);
+    std::vector<std::optional<Placer>> placers(r.new_cells.size());  // built when first asked
     for (std::size_t j = 0; j < points.size(); ++j) {
       const int x = points[j];
       if (!on_chain.empty() && is_input_vertex(x) && on_chain[std::size_t(x)]) continue;
       bool placed = false;
       for (std::size_t i = 0; i < r.new_cells.size() && !placed; ++i) {
-        const auto q = placers[i].place(*this, x);
+        if (!placers[i]) placers[i].emplace(*this, r.new_cells[i]);
+        const auto q = placers[i]->place(*this, x);
         if (!q) continue;
         // Repair mode: a violating point may stay beyond the bound, no farther than the
         // farthest one was.
