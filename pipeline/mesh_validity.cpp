@@ -1,5 +1,8 @@
 #include "pipeline/mesh_validity.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -28,17 +31,23 @@ MapRoundtrip map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
   std::unordered_map<int, std::vector<int>> around;
   for (Eigen::Index f = 0; f < cells.rows(); ++f)
     for (int c = 0; c < 3; ++c) around[cells(f, c)].push_back(int(f));
-  for (int v = 0; v < map.num_input_vertices(); ++v) {
+  // Each vertex alone (the inverse's queries are thread-safe), then the counts in vertex order.
+  const int nv = map.num_input_vertices();
+  std::vector<double> error(std::size_t(nv), 0.0);
+  std::vector<char> failed(std::size_t(nv), 0), checked(std::size_t(nv), 0);
+  auto pull_back = [&](int v) {
     const int f = map.vertex_face[v];
-    if (f < 0) continue;
+    if (f < 0) return;
+    checked[std::size_t(v)] = 1;
     std::vector<std::optional<mapping::InputPoint>> backs{inverse(map.image(v))};
     const double u = map.vertex_uv(v, 0), w = map.vertex_uv(v, 1);
     const std::array<double, 3> bary{1 - u - w, u, w};
     std::vector<std::pair<int, double>> weights;  // (corner node, weight), zero weights dropped
     for (int c = 0; c < 3; ++c)
       if (bary[std::size_t(c)] != 0) weights.emplace_back(cells(f, c), bary[std::size_t(c)]);
-    if (!weights.empty() && weights.size() < 3)
-      for (int g : around[weights.front().first]) {
+    const auto ring = weights.empty() ? around.end() : around.find(weights.front().first);
+    if (weights.size() < 3 && ring != around.end())
+      for (int g : ring->second) {
         std::array<double, 3> b{1e-13, 1e-13, 1e-13};
         int held = 0;
         for (const auto& [node, weight] : weights)
@@ -48,17 +57,23 @@ MapRoundtrip map_roundtrip(const BoundaryMap& map, const ShellFibers& fibers,
         const double sum = b[0] + b[1] + b[2];
         backs.push_back(inverse.from_boundary(g, b[1] / sum, b[2] / sum));
       }
-    double error = 0;
-    bool failed = false;
     for (const auto& back : backs) {
       if (!back) {
-        failed = true;
+        failed[std::size_t(v)] = 1;
         continue;
       }
-      error = std::max(error, (back->position - input.V.row(v).transpose()).norm() / unit);
+      error[std::size_t(v)] = std::max(error[std::size_t(v)],
+                                       (back->position - input.V.row(v).transpose()).norm() / unit);
     }
-    if (failed && r.failures++ == 0) r.first_failure = v;
-    if (r.worst_vertex < 0 || error > r.max_error_rel) r.max_error_rel = error, r.worst_vertex = v;
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, nv, 256), [&](const tbb::blocked_range<int>& range) {
+    for (int v = range.begin(); v < range.end(); ++v) pull_back(v);
+  });
+  for (int v = 0; v < nv; ++v) {
+    if (!checked[std::size_t(v)]) continue;
+    if (failed[std::size_t(v)] && r.failures++ == 0) r.first_failure = v;
+    if (r.worst_vertex < 0 || error[std::size_t(v)] > r.max_error_rel)
+      r.max_error_rel = error[std::size_t(v)], r.worst_vertex = v;
   }
   r.seconds = watch.seconds();
   return r;

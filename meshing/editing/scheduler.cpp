@@ -36,10 +36,10 @@ std::string PassStats::summary() const {
   std::snprintf(buf, sizeof(buf),
                 "%zu attempted, %zu succeeded, %zu rejected (before %zu, topology %zu, after %zu, "
                 "invariant %zu), "
-                "%zu stale, %zu lock failures, %zu serial tail, %.3f s on %d thread(s)",
+                "%zu stale, %zu lock failures, %zu serial tail, %zu levels, %.3f s on %d thread(s)",
                 attempted, succeeded, rejected(), rejected_before, rejected_topology,
                 rejected_after, rejected_invariant, stale_tuple + stale_priority, lock_failures,
-                serial_tail, seconds, threads);
+                serial_tail, levels, seconds, threads);
   return buf;
 }
 
@@ -56,6 +56,7 @@ void add(PassStats& into, const PassStats& s) {
   into.stale_priority += s.stale_priority;
   into.lock_failures += s.lock_failures;
   into.serial_tail += s.serial_tail;
+  into.levels += s.levels;
 }
 
 }  // namespace
@@ -152,6 +153,107 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
     });
   } else {
     seed(0, work.size());
+  }
+  if (level_region && threads > 1 && !renew_neighbor_tuples && !should_process &&
+      !stopping_criterion) {
+    // Ordered levels: the one-thread pass's order is its queue's pop order (the same pushes into
+    // the same heap; with nothing renewed it does not depend on the outcomes).
+    Queue q;
+    for (std::size_t i = 0; i < work.size(); ++i)
+      q.push(Entry{priorities[i], ops[i], work[i].second, 0});
+    std::vector<Entry> order;
+    order.reserve(q.size());
+    while (!q.empty()) {
+      order.push_back(q.top());
+      q.pop();
+    }
+    // Levels: one more than the highest level of an earlier entry sharing a region vertex.
+    std::vector<int> last(mesh.vertex_capacity(), 0), level(order.size(), 0);
+    std::vector<Id> region;
+    int levels = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      region.clear();
+      if (mesh.is_valid(order[i].t)) level_region(mesh, order[i].t, region);
+      int l = 0;
+      for (Id v : region) {
+        if (std::size_t(v) >= last.size()) last.resize(std::size_t(v) + 1, 0);
+        l = std::max(l, last[v]);
+      }
+      ++l;
+      for (Id v : region) last[v] = l;
+      level[i] = l;
+      levels = std::max(levels, l);
+    }
+    // Entries grouped by level, each group in the serial order.
+    std::vector<std::size_t> start(std::size_t(levels) + 2, 0);
+    for (int l : level) ++start[std::size_t(l) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<std::size_t> slot(order.size()), fill(start.begin(), start.end());
+    for (std::size_t i = 0; i < order.size(); ++i) slot[fill[std::size_t(level[i])]++] = i;
+    PassStats total;
+    total.threads = threads;
+    total.levels = std::size_t(levels);
+    std::vector<PassStats> per(static_cast<std::size_t>(threads));
+    auto run_entry = [&](const Entry& e, PassStats& st) {
+      if (!mesh.is_valid(e.t)) {
+        ++st.stale_tuple;
+        return;
+      }
+      ++st.attempted;
+      if ((*fns[e.op])(mesh, e.t)) {
+        ++st.succeeded;
+        return;
+      }
+      switch (mesh.last_rejection()) {
+        case Rejection::before:
+          ++st.rejected_before;
+          break;
+        case Rejection::topology:
+          ++st.rejected_topology;
+          break;
+        case Rejection::after:
+          ++st.rejected_after;
+          break;
+        case Rejection::invariant:
+          ++st.rejected_invariant;
+          break;
+        default:
+          ++st.stale_tuple;
+          break;
+      }
+    };
+    tbb::task_arena arena(threads);
+    for (int l = 1; l <= levels; ++l) {
+      const std::size_t lo = start[std::size_t(l)], hi = start[std::size_t(l) + 1];
+      if (reverse_levels) {
+        ThreadSlotScope slot0(0);
+        for (std::size_t j = hi; j-- > lo;) run_entry(order[slot[j]], per[0]);
+        continue;
+      }
+      if (hi - lo < 2) {  // not worth the hand-off
+        ThreadSlotScope slot0(0);
+        for (std::size_t j = lo; j < hi; ++j) run_entry(order[slot[j]], per[0]);
+        continue;
+      }
+      std::atomic<std::size_t> next{lo};
+      int fork = 0, join = 0;
+      CF_TSAN_RELEASE(&fork);
+      arena.execute([&] {
+        tbb::parallel_for(0, threads, [&](int p) {
+          CF_TSAN_ACQUIRE(&fork);
+          tbb::this_task_arena::isolate([&] {
+            ThreadSlotScope scope(p);
+            for (std::size_t j = next.fetch_add(1); j < hi; j = next.fetch_add(1))
+              run_entry(order[slot[j]], per[std::size_t(p)]);
+          });
+          CF_TSAN_RELEASE(&join);
+        });
+      });
+      CF_TSAN_ACQUIRE(&join);
+    }
+    for (const PassStats& s : per) add(total, s);
+    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return total;
   }
   for (std::size_t i = 0; i < work.size(); ++i) {
     const Tuple& t = work[i].second;

@@ -34,6 +34,7 @@ struct PassStats {
   std::size_t lock_failures = 0;       // try-lock attempts that failed
   std::size_t serial_tail = 0;         // operations handed to the serial tail
   std::size_t epochs = 0;              // parallel epochs (see ExecutePass::epoch_fraction)
+  std::size_t levels = 0;              // ordered levels (see ExecutePass::level_region)
   double seconds = 0;
   int threads = 1;
 
@@ -66,6 +67,24 @@ class ExecutePass {
   std::function<bool(const Mesh&)> stopping_criterion;
   // Vertex positions for the Morton partition (optional; by vertex id otherwise).
   std::function<Eigen::Vector3d(Id)> position;
+
+  // Ordered levels: a parallel pass whose mesh after the pass is the one-thread pass's, for
+  // passes that renew nothing, change no cell (vertex smoothing) and have neither
+  // `should_process` nor `stopping_criterion`. The work is taken in the order one thread would run
+  // it (the same queue); an operation's level is one more than the highest level of an earlier
+  // operation whose region shares a vertex with its own; the levels run one after another and
+  // the operations of a level in parallel, without locks. The result equals the serial pass's
+  // PROVIDED each operation reads and writes only data of its region's vertices and of cells
+  // all of whose vertices are in it, or data no operation of the pass writes — the user's
+  // argument, as for the refusal memo. `level_region(mesh, t, out)` fills `out` with the
+  // region's vertices, and may name other shared data by ids from vertex_capacity() on (e.g.
+  // vertex_capacity() + i for entry i of a user array). Used when set and num_threads > 1;
+  // otherwise ignored.
+  std::function<void(const Mesh&, const Tuple&, std::vector<Id>&)> level_region;
+  // Tests of a region argument: each level runs on one thread in the reverse of the serial order.
+  // Operations that commute as claimed give the same mesh; a region that misses a dependence
+  // swaps two dependent operations (two threads rarely run them in the wrong order).
+  bool reverse_levels = false;
 
   int num_threads = 1;
   int max_retry_limit = 10;

@@ -37,6 +37,10 @@ namespace curvefem::meshing::shell {
 
 struct SimplifyOptions {
   int threads = 1;
+  // With threads == 1: the pillar rotations and thickness growths run on this many threads as
+  // ordered levels (editing::ExecutePass::level_region), giving the one-thread shell exactly.
+  int smoothing_threads = 1;
+  bool smoothing_levels_reversed = false;  // tests: editing::ExecutePass::reverse_levels
   // One-thread collapse passes replay a refusal while nothing it read has changed (same answers,
   // meshing/shell/README.md "What the checks skip"); false runs every check (for comparisons).
   bool replay_refusals = true;

@@ -684,3 +684,114 @@ TEST(EditingTet, LinkConditionAgreesWithTheEnumerationOfTheClosedComplex) {
   EXPECT_GT(agree_true, 50);
   EXPECT_GT(agree_false, 50);
 }
+
+namespace {
+
+// Gauss-Seidel smoothing on a triangle mesh: a vertex moves toward its neighbours' mean (read from
+// its one-ring), writes a value on every face of its star, and is refused (and rolled back) when
+// the move is long against its shortest incident edge — so each outcome depends on the moves of
+// the neighbours before it, and the pass's result on its order.
+class GaussSeidelTriMesh : public ed::TriMesh {
+ public:
+  ed::Attribute<Eigen::Vector3d> position{*this, 0, Eigen::Vector3d::Zero()};
+  ed::Attribute<double> face_value{*this, 2, 0.0};
+  bool smooth_after(const ed::OperationRecord& r) override {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    const auto ring = one_ring(r.v0);
+    double shortest = HUGE_VAL;
+    for (Id u : ring) {
+      c += position[u];
+      shortest = std::min(shortest, (position[u] - position[r.v0]).norm());
+    }
+    const Eigen::Vector3d to = 0.3 * position[r.v0] + 0.7 * c / double(ring.size());
+    move = (to - position[r.v0]).norm() / shortest;
+    position.set(r.v0, to);
+    for (Id f : r.new_cells) face_value.set(f, face_value[f] + to.norm());
+    return true;
+  }
+  bool invariants(const ed::OperationRecord&) override { return move < 0.35; }
+  thread_local static double move;
+};
+thread_local double GaussSeidelTriMesh::move = 0;
+
+}  // namespace
+
+// Ordered levels (ExecutePass::level_region) on two threads give the one-thread pass bit for bit:
+// positions, face values and counts, over several passes of a smoothing whose every move reads
+// its neighbours. Running the same work on two threads without the levels (try-locks) gives a
+// different mesh, so the comparison can fail.
+TEST(EditingScheduler, OrderedLevelsGiveTheOneThreadPass) {
+  const auto sphere = curvefem::make_icosphere(4);
+  auto make = [&](GaussSeidelTriMesh& m) {
+    std::vector<ed::TriMesh::Cell> cells;
+    for (int f = 0; f < sphere.F.rows(); ++f)
+      cells.push_back({Id(sphere.F(f, 0)), Id(sphere.F(f, 1)), Id(sphere.F(f, 2))});
+    m.initialize(sphere.V.rows(), cells);
+    std::mt19937 same(5);
+    std::normal_distribution<double> j(0.0, 0.02);
+    for (int v = 0; v < sphere.V.rows(); ++v)
+      m.position.set(v, sphere.V.row(v).transpose() + Eigen::Vector3d(j(same), j(same), j(same)));
+  };
+  using Pass = ed::ExecutePass<ed::TriMesh>;
+  struct Result {
+    std::vector<Eigen::Vector3d> position;
+    std::vector<double> face_value;
+    std::vector<std::array<std::size_t, 3>> counts;  // attempted, succeeded, rejected per pass
+    std::size_t levels = 0;
+  };
+  auto run = [&](int threads, bool levels, bool reversed = false) {
+    GaussSeidelTriMesh m;
+    make(m);
+    Result out;
+    for (int pass_index = 0; pass_index < 4; ++pass_index) {
+      Pass pass;
+      pass.num_threads = threads;
+      pass.operations["smooth"] = [&m](ed::TriMesh&, const ed::TriMesh::Tuple& t) {
+        return m.smooth_vertex(t);
+      };
+      pass.priority = [](const ed::TriMesh&, const std::string&, const ed::TriMesh::Tuple&) {
+        return 0.0;
+      };
+      pass.position = [&m](Id v) { return m.position[v]; };
+      pass.reverse_levels = reversed;
+      if (levels)
+        pass.level_region = [](const ed::TriMesh& mesh, const ed::TriMesh::Tuple& t,
+                               std::vector<Id>& region) {
+          region = mesh.one_ring(t.vid);
+          region.push_back(t.vid);
+        };
+      std::vector<Pass::Work> work;
+      for (const auto& v : m.get_vertices()) work.emplace_back("smooth", v);
+      const ed::PassStats s = pass.run(m, work);
+      out.counts.push_back({s.attempted, s.succeeded, s.rejected_invariant});
+      out.levels += s.levels;
+    }
+    for (std::size_t v = 0; v < m.vertex_capacity(); ++v) out.position.push_back(m.position[Id(v)]);
+    for (std::size_t f = 0; f < m.cell_capacity(); ++f)
+      out.face_value.push_back(m.face_value[Id(f)]);
+    return out;
+  };
+  const Result serial = run(1, false);
+  const Result ordered = run(2, true);
+  // Some moves refused, some accepted, in every pass.
+  for (const auto& c : serial.counts) {
+    EXPECT_GT(c[1], 100u);
+    EXPECT_GT(c[2], 10u);
+  }
+  EXPECT_EQ(serial.levels, 0u);
+  EXPECT_GT(ordered.levels, 4u);                         // several levels per pass
+  EXPECT_LT(ordered.levels, 4 * sphere.V.rows() / 20u);  // ... with many operations each
+  EXPECT_EQ(ordered.counts, serial.counts);
+  ASSERT_EQ(ordered.position.size(), serial.position.size());
+  for (std::size_t v = 0; v < serial.position.size(); ++v)
+    ASSERT_EQ(ordered.position[v], serial.position[v]) << "vertex " << v;
+  EXPECT_EQ(ordered.face_value, serial.face_value);
+  // Each level in the reverse of the serial order: the same again (its operations commute).
+  const Result reversed = run(2, true, true);
+  EXPECT_EQ(reversed.counts, serial.counts);
+  EXPECT_EQ(reversed.position, serial.position);
+  EXPECT_EQ(reversed.face_value, serial.face_value);
+  // Without the levels the two-thread pass runs in another order and ends elsewhere.
+  const Result unordered = run(2, false);
+  EXPECT_NE(unordered.position, serial.position);
+}

@@ -186,6 +186,59 @@ TEST(ShellSimplify, ReplayedRefusalsGiveTheSameShell) {
   }
 }
 
+// Rotations, growths and pans as ordered levels on two threads (SimplifyOptions::smoothing_threads,
+// the curved mesher's deterministic mode) give the one-thread shell bit for bit, with the same
+// counts, on a noisy sphere under a distance bound and a shape guard (so pans run).
+TEST(ShellSimplify, SmoothingAsOrderedLevelsGivesTheOneThreadShell) {
+  SurfaceMesh sphere = curvefem::make_icosphere(4);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+  for (int v = 0; v < sphere.V.rows(); ++v) sphere.V.row(v) *= 1 + jitter(rng);
+  sh::ShellStats stats;
+  const sh::Shell shell = build(sphere, stats);
+  const double unit = curvefem::bbox_longest_edge(sphere.V);
+  sh::SimplifyOptions o;
+  o.max_distance = 0.02 * unit;
+  o.max_mips = 6;
+  o.rounds = 4;
+  o.zoom = 0.1 * unit;
+  o.pan = true;
+  sh::SimplifyStats one, two;
+  const sh::Shell a = sh::simplify_shell(shell, sphere, o, one);
+  o.smoothing_threads = 2;
+  const sh::Shell b = sh::simplify_shell(shell, sphere, o, two);
+  EXPECT_EQ(a.F, b.F);
+  EXPECT_EQ(a.mid, b.mid);
+  EXPECT_EQ(a.base, b.base);
+  EXPECT_EQ(a.top, b.top);
+  EXPECT_EQ(a.input_vertex, b.input_vertex);
+  EXPECT_EQ(one.collapses, two.collapses);
+  EXPECT_EQ(one.rotations, two.rotations);
+  EXPECT_EQ(one.zooms, two.zooms);
+  EXPECT_EQ(one.pans, two.pans);
+  EXPECT_GT(one.rotations, 50);
+  EXPECT_GT(one.zooms, 50);
+  EXPECT_GT(one.pans, 5);
+  std::size_t levels_one = 0, levels_two = 0;
+  for (const auto& [name, s] : one.passes) levels_one += s.levels;
+  for (const auto& [name, s] : two.passes)
+    if (name == "rotate" || name == "zoom" || name == "pan") levels_two += s.levels;
+  EXPECT_EQ(levels_one, 0u);
+  EXPECT_GT(levels_two, 0u);  // the two-thread run did run as levels
+  expect_valid(b, sphere);
+  // Each level in the reverse order: the same shell, so the moves of a level commute (two
+  // threads alone rarely run two dependent moves of a level out of order).
+  o.smoothing_levels_reversed = true;
+  sh::SimplifyStats reversed;
+  const sh::Shell c = sh::simplify_shell(shell, sphere, o, reversed);
+  EXPECT_EQ(a.F, c.F);
+  EXPECT_EQ(a.mid, c.mid);
+  EXPECT_EQ(a.base, c.base);
+  EXPECT_EQ(a.top, c.top);
+  EXPECT_EQ(a.input_vertex, c.input_vertex);
+  EXPECT_EQ(one.pans, reversed.pans);
+}
+
 TEST(ShellSimplify, FlipsRotationsAndGrowthCoarsenFurtherUnderADistanceBound) {
   // Collapses alone stop where the kept pillars no longer fit the coarse faces and where the
   // initial shell is too thin for the chords; flips, pillar rotation and thickness growth must
