@@ -59,6 +59,27 @@ void add(PassStats& into, const PassStats& s) {
   into.levels += s.levels;
 }
 
+// Counts why an operation was refused.
+void count_rejection(PassStats& st, Rejection why) {
+  switch (why) {
+    case Rejection::before:
+      ++st.rejected_before;
+      break;
+    case Rejection::topology:
+      ++st.rejected_topology;
+      break;
+    case Rejection::after:
+      ++st.rejected_after;
+      break;
+    case Rejection::invariant:
+      ++st.rejected_invariant;
+      break;
+    default:
+      ++st.stale_tuple;
+      break;
+  }
+}
+
 }  // namespace
 
 std::vector<int> morton_partition(std::size_t n, const std::function<Eigen::Vector3d(Id)>& position,
@@ -204,23 +225,7 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
         ++st.succeeded;
         return;
       }
-      switch (mesh.last_rejection()) {
-        case Rejection::before:
-          ++st.rejected_before;
-          break;
-        case Rejection::topology:
-          ++st.rejected_topology;
-          break;
-        case Rejection::after:
-          ++st.rejected_after;
-          break;
-        case Rejection::invariant:
-          ++st.rejected_invariant;
-          break;
-        default:
-          ++st.stale_tuple;
-          break;
-      }
+      count_rejection(st, mesh.last_rejection());
     };
     tbb::task_arena arena(threads);
     for (int l = 1; l <= levels; ++l) {
@@ -325,23 +330,7 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
           }
         if (stopping_criterion && stopping_criterion(mesh)) stop.store(true);
       } else {
-        switch (mesh.last_rejection()) {
-          case Rejection::before:
-            ++st.rejected_before;
-            break;
-          case Rejection::topology:
-            ++st.rejected_topology;
-            break;
-          case Rejection::after:
-            ++st.rejected_after;
-            break;
-          case Rejection::invariant:
-            ++st.rejected_invariant;
-            break;
-          default:
-            ++st.stale_tuple;
-            break;
-        }
+        count_rejection(st, mesh.last_rejection());
       }
       if (locking) mesh.release_vertex_locks();
     }

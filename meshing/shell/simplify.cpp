@@ -1753,53 +1753,41 @@ Shell simplify_shell(const Shell& shell, const SurfaceMesh& input, const Simplif
     for (const auto& v : m.get_vertices())
       if (flags[v.vid]) work.emplace_back(name, v);
     std::fill(flags.begin(), flags.end(), 0);
-    if (mode != ShellMesh::Smoothing::pan && options.threads <= 1 &&
-        options.smoothing_threads > 1) {
+    const bool pan = mode == ShellMesh::Smoothing::pan;
+    const bool levels = options.threads <= 1 && options.smoothing_threads > 1;
+    if (!pan && !levels) return run(name, pass, work);
+    if (levels) {
       // Ordered levels, the same shell as one thread: a rotation or growth of v reads and writes
       // only the data of v's closed one-ring and of cells within it, the data of the cells
       // across its star's edges and of their corners (curved_ok) — written only by operations
       // on vertices within two edges of v, whose regions meet v's — and the fixed input; the
       // smoothing flags and memo stamps it sets are on its one-ring (no other operation of the
-      // pass reads them; a stamp only has to be later than any refusal before the pass).
-      pass.level_region = [](const TriMesh& mesh, const TriMesh::Tuple& t, std::vector<Id>& out) {
-        out = mesh.one_ring(t.vid);
-        out.push_back(t.vid);
-      };
-      pass.num_threads = options.smoothing_threads;
-      pass.reverse_levels = options.smoothing_levels_reversed;
-      pass.position = [&m](Id v) { return m.mid[v]; };
-      const editing::PassStats s = pass.run(m, work);
-      stats.passes.emplace_back(name, s);
-      log::debug("simplify: ", name, ": ", s.summary());
-      return int(s.succeeded);
-    }
-    if (mode != ShellMesh::Smoothing::pan) return run(name, pass, work);
-    // Pans run on one thread, or as ordered levels: `taken` is shared by moves whose stars do
-    // not overlap.
-    m.taken.assign(std::size_t(input.num_vertices()), 0);
-    for (const auto& v : m.get_vertices())
-      if (m.input_vertex[v.vid] >= 0) m.taken[std::size_t(m.input_vertex[v.vid])] = 1;
-    for (std::size_t x = 0; x < m.on_chain.size(); ++x)
-      if (m.on_chain[x]) m.taken[x] = 1;
-    pass.num_threads = 1;
-    if (options.threads <= 1 && options.smoothing_threads > 1) {
-      // Ordered levels, the same shell as one thread: a pan of v reads and writes what a
-      // rotation does (above) and `taken` of the input vertices around v's input vertex x (it
-      // moves v to one of them), named by ids from the vertex capacity on.
+      // pass reads them; a stamp only has to be later than any refusal before the pass). A pan
+      // also reads and writes `taken` of the input vertices around v's input vertex (it moves v
+      // to one of them), named by ids from the vertex capacity on.
       const std::size_t cap = m.vertex_capacity();
-      pass.level_region = [&m, cap](const TriMesh& mesh, const TriMesh::Tuple& t,
-                                    std::vector<Id>& out) {
+      pass.level_region = [&m, cap, pan](const TriMesh& mesh, const TriMesh::Tuple& t,
+                                         std::vector<Id>& out) {
         out = mesh.one_ring(t.vid);
         out.push_back(t.vid);
         const int x = m.input_vertex[t.vid];
-        if (x < 0) return;
+        if (!pan || x < 0) return;
         out.push_back(Id(cap + std::size_t(x)));
         for (int g : (*m.vf)[std::size_t(x)])
           for (int k = 0; k < 3; ++k) out.push_back(Id(cap + std::size_t(m.input->F()(g, k))));
       };
-      pass.num_threads = options.smoothing_threads;
       pass.reverse_levels = options.smoothing_levels_reversed;
     }
+    // Pans run on one thread, or as ordered levels: `taken` is shared by moves whose stars do
+    // not overlap.
+    if (pan) {
+      m.taken.assign(std::size_t(input.num_vertices()), 0);
+      for (const auto& v : m.get_vertices())
+        if (m.input_vertex[v.vid] >= 0) m.taken[std::size_t(m.input_vertex[v.vid])] = 1;
+      for (std::size_t x = 0; x < m.on_chain.size(); ++x)
+        if (m.on_chain[x]) m.taken[x] = 1;
+    }
+    pass.num_threads = levels ? options.smoothing_threads : 1;
     pass.position = [&m](Id v) { return m.mid[v]; };
     const editing::PassStats st = pass.run(m, work);
     stats.passes.emplace_back(name, st);
