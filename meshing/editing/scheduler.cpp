@@ -59,6 +59,25 @@ void add(PassStats& into, const PassStats& s) {
   into.levels += s.levels;
 }
 
+// body(p) for p in [0, threads) on the arena's threads, each isolated in thread slot p (the
+// engine's per-thread journals and locks), with the fork and join annotated for TSan.
+template <class Body>
+void run_in_slots(tbb::task_arena& arena, int threads, const Body& body) {
+  int fork = 0, join = 0;
+  CF_TSAN_RELEASE(&fork);
+  arena.execute([&] {
+    tbb::parallel_for(0, threads, [&](int p) {
+      CF_TSAN_ACQUIRE(&fork);
+      tbb::this_task_arena::isolate([&] {
+        ThreadSlotScope slot(p);
+        body(p);
+      });
+      CF_TSAN_RELEASE(&join);
+    });
+  });
+  CF_TSAN_ACQUIRE(&join);
+}
+
 // Counts why an operation was refused.
 void count_rejection(PassStats& st, Rejection why) {
   switch (why) {
@@ -241,20 +260,10 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
         continue;
       }
       std::atomic<std::size_t> next{lo};
-      int fork = 0, join = 0;
-      CF_TSAN_RELEASE(&fork);
-      arena.execute([&] {
-        tbb::parallel_for(0, threads, [&](int p) {
-          CF_TSAN_ACQUIRE(&fork);
-          tbb::this_task_arena::isolate([&] {
-            ThreadSlotScope scope(p);
-            for (std::size_t j = next.fetch_add(1); j < hi; j = next.fetch_add(1))
-              run_entry(order[slot[j]], per[std::size_t(p)]);
-          });
-          CF_TSAN_RELEASE(&join);
-        });
+      run_in_slots(arena, threads, [&](int p) {
+        for (std::size_t j = next.fetch_add(1); j < hi; j = next.fetch_add(1))
+          run_entry(order[slot[j]], per[std::size_t(p)]);
       });
-      CF_TSAN_ACQUIRE(&join);
     }
     for (const PassStats& s : per) add(total, s);
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -368,19 +377,7 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
       if (!any || stop.load()) break;
       const double threshold = epoch_threshold();
       ++total.epochs;
-      int fork = 0, join = 0;
-      CF_TSAN_RELEASE(&fork);
-      arena.execute([&] {
-        tbb::parallel_for(0, threads, [&](int p) {
-          CF_TSAN_ACQUIRE(&fork);
-          tbb::this_task_arena::isolate([&] {
-            ThreadSlotScope slot(p);
-            process(queues[p], per[p], true, threshold);
-          });
-          CF_TSAN_RELEASE(&join);
-        });
-      });
-      CF_TSAN_ACQUIRE(&join);
+      run_in_slots(arena, threads, [&](int p) { process(queues[p], per[p], true, threshold); });
       if (!stop.load() && !tail.empty()) {
         // The serial tail of this epoch: same threshold; what it renews below the threshold
         // goes back to the partition queues for the next epochs.
