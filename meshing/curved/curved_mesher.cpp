@@ -1395,10 +1395,12 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     });
     st.linear_phase_concurrent = true;
   }
-  // A deterministic coarsening's pillar rotations and growths run as ordered levels on every
-  // core, the same shell as on one thread. Also beside a concurrent linear phase: sharing its
-  // core there cost less than leaving it (paired, 2 threads: armadillo 0.95x, homer 0.97x,
-  // rocker_arm 0.99x, whose linear phase is used; on the cores it leaves: 0.95x, 0.96x, 1.25x).
+  // A deterministic coarsening's pillar rotations, growths and pans run as ordered levels on
+  // every core, the same shell as on one thread. Also beside a concurrent linear phase: sharing
+  // its core there cost less than giving the linear phase up (paired, 2 threads, against the
+  // levels on the cores it leaves: armadillo 0.95x, homer 0.97x, rocker_arm 0.99x; without it:
+  // 0.95x, 0.96x, and 1.25x on rocker_arm, whose linear phase is used). Against one thread for
+  // these passes the whole runs are within noise (benchmarks/results/coarsening_speed_4.md).
   if (options.deterministic) simplify_options.smoothing_threads = cores;
   sh::SimplifyStats simplify_stats;
   sh::Shell shell;
