@@ -249,14 +249,10 @@ PassStats ExecutePass<Mesh>::run(Mesh& mesh, const std::vector<Work>& work) {
     tbb::task_arena arena(threads);
     for (int l = 1; l <= levels; ++l) {
       const std::size_t lo = start[std::size_t(l)], hi = start[std::size_t(l) + 1];
-      if (reverse_levels) {
+      if (reverse_levels || hi - lo < 2) {  // a test's order, or not worth the hand-off
         ThreadSlotScope slot0(0);
-        for (std::size_t j = hi; j-- > lo;) run_entry(order[slot[j]], per[0]);
-        continue;
-      }
-      if (hi - lo < 2) {  // not worth the hand-off
-        ThreadSlotScope slot0(0);
-        for (std::size_t j = lo; j < hi; ++j) run_entry(order[slot[j]], per[0]);
+        for (std::size_t k = lo; k < hi; ++k)
+          run_entry(order[slot[reverse_levels ? lo + hi - 1 - k : k]], per[0]);
         continue;
       }
       std::atomic<std::size_t> next{lo};

@@ -39,6 +39,14 @@ void expect_valid(const sh::Shell& shell, const SurfaceMesh& input, const std::s
   EXPECT_LT(v.roundtrip_max_error_rel, 1e-12) << what;
 }
 // The boundary map needs every coarse corner exactly on an input vertex, each on its own.
+// The same coarse shell, bit for bit.
+void expect_same_shell(const sh::Shell& a, const sh::Shell& b, const std::string& what) {
+  EXPECT_EQ(a.F, b.F) << what;
+  EXPECT_EQ(a.mid, b.mid) << what;
+  EXPECT_EQ(a.base, b.base) << what;
+  EXPECT_EQ(a.top, b.top) << what;
+  EXPECT_EQ(a.input_vertex, b.input_vertex) << what;
+}
 void expect_on_distinct_input_vertices(const sh::Shell& coarse, const SurfaceMesh& input) {
   std::set<int> used;
   for (int m = 0; m < coarse.mid.rows(); ++m) {
@@ -207,11 +215,7 @@ TEST(ShellSimplify, SmoothingAsOrderedLevelsGivesTheOneThreadShell) {
   const sh::Shell a = sh::simplify_shell(shell, sphere, o, one);
   o.smoothing_threads = 2;
   const sh::Shell b = sh::simplify_shell(shell, sphere, o, two);
-  EXPECT_EQ(a.F, b.F);
-  EXPECT_EQ(a.mid, b.mid);
-  EXPECT_EQ(a.base, b.base);
-  EXPECT_EQ(a.top, b.top);
-  EXPECT_EQ(a.input_vertex, b.input_vertex);
+  expect_same_shell(a, b, "two threads");
   EXPECT_EQ(one.collapses, two.collapses);
   EXPECT_EQ(one.rotations, two.rotations);
   EXPECT_EQ(one.zooms, two.zooms);
@@ -231,11 +235,7 @@ TEST(ShellSimplify, SmoothingAsOrderedLevelsGivesTheOneThreadShell) {
   o.smoothing_levels_reversed = true;
   sh::SimplifyStats reversed;
   const sh::Shell c = sh::simplify_shell(shell, sphere, o, reversed);
-  EXPECT_EQ(a.F, c.F);
-  EXPECT_EQ(a.mid, c.mid);
-  EXPECT_EQ(a.base, c.base);
-  EXPECT_EQ(a.top, c.top);
-  EXPECT_EQ(a.input_vertex, c.input_vertex);
+  expect_same_shell(a, c, "levels reversed");
   EXPECT_EQ(one.pans, reversed.pans);
 }
 
