@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <limits>
 #include <optional>
 #include <set>
@@ -13,6 +14,8 @@
 #include "meshing/core/prism_split.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/shell/bevel.hpp"
+#include "meshing/shell/prism_positivity.hpp"
+#include "meshing/shell/shell_intersection.hpp"
 
 namespace curvefem::meshing::shell {
 namespace {
@@ -62,6 +65,131 @@ std::string shrink_top(Shell& shell, CageLayer& layer, const NestedCageOptions& 
   return "";
 }
 
+/// Vertices of the top surface that the next layer's shell would pinch: no direction sees all
+/// their faces (extrusion_directions with the shell's tolerance).
+std::vector<int> pinch_points(const Shell& shell, const NestedCageOptions& options) {
+  const ExtrusionDirections d =
+      extrusion_directions(shell.top, shell.F, options.shell.singularity_tolerance);
+  std::vector<int> out;
+  for (int v = 0; v < int(d.singular.size()); ++v)
+    if (d.singular[std::size_t(v)]) out.push_back(v);
+  return out;
+}
+
+/// Shortens the top pillars at and around the top surface's pinch points (each pinch point's
+/// and its neighbours', kept fraction `shrink` per round), round by round. A round's change is
+/// kept only when the prisms it changes stay positive and their top triangles meet neither the
+/// layer inside nor, anywhere, the rest of the top surface; when it is refused, the round's
+/// pinch points are split in halves and each half tried alone, down to single points, and a
+/// single point that cannot be shortened is not tried again. The whole shell is verified at the
+/// end (verify_shell: positivity, separation, section, roundtrip); if that fails, the rounds are
+/// redone with every change verified so. A shell left with more pinch points than it started
+/// with is given back as it was. Returns the pinch points left.
+int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options,
+                bool verify_each) {
+  const Shell start = shell;
+  const ShellVerification start_verification = layer.verification;
+  std::vector<int> pinched = pinch_points(shell, options);
+  layer.top_pinch_points_before = int(pinched.size());
+  layer.unpinch_rounds = 0;
+  if (!verify_each) layer.unpinch_trials = 0;
+  if (pinched.empty()) return 0;
+  const int nv = int(shell.top.rows());
+  std::vector<std::vector<int>> ring(static_cast<std::size_t>(nv)),
+      faces_of(static_cast<std::size_t>(nv));
+  for (int f = 0; f < int(shell.F.rows()); ++f)
+    for (int c = 0; c < 3; ++c) {
+      faces_of[std::size_t(shell.F(f, c))].push_back(f);
+      for (int e = 1; e < 3; ++e)
+        ring[std::size_t(shell.F(f, c))].push_back(shell.F(f, (c + e) % 3));
+    }
+  const InputSurfaceIndex inside(layer.surface.V, layer.surface.F, shell.reference);
+  // The changed prisms alone: positive, top triangles off the layer inside.
+  auto locally_ok = [&](const Shell& trial, const std::set<int>& moved) {
+    std::set<int> faces;
+    for (int v : moved)
+      faces.insert(faces_of[std::size_t(v)].begin(), faces_of[std::size_t(v)].end());
+    for (int f : faces) {
+      std::array<Eigen::Vector3d, 3> b, m, t;
+      std::array<bool, 3> sing{};
+      Eigen::Vector3i ids;
+      for (int k = 0; k < 3; ++k) {
+        const int v = trial.F(f, k);
+        b[std::size_t(k)] = trial.base.row(v);
+        m[std::size_t(k)] = trial.mid.row(v);
+        t[std::size_t(k)] = trial.top.row(v);
+        sing[std::size_t(k)] = trial.singular[std::size_t(v)];
+        ids[k] = sing[std::size_t(k)] ? trial.input_vertex[std::size_t(v)] : -1;
+      }
+      if (!shell_face_positive(b, m, t, sing)) return false;
+      if (inside.triangle_intersects(t, sing, ids)) return false;
+    }
+    return true;
+  };
+  std::set<int> stuck;
+  int stalled = 0;
+  for (int round = 0; round < options.max_shrink_rounds; ++round) {
+    std::vector<int> active;
+    for (int v : pinched)
+      if (!stuck.count(v)) active.push_back(v);
+    if (active.empty()) break;
+    std::vector<std::vector<int>> groups{active};
+    bool changed = false;
+    while (!groups.empty()) {
+      const std::vector<int> group = std::move(groups.back());
+      groups.pop_back();
+      Shell trial = shell;
+      std::set<int> vertices(group.begin(), group.end());
+      for (int v : group) vertices.insert(ring[std::size_t(v)].begin(), ring[std::size_t(v)].end());
+      for (int v : vertices)
+        trial.top.row(v) =
+            shell.mid.row(v) + options.shrink * (shell.top.row(v) - shell.mid.row(v));
+      ++layer.unpinch_trials;
+      bool ok = locally_ok(trial, vertices) && top_pairs(trial).empty();
+      if (ok && verify_each) {
+        const ShellVerification check = verify_shell(trial, layer.surface);
+        ok = check.valid();
+        if (ok) layer.verification = check;
+      }
+      if (ok) {
+        shell = std::move(trial);
+        changed = true;
+      } else if (group.size() > 1) {
+        const auto half = group.begin() + std::ptrdiff_t(group.size() / 2);
+        groups.emplace_back(group.begin(), half);
+        groups.emplace_back(half, group.end());
+      } else {
+        stuck.insert(group[0]);
+      }
+    }
+    if (!changed) continue;
+    ++layer.unpinch_rounds;
+    const std::vector<int> left = pinch_points(shell, options);
+    stalled = left.size() < pinched.size() ? 0 : stalled + 1;
+    pinched = left;
+    if (pinched.empty() || stalled == options.max_shrink_rounds / 2) break;
+  }
+  if (int(pinched.size()) > layer.top_pinch_points_before) {  // worse than before: undo
+    shell = start;
+    layer.verification = start_verification;
+    layer.unpinch_rounds = 0;
+    return layer.top_pinch_points_before;
+  }
+  if (layer.unpinch_rounds > 0 && !verify_each) {
+    const ShellVerification check = verify_shell(shell, layer.surface);
+    if (!check.valid()) {
+      log::info(
+          "nested cages: the unpinched shell does not verify; unpinching again with every "
+          "change verified");
+      shell = start;
+      layer.verification = start_verification;
+      return unpinch_top(shell, layer, options, true);
+    }
+    layer.verification = check;
+  }
+  return int(pinched.size());
+}
+
 }  // namespace
 
 NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions& options,
@@ -96,6 +224,7 @@ NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions
     Shell shell;
     std::unique_ptr<BeveledShell> beveled;
     double built_thickness = -1;
+    std::optional<std::pair<CageLayer, Shell>> best;  // fewest pinch points left so far
     for (std::size_t a = 0; a < attempts.size(); ++a) {
       if (attempts[a].thickness != built_thickness) {
         ShellOptions so = options.shell;
@@ -119,19 +248,42 @@ NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions
       }
       layer.attempt = attempts[a].name;
       why = shrink_top(shell, layer, options);
-      if (why.empty()) break;
+      if (why.empty()) {
+        if (k + 1 == options.layers || !options.unpinch) break;
+        // The next layer's shell is pinched (zero thickness) wherever this cage has a pinch
+        // point, so the next cage would touch this one there: unpinch, and when points are left
+        // try the next, less coarsened attempt (its middle surface is closer to the layer
+        // inside); the attempt with the fewest points left is kept, the coarsest on a tie.
+        layer.top_pinch_points = unpinch_top(shell, layer, options, false);
+        if (!best || layer.top_pinch_points < best->first.top_pinch_points)
+          best.emplace(layer, shell);
+        if (layer.top_pinch_points == 0) break;
+        log::info("nested cages: layer ", k + 1, ", ", attempts[a].name, ": ",
+                  layer.top_pinch_points, " pinch points of the cage left");
+        if (a + 1 == attempts.size()) break;
+        continue;
+      }
       log::info("nested cages: layer ", k + 1, ", ", attempts[a].name, ": ", why);
-      if (a + 1 == attempts.size())
+      if (a + 1 == attempts.size()) {
+        if (best) break;
         throw MeshingError("nested cages: layer " + std::to_string(k + 1) + ": " + why);
+      }
     }
-    if (layer.shrink_rounds == 0) layer.verification = verify_shell(shell, layer.surface);
+    if (best && (!why.empty() || layer.top_pinch_points > 0)) {
+      layer = std::move(best->first);
+      shell = std::move(best->second);
+    }
+    if (layer.shrink_rounds == 0 && layer.unpinch_rounds == 0)
+      layer.verification = verify_shell(shell, layer.surface);
     layer.cage.V = shell.top;
     layer.cage.F = shell.F;
     layer.shell = std::move(shell);
     layer.seconds = clock.seconds();
     log::info("nested cages: layer ", k + 1, ": ", layer.cage.num_faces(), " faces, ",
               layer.self_intersecting_pairs_before, " self-intersecting pairs removed in ",
-              layer.shrink_rounds, " rounds (", layer.shrunk_pillars, " pillars), ", layer.seconds,
+              layer.shrink_rounds, " rounds (", layer.shrunk_pillars, " pillars), pinch points ",
+              layer.top_pinch_points_before, " -> ", layer.top_pinch_points, " in ",
+              layer.unpinch_rounds, " rounds (", layer.unpinch_trials, " trials), ", layer.seconds,
               " s");
     current = layer.cage;
     out.layers.push_back(std::move(layer));

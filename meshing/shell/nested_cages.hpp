@@ -14,9 +14,17 @@
 // shell a quarter as thick, then not simplified (its middle surface is the layer inside, which
 // shrinking cannot cross). Only when even that
 // fails does the construction stop, with a MeshingError naming the layer and the pairs left.
-// At a singular vertex of a layer (zero-length pillar) the next cage touches that layer: the
-// thesis fills the shell there (§4.5, pinching alternative); that is not done, and the touching
-// is reported (CageLayer::singular_vertices and the checks of `curvefem shell --cages`).
+// At a singular vertex of a layer (zero-length pillar) the next cage touches that layer. When the
+// layer is a cage, such a vertex is a "pinch point" of the top surface the layer came from (no
+// direction sees all its faces), usually where a coarse top surface folds into a narrow crease:
+// before the next layer is built, the top pillars at and around each pinch point are shortened,
+// round by round (the top surface then approaches the middle surface, a section of the layer
+// inside), each change kept only if the changed prisms stay positive and off the layer inside
+// and the top surface free of self-intersections, the whole shell verified at the end. Points
+// left over make the layer try its next, less coarsened shell; the shell with the fewest is kept.
+// At singular vertices of the input itself the first cage still touches the input: the thesis
+// fills the shell there (§4.5, pinching alternative); that is not done, and the touching is
+// reported (CageLayer::singular_vertices and the checks of `curvefem shell --cages`).
 //
 // Maps. cage_to_input carries points of cage k + 1, given as a face and barycentric coordinates
 // (a point of the top surface is on the boundary of the shell, where locating a rounded position
@@ -50,6 +58,9 @@ struct NestedCageOptions {
   int threads = 1;
   double shrink = 0.8;  ///< fraction of a top half-pillar kept per shrink round
   int max_shrink_rounds = 40;
+  /// Shorten the top pillars around the cage's pinch points before the next layer is built on
+  /// it (see CageLayer::top_pinch_points); false only to measure what it changes.
+  bool unpinch = true;
 };
 
 struct CageLayer {
@@ -66,7 +77,12 @@ struct CageLayer {
   int singular_vertices = 0;  ///< zero-length pillars: the cage touches the layer inside there
   int self_intersecting_pairs_before = 0;  ///< the top surface's pairs before shrinking
   int shrink_rounds = 0;
-  int shrunk_pillars = 0;          ///< top half-pillars shortened at least once
+  int shrunk_pillars = 0;  ///< top half-pillars shortened at least once
+  /// Vertices of the cage the next layer's shell would pinch (no extrusion direction), before
+  /// and after their top pillars and their neighbours' were shortened (unpinch_rounds rounds);
+  /// not computed for the last layer.
+  int top_pinch_points_before = 0, top_pinch_points = 0, unpinch_rounds = 0;
+  int unpinch_trials = 0;          ///< shortenings tried (each verified), the attempt kept
   ShellVerification verification;  ///< the final shell against `surface`
   double seconds = 0;
 };
