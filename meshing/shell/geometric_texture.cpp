@@ -178,4 +178,21 @@ TexturedSurface apply_geometric_texture(const ShellProjection& onto_input,
   return out;
 }
 
+TileSeparation separate_for_tile(Shell& shell, const SurfaceMesh& surface,
+                                 const SurfaceMesh& tile) {
+  TileSeparation out;
+  for (int v = 0; v < tile.num_vertices(); ++v) {
+    out.top = out.top || tile.V(v, 2) > 0.5;
+    out.base = out.base || tile.V(v, 2) < 0.5;
+  }
+  const NestedCageOptions defaults;
+  if (out.top)
+    out.top_failure = separate_shell_side(shell, surface, true, defaults.shrink,
+                                          defaults.max_shrink_rounds, out.top_stats);
+  if (out.base)
+    out.base_failure = separate_shell_side(shell, surface, false, defaults.shrink,
+                                           defaults.max_shrink_rounds, out.base_stats);
+  return out;
+}
+
 }  // namespace curvefem::meshing::shell

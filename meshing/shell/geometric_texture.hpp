@@ -13,16 +13,20 @@
 // plus the middle, for type A or B faces: split_tile_at_tets), so every piece lies in one tet and
 // its image is the flat triangle of its mapped corners: the textured surface is the exact image
 // of the tile. So a tile free of self-intersections gives copies that meet neither themselves nor
-// each other wherever the shell's prisms are positive and do not overlap; `curvefem shell
-// --texture` checks the result with exact predicates. The input is not a constraint: it crosses
-// the fibers at heights of its own, and a tile reaching below it meets it (reported).
+// each other wherever the shell's prisms are positive and do not overlap. Overlaps show where the
+// top (base) surface meets itself; separate_for_tile shortens the half-pillars there first.
+// `curvefem shell --texture` does both and checks the result with exact predicates. The input is
+// not a constraint: it crosses the fibers at heights of its own, and a tile reaching below it meets
+// it (reported).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "meshing/core/surface_mesh.hpp"
+#include "meshing/shell/nested_cages.hpp"
 #include "meshing/shell/projection.hpp"
+#include "meshing/shell/shell.hpp"
 
 namespace curvefem::meshing::shell {
 
@@ -45,6 +49,17 @@ SurfaceMesh split_tile_at_tets(const SurfaceMesh& tile, bool type_a);
 struct TexturedSurface {
   SurfaceMesh mesh;  ///< one copy of the (split) tile per prism (tags: the prism's face)
 };
+
+/// Where the shell's top (base) surface meets itself, the upper (lower) halves of prisms overlap
+/// and copies lying there can meet. For each half the tile reaches (t > ½, t < ½), that surface
+/// is freed of self-intersections by shortening its half-pillars (separate_shell_side, as for
+/// nested cages, each change verified against `surface`). `shell` is changed in place.
+struct TileSeparation {
+  bool top = false, base = false;  ///< which halves the tile reaches
+  SeparationStats top_stats, base_stats;
+  std::string top_failure, base_failure;  ///< "" when that surface ended free of pairs
+};
+TileSeparation separate_for_tile(Shell& shell, const SurfaceMesh& surface, const SurfaceMesh& tile);
 
 /// Copies `tile` into every prism of onto_input's shell (parallel over prisms).
 TexturedSurface apply_geometric_texture(const ShellProjection& onto_input, const SurfaceMesh& tile);

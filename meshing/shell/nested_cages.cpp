@@ -25,44 +25,54 @@ std::vector<std::pair<int, int>> top_pairs(const Shell& shell) {
   return check::find_self_intersections(shell.top, shell.F, degenerate, true).pairs;
 }
 
-/// Shortens the top pillars of the faces in self-intersecting pairs of the top surface, round by
-/// round, each round verified; "" when the top surface ends free of self-intersections, else why
-/// not (shell left as it was before the failing round).
-std::string shrink_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options) {
-  auto pairs = top_pairs(shell);
-  layer.self_intersecting_pairs_before = int(pairs.size());
-  layer.shrink_rounds = 0;
-  std::set<int> shrunk;
-  while (!pairs.empty()) {
-    if (layer.shrink_rounds == options.max_shrink_rounds)
-      return "the top surface still has " + std::to_string(pairs.size()) +
-             " self-intersecting face pairs after " + std::to_string(layer.shrink_rounds) +
-             " shrink rounds";
-    Shell trial = shell;
-    std::set<int> vertices;
-    for (const auto& [f, g] : pairs)
-      for (int c = 0; c < 3; ++c) {
-        vertices.insert(shell.F(f, c));
-        vertices.insert(shell.F(g, c));
-      }
-    for (int v : vertices)
-      trial.top.row(v) = shell.mid.row(v) + options.shrink * (shell.top.row(v) - shell.mid.row(v));
-    const ShellVerification check = verify_shell(trial, layer.surface);
-    if (!check.positive() || !check.separated() || !check.section())
-      return "shortening the top pillars of " + std::to_string(vertices.size()) +
-             " vertices to remove " + std::to_string(pairs.size()) +
-             " self-intersecting pairs of the top surface breaks the shell (" +
-             std::to_string(check.non_positive_faces) + " prisms not positive, " +
-             std::to_string(check.intersecting_input_faces) + " faces meeting it, " +
-             std::to_string(check.non_section_faces) + " not a section)";
-    shrunk.insert(vertices.begin(), vertices.end());
-    layer.verification = check;  // of the shell kept: no need to verify it again
-    shell = std::move(trial);
-    ++layer.shrink_rounds;
-    pairs = top_pairs(shell);
+/// The prisms around moved pillar ends alone: positive (both halves), and their top and base
+/// triangles off `surface` (contact at pinch points only). A cheap screen before verify_shell.
+class LocalCheck {
+ public:
+  LocalCheck(const Shell& shell, const SurfaceMesh& surface)
+      : faces_of_(static_cast<std::size_t>(shell.top.rows())),
+        index_(surface.V, surface.F, shell.reference) {
+    for (int f = 0; f < int(shell.F.rows()); ++f)
+      for (int c = 0; c < 3; ++c) faces_of_[std::size_t(shell.F(f, c))].push_back(f);
   }
-  layer.shrunk_pillars = int(shrunk.size());
-  return "";
+  bool ok(const Shell& trial, const std::set<int>& moved) const {
+    std::set<int> faces;
+    for (int v : moved)
+      faces.insert(faces_of_[std::size_t(v)].begin(), faces_of_[std::size_t(v)].end());
+    for (int f : faces) {
+      std::array<Eigen::Vector3d, 3> b, m, t;
+      std::array<bool, 3> sing{};
+      Eigen::Vector3i ids;
+      for (int k = 0; k < 3; ++k) {
+        const int v = trial.F(f, k);
+        b[std::size_t(k)] = trial.base.row(v);
+        m[std::size_t(k)] = trial.mid.row(v);
+        t[std::size_t(k)] = trial.top.row(v);
+        sing[std::size_t(k)] = trial.singular[std::size_t(v)];
+        ids[k] = sing[std::size_t(k)] ? trial.input_vertex[std::size_t(v)] : -1;
+      }
+      if (!shell_face_positive(b, m, t, sing)) return false;
+      if (index_.triangle_intersects(t, sing, ids) || index_.triangle_intersects(b, sing, ids))
+        return false;
+    }
+    return true;
+  }
+
+ private:
+  std::vector<std::vector<int>> faces_of_;
+  InputSurfaceIndex index_;
+};
+
+/// shrink_top: separate_shell_side on the top, with the layer's counts.
+std::string shrink_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options) {
+  SeparationStats stats;
+  const std::string why = separate_shell_side(shell, layer.surface, true, options.shrink,
+                                              options.max_shrink_rounds, stats);
+  layer.self_intersecting_pairs_before = stats.pairs_before;
+  layer.shrink_rounds = stats.rounds;
+  if (stats.rounds > 0) layer.verification = stats.verification;
+  if (why.empty()) layer.shrunk_pillars = stats.shortened_pillars;
+  return why;
 }
 
 /// Vertices of the top surface that the next layer's shell would pinch: no direction sees all
@@ -95,37 +105,12 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
   if (!verify_each) layer.unpinch_trials = 0;
   if (pinched.empty()) return 0;
   const int nv = int(shell.top.rows());
-  std::vector<std::vector<int>> ring(static_cast<std::size_t>(nv)),
-      faces_of(static_cast<std::size_t>(nv));
+  std::vector<std::vector<int>> ring(static_cast<std::size_t>(nv));
   for (int f = 0; f < int(shell.F.rows()); ++f)
-    for (int c = 0; c < 3; ++c) {
-      faces_of[std::size_t(shell.F(f, c))].push_back(f);
+    for (int c = 0; c < 3; ++c)
       for (int e = 1; e < 3; ++e)
         ring[std::size_t(shell.F(f, c))].push_back(shell.F(f, (c + e) % 3));
-    }
-  const InputSurfaceIndex inside(layer.surface.V, layer.surface.F, shell.reference);
-  // The changed prisms alone: positive, top triangles off the layer inside.
-  auto locally_ok = [&](const Shell& trial, const std::set<int>& moved) {
-    std::set<int> faces;
-    for (int v : moved)
-      faces.insert(faces_of[std::size_t(v)].begin(), faces_of[std::size_t(v)].end());
-    for (int f : faces) {
-      std::array<Eigen::Vector3d, 3> b, m, t;
-      std::array<bool, 3> sing{};
-      Eigen::Vector3i ids;
-      for (int k = 0; k < 3; ++k) {
-        const int v = trial.F(f, k);
-        b[std::size_t(k)] = trial.base.row(v);
-        m[std::size_t(k)] = trial.mid.row(v);
-        t[std::size_t(k)] = trial.top.row(v);
-        sing[std::size_t(k)] = trial.singular[std::size_t(v)];
-        ids[k] = sing[std::size_t(k)] ? trial.input_vertex[std::size_t(v)] : -1;
-      }
-      if (!shell_face_positive(b, m, t, sing)) return false;
-      if (inside.triangle_intersects(t, sing, ids)) return false;
-    }
-    return true;
-  };
+  const LocalCheck local(shell, layer.surface);
   std::set<int> stuck;
   int stalled = 0;
   for (int round = 0; round < options.max_shrink_rounds; ++round) {
@@ -145,7 +130,7 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
         trial.top.row(v) =
             shell.mid.row(v) + options.shrink * (shell.top.row(v) - shell.mid.row(v));
       ++layer.unpinch_trials;
-      bool ok = locally_ok(trial, vertices) && top_pairs(trial).empty();
+      bool ok = local.ok(trial, vertices) && top_pairs(trial).empty();
       if (ok && verify_each) {
         const ShellVerification check = verify_shell(trial, layer.surface);
         ok = check.valid();
@@ -191,6 +176,110 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
 }
 
 }  // namespace
+
+namespace {
+
+std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, double shrink,
+                          int max_rounds, SeparationStats& stats, bool verify_each) {
+  const Shell start = shell;
+  const LocalCheck local(shell, surface);
+  Eigen::MatrixXd& side = top ? shell.top : shell.base;
+  const char* name = top ? "top" : "base";
+  auto side_pairs = [&](const Shell& s) {
+    const Eigen::MatrixXd& m = top ? s.top : s.base;
+    const auto degenerate = check::exactly_degenerate_faces(m, s.F);
+    return check::find_self_intersections(m, s.F, degenerate, true).pairs;
+  };
+  auto pairs = side_pairs(shell);
+  stats = SeparationStats{};
+  stats.pairs_before = int(pairs.size());
+  std::set<int> shortened;
+  std::string why;
+  while (!pairs.empty()) {
+    if (stats.rounds == max_rounds) {
+      why = std::string("the ") + name + " surface still has " + std::to_string(pairs.size()) +
+            " self-intersecting face pairs after " + std::to_string(stats.rounds) +
+            " shrink rounds";
+      break;
+    }
+    // The round's pairs together; a refused group is split in halves, each tried alone, so a
+    // pair whose shortening breaks the shell does not hold back the others.
+    std::vector<std::vector<std::pair<int, int>>> groups{pairs};
+    bool changed = false;
+    std::string refused;
+    while (!groups.empty()) {
+      const auto group = std::move(groups.back());
+      groups.pop_back();
+      Shell trial = shell;
+      Eigen::MatrixXd& trial_side = top ? trial.top : trial.base;
+      std::set<int> vertices;
+      for (const auto& [f, g] : group)
+        for (int c = 0; c < 3; ++c) {
+          vertices.insert(shell.F(f, c));
+          vertices.insert(shell.F(g, c));
+        }
+      for (int v : vertices)
+        trial_side.row(v) = shell.mid.row(v) + shrink * (side.row(v) - shell.mid.row(v));
+      ShellVerification check;
+      check.non_positive_faces = -1;  // not verified: the local screen refused it
+      bool ok = local.ok(trial, vertices);
+      if (ok && verify_each) {
+        check = verify_shell(trial, surface);
+        ok = check.positive() && check.separated() && check.section();
+        if (ok) stats.verification = check;  // of the shell kept: no need to verify it again
+      }
+      if (ok) {
+        shortened.insert(vertices.begin(), vertices.end());
+        shell = std::move(trial);
+        changed = true;
+      } else if (group.size() > 1 && !verify_each) {
+        const auto half = group.begin() + std::ptrdiff_t(group.size() / 2);
+        groups.emplace_back(group.begin(), half);
+        groups.emplace_back(half, group.end());
+      } else if (refused.empty()) {
+        refused =
+            std::string("shortening the ") + name + " pillars of " +
+            (group.size() == 1 ? "faces " + std::to_string(group[0].first) + " and " +
+                                     std::to_string(group[0].second) +
+                                     " (a self-intersecting pair of the " + name + " surface)"
+                               : "the faces of " + std::to_string(group.size()) +
+                                     " self-intersecting pairs of the " + name + " surface") +
+            " breaks the shell (" +
+            (check.non_positive_faces < 0
+                 ? std::string("a prism around them not positive, or meeting the surface")
+                 : std::to_string(check.non_positive_faces) + " prisms not positive, " +
+                       std::to_string(check.intersecting_input_faces) + " faces meeting it, " +
+                       std::to_string(check.non_section_faces) + " not a section") +
+            ")";
+      }
+    }
+    if (!changed) {
+      why = refused;
+      break;
+    }
+    ++stats.rounds;
+    pairs = side_pairs(shell);
+  }
+  if (why.empty()) stats.shortened_pillars = int(shortened.size());
+  // Changes were kept (also within a round that then stopped) on the local screen alone: the
+  // whole shell is verified once, and on failure everything is redone with each change verified.
+  if (!verify_each && !shortened.empty()) {
+    const ShellVerification check = verify_shell(shell, surface);
+    if (!(check.positive() && check.separated() && check.section())) {
+      shell = start;
+      return separate_side(shell, surface, top, shrink, max_rounds, stats, true);
+    }
+    stats.verification = check;
+  }
+  return why;
+}
+
+}  // namespace
+
+std::string separate_shell_side(Shell& shell, const SurfaceMesh& surface, bool top, double shrink,
+                                int max_rounds, SeparationStats& stats) {
+  return separate_side(shell, surface, top, shrink, max_rounds, stats, false);
+}
 
 NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions& options,
                                const ProgressFn& progress) {

@@ -94,6 +94,26 @@ struct NestedCages {
   std::vector<std::unique_ptr<ShellProjection>> projections;
 };
 
+struct SeparationStats {
+  int pairs_before = 0;            ///< self-intersecting pairs of that surface before shrinking
+  int rounds = 0;                  ///< shrink rounds kept
+  int shortened_pillars = 0;       ///< half-pillars shortened at least once (when it succeeded)
+  ShellVerification verification;  ///< of the shell kept, when rounds > 0
+};
+
+/// The thesis' resolution of a shell's self-intersections (§4.5): the half-pillars on one side
+/// (top or base) of the faces in self-intersecting pairs of that surface are shortened toward
+/// the middle surface (kept fraction `shrink` per round), round by round, each change verified
+/// against `surface`: each change is screened on the prisms it moves (positive, their top and
+/// base triangles off `surface`), and a refused change is split, each half of the round's pairs
+/// tried alone down to single pairs; the whole shell is then verified once (verify_shell:
+/// positive, separated, a section), and if that fails, the rounds are redone with every round
+/// verified whole and not split (the construction before the screen). "" when that surface ends
+/// free of self-intersections, else why not (a round in which nothing could be shortened; the
+/// shell keeps the changes made until then).
+std::string separate_shell_side(Shell& shell, const SurfaceMesh& surface, bool top, double shrink,
+                                int max_rounds, SeparationStats& stats);
+
 /// MeshingError when a layer's top surface cannot be made free of self-intersections by
 /// shrinking (the layer's number and the pairs left), InputError for a bad input.
 NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions& options,

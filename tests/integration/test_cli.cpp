@@ -426,6 +426,11 @@ TEST(Cli, ShellGeometricTextureFromABuiltInTileAndAnObjTile) {
   EXPECT_EQ(t["pairs_with_input"], 0);
   EXPECT_EQ(t["degenerate_faces"], 0);
   EXPECT_GT(t["min_distance_to_input_rel"].get<double>(), 0.0);
+  // The knob lies in the upper half only: the top surface was checked for self-intersections
+  // (a sphere's has none), the base was not.
+  EXPECT_EQ(t["shell_separation"]["top"]["self_intersecting_pairs_before"], 0);
+  EXPECT_EQ(t["shell_separation"]["top"]["failure"], "");
+  EXPECT_FALSE(t["shell_separation"].contains("base"));
   EXPECT_EQ(io::read_surface(dir / "knob" / "textured.obj").num_faces(), t["faces"].get<int>());
   // A tile of one's own: a tetrahedron in the upper half of the prism.
   std::ofstream(dir / "tet.obj") << "v 0.2 0.2 0.6\nv 0.6 0.2 0.6\nv 0.2 0.6 0.6\nv 0.3 0.3 0.9\n"

@@ -225,14 +225,27 @@ nlohmann::ordered_json run_geometric_texture(const sh::Shell& shell, const Surfa
                                              const SurfaceMesh& tile, const std::string& tile_spec,
                                              const StagedOutputDir& out) {
   Stopwatch clock;
-  const sh::ShellProjection onto_input(shell, surface);
+  sh::Shell separated = shell;
+  const sh::TileSeparation sep = sh::separate_for_tile(separated, surface, tile);
+  nlohmann::ordered_json separation = nlohmann::ordered_json::object();
+  auto side = [](const sh::SeparationStats& st, const std::string& why) {
+    return nlohmann::ordered_json{{"self_intersecting_pairs_before", st.pairs_before},
+                                  {"shrink_rounds", st.rounds},
+                                  {"shortened_pillars", st.shortened_pillars},
+                                  {"failure", why}};
+  };
+  if (sep.top) separation["top"] = side(sep.top_stats, sep.top_failure);
+  if (sep.base) separation["base"] = side(sep.base_stats, sep.base_failure);
+  const double separate_s = clock.seconds();
+  const sh::ShellProjection onto_input(separated, surface);
   const sh::TexturedSurface textured = sh::apply_geometric_texture(onto_input, tile);
-  const double map_s = clock.seconds();
+  const double map_s = clock.seconds() - separate_s;
   io::write_surface(out.path("textured.obj"), textured.mesh, io::SurfaceFormat::obj);
   nlohmann::ordered_json j = {{"tile", tile_spec},
                               {"tile_faces", tile.num_faces()},
                               {"copies", int(shell.F.rows())},
-                              {"faces", textured.mesh.num_faces()}};
+                              {"faces", textured.mesh.num_faces()},
+                              {"shell_separation", separation}};
   {
     const SurfaceMesh& m = textured.mesh;
     const auto degenerate = check::exactly_degenerate_faces(m.V, m.F);
@@ -246,7 +259,8 @@ nlohmann::ordered_json run_geometric_texture(const sh::Shell& shell, const Surfa
     j["min_distance_to_input_rel"] =
         check::distances_to_surface(m.V, surface.V, surface.F).minCoeff() / unit;
   }
-  j["time_s"] = {{"map", map_s}, {"checks", clock.seconds() - map_s}};
+  j["time_s"] = {
+      {"separate", separate_s}, {"map", map_s}, {"checks", clock.seconds() - separate_s - map_s}};
   return j;
 }
 

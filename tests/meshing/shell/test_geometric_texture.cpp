@@ -9,6 +9,7 @@
 #include "meshing/core/error.hpp"
 #include "meshing/core/prism_split.hpp"
 #include "meshing/shell/geometric_texture.hpp"
+#include "meshing/shell/nested_cages.hpp"
 #include "meshing/shell/projection.hpp"
 #include "meshing/shell/shell.hpp"
 #include "meshing/shell/simplify.hpp"
@@ -88,6 +89,46 @@ TEST(GeometricTexture, CopiesAreTheExactImageAndDoNotIntersect) {
   EXPECT_EQ(
       curvefem::check::find_self_intersections(t.mesh.V, t.mesh.F, degenerate, false).pairs.size(),
       0u);
+}
+
+TEST(GeometricTexture, TopSurfaceSelfIntersectionsAreShortenedAwaySoCopiesDoNotMeet) {
+  // A split ring with a slit of 0.1 ε: the simplified shell's top surfaces meet across the slit,
+  // so the upper halves of prisms on either side overlap and a tile filling most of the upper
+  // half meets the copies across. Shortening those top pillars (separate_shell_side, as for
+  // nested cages; separate_for_tile) removes the overlap.
+  const SurfaceMesh input = curvefem::make_adversarial("split_ring_01");
+  sh::Shell shell = curvefem::test::coarse_shell(input);
+  SurfaceMesh tile;  // a triangular slab over most of the face, t in [0.9, 0.97]
+  tile.V.resize(6, 3);
+  tile.V << 0.05, 0.05, 0.9, 0.9, 0.05, 0.9, 0.05, 0.9, 0.9,  //
+      0.05, 0.05, 0.97, 0.9, 0.05, 0.97, 0.05, 0.9, 0.97;
+  tile.F.resize(8, 3);
+  tile.F << 0, 2, 1, 3, 4, 5, 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 2, 0, 3, 2, 3, 5;
+  sh::check_tile(tile, "slab");
+  auto pairs = [](const SurfaceMesh& m) {
+    const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
+    EXPECT_EQ(std::count(degenerate.begin(), degenerate.end(), 1), 0);
+    return curvefem::check::find_self_intersections(m.V, m.F, degenerate, false).pairs.size();
+  };
+  {
+    const sh::ShellProjection projection(shell, input);
+    EXPECT_GT(pairs(sh::apply_geometric_texture(projection, tile).mesh), 0u);
+  }
+  const sh::TileSeparation sep = sh::separate_for_tile(shell, input, tile);
+  EXPECT_TRUE(sep.top);
+  EXPECT_FALSE(sep.base);  // the tile stays in the upper half
+  EXPECT_EQ(sep.top_failure, "");
+  const sh::SeparationStats& stats = sep.top_stats;
+  EXPECT_GT(stats.pairs_before, 0);
+  EXPECT_GT(stats.rounds, 0);
+  EXPECT_GT(stats.shortened_pillars, 0);
+  EXPECT_TRUE(sh::verify_shell(shell, input).valid());
+  SurfaceMesh top;
+  top.V = shell.top;
+  top.F = shell.F;
+  EXPECT_EQ(pairs(top), 0u);
+  const sh::ShellProjection projection(shell, input);
+  EXPECT_EQ(pairs(sh::apply_geometric_texture(projection, tile).mesh), 0u);
 }
 
 TEST(GeometricTexture, ATileOutsideTheUnitPrismOrUnknownIsRefused) {
