@@ -93,8 +93,9 @@ std::vector<int> pinch_points(const Shell& shell, const NestedCageOptions& optio
 /// pinch points are split in halves and each half tried alone, down to single points, and a
 /// single point that cannot be shortened is not tried again. The whole shell is verified at the
 /// end (verify_shell: positivity, separation, section, roundtrip); if that fails, the rounds are
-/// redone with every change verified so. A shell left with more pinch points than it started
-/// with is given back as it was. Returns the pinch points left.
+/// redone with every round verified whole and not split (a refused round ends the shortening of
+/// its points). A shell left with more pinch points than it started with is given back as it
+/// was. Returns the pinch points left.
 int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options,
                 bool verify_each) {
   const Shell start = shell;
@@ -139,12 +140,12 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
       if (ok) {
         shell = std::move(trial);
         changed = true;
-      } else if (group.size() > 1) {
+      } else if (group.size() > 1 && !verify_each) {
         const auto half = group.begin() + std::ptrdiff_t(group.size() / 2);
         groups.emplace_back(group.begin(), half);
         groups.emplace_back(half, group.end());
       } else {
-        stuck.insert(group[0]);
+        stuck.insert(group.begin(), group.end());
       }
     }
     if (!changed) continue;
@@ -174,10 +175,6 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
   }
   return int(pinched.size());
 }
-
-}  // namespace
-
-namespace {
 
 std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, double shrink,
                           int max_rounds, SeparationStats& stats, bool verify_each) {
@@ -260,7 +257,7 @@ std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, do
     ++stats.rounds;
     pairs = side_pairs(shell);
   }
-  if (why.empty()) stats.shortened_pillars = int(shortened.size());
+  stats.shortened_pillars = int(shortened.size());
   // Changes were kept (also within a round that then stopped) on the local screen alone: the
   // whole shell is verified once, and on failure everything is redone with each change verified.
   if (!verify_each && !shortened.empty()) {

@@ -97,7 +97,7 @@ struct NestedCages {
 struct SeparationStats {
   int pairs_before = 0;            ///< self-intersecting pairs of that surface before shrinking
   int rounds = 0;                  ///< shrink rounds kept
-  int shortened_pillars = 0;       ///< half-pillars shortened at least once (when it succeeded)
+  int shortened_pillars = 0;       ///< half-pillars shortened at least once
   ShellVerification verification;  ///< of the shell kept, when rounds > 0
 };
 
