@@ -63,6 +63,39 @@ class LocalCheck {
   InputSurfaceIndex index_;
 };
 
+/// One round of shortenings. The items (pinch points, self-intersecting pairs) are tried
+/// together: the pillar ends `vertices_of(group)` on the top (base) side move to fraction `shrink`
+/// of their distance from the middle surface, and `accept(trial, vertices)` decides. A refused
+/// group is split in halves, each tried alone (when `split`); `refused(group)` is called for a
+/// group refused and not split. Returns whether a change was kept (`shell` holds all of them).
+template <class Item, class VerticesOf, class Accept, class Refused>
+bool shorten_in_halves(Shell& shell, bool top, double shrink, std::vector<Item> items, bool split,
+                       const VerticesOf& vertices_of, const Accept& accept,
+                       const Refused& refused) {
+  std::vector<std::vector<Item>> groups{std::move(items)};
+  bool changed = false;
+  while (!groups.empty()) {
+    const std::vector<Item> group = std::move(groups.back());
+    groups.pop_back();
+    const std::set<int> vertices = vertices_of(group);
+    Shell trial = shell;
+    Eigen::MatrixXd& to = top ? trial.top : trial.base;
+    const Eigen::MatrixXd& from = top ? shell.top : shell.base;
+    for (int v : vertices) to.row(v) = shell.mid.row(v) + shrink * (from.row(v) - shell.mid.row(v));
+    if (accept(trial, vertices)) {
+      shell = std::move(trial);
+      changed = true;
+    } else if (split && group.size() > 1) {
+      const auto half = group.begin() + std::ptrdiff_t(group.size() / 2);
+      groups.emplace_back(group.begin(), half);
+      groups.emplace_back(half, group.end());
+    } else {
+      refused(group);
+    }
+  }
+  return changed;
+}
+
 /// shrink_top: separate_shell_side on the top, with the layer's counts.
 std::string shrink_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options) {
   SeparationStats stats;
@@ -119,35 +152,23 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
     for (int v : pinched)
       if (!stuck.count(v)) active.push_back(v);
     if (active.empty()) break;
-    std::vector<std::vector<int>> groups{active};
-    bool changed = false;
-    while (!groups.empty()) {
-      const std::vector<int> group = std::move(groups.back());
-      groups.pop_back();
-      Shell trial = shell;
-      std::set<int> vertices(group.begin(), group.end());
-      for (int v : group) vertices.insert(ring[std::size_t(v)].begin(), ring[std::size_t(v)].end());
-      for (int v : vertices)
-        trial.top.row(v) =
-            shell.mid.row(v) + options.shrink * (shell.top.row(v) - shell.mid.row(v));
-      ++layer.unpinch_trials;
-      bool ok = local.ok(trial, vertices) && top_pairs(trial).empty();
-      if (ok && verify_each) {
-        const ShellVerification check = verify_shell(trial, layer.surface);
-        ok = check.valid();
-        if (ok) layer.verification = check;
-      }
-      if (ok) {
-        shell = std::move(trial);
-        changed = true;
-      } else if (group.size() > 1 && !verify_each) {
-        const auto half = group.begin() + std::ptrdiff_t(group.size() / 2);
-        groups.emplace_back(group.begin(), half);
-        groups.emplace_back(half, group.end());
-      } else {
-        stuck.insert(group.begin(), group.end());
-      }
-    }
+    const bool changed = shorten_in_halves(
+        shell, true, options.shrink, active, !verify_each,
+        [&](const std::vector<int>& group) {
+          std::set<int> vertices(group.begin(), group.end());
+          for (int v : group)
+            vertices.insert(ring[std::size_t(v)].begin(), ring[std::size_t(v)].end());
+          return vertices;
+        },
+        [&](const Shell& trial, const std::set<int>& vertices) {
+          ++layer.unpinch_trials;
+          if (!local.ok(trial, vertices) || !top_pairs(trial).empty()) return false;
+          if (!verify_each) return true;
+          const ShellVerification check = verify_shell(trial, layer.surface);
+          if (check.valid()) layer.verification = check;
+          return check.valid();
+        },
+        [&](const std::vector<int>& group) { stuck.insert(group.begin(), group.end()); });
     if (!changed) continue;
     ++layer.unpinch_rounds;
     const std::vector<int> left = pinch_points(shell, options);
@@ -180,7 +201,6 @@ std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, do
                           int max_rounds, SeparationStats& stats, bool verify_each) {
   const Shell start = shell;
   const LocalCheck local(shell, surface);
-  Eigen::MatrixXd& side = top ? shell.top : shell.base;
   const char* name = top ? "top" : "base";
   auto side_pairs = [&](const Shell& s) {
     const Eigen::MatrixXd& m = top ? s.top : s.base;
@@ -201,55 +221,48 @@ std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, do
     }
     // The round's pairs together; a refused group is split in halves, each tried alone, so a
     // pair whose shortening breaks the shell does not hold back the others.
-    std::vector<std::vector<std::pair<int, int>>> groups{pairs};
-    bool changed = false;
     std::string refused;
-    while (!groups.empty()) {
-      const auto group = std::move(groups.back());
-      groups.pop_back();
-      Shell trial = shell;
-      Eigen::MatrixXd& trial_side = top ? trial.top : trial.base;
-      std::set<int> vertices;
-      for (const auto& [f, g] : group)
-        for (int c = 0; c < 3; ++c) {
-          vertices.insert(shell.F(f, c));
-          vertices.insert(shell.F(g, c));
-        }
-      for (int v : vertices)
-        trial_side.row(v) = shell.mid.row(v) + shrink * (side.row(v) - shell.mid.row(v));
-      ShellVerification check;
-      check.non_positive_faces = -1;  // not verified: the local screen refused it
-      bool ok = local.ok(trial, vertices);
-      if (ok && verify_each) {
-        check = verify_shell(trial, surface);
-        ok = check.positive() && check.separated() && check.section();
-        if (ok) stats.verification = check;  // of the shell kept: no need to verify it again
-      }
-      if (ok) {
-        shortened.insert(vertices.begin(), vertices.end());
-        shell = std::move(trial);
-        changed = true;
-      } else if (group.size() > 1 && !verify_each) {
-        const auto half = group.begin() + std::ptrdiff_t(group.size() / 2);
-        groups.emplace_back(group.begin(), half);
-        groups.emplace_back(half, group.end());
-      } else if (refused.empty()) {
-        refused =
-            std::string("shortening the ") + name + " pillars of " +
-            (group.size() == 1 ? "faces " + std::to_string(group[0].first) + " and " +
-                                     std::to_string(group[0].second) +
-                                     " (a self-intersecting pair of the " + name + " surface)"
-                               : "the faces of " + std::to_string(group.size()) +
-                                     " self-intersecting pairs of the " + name + " surface") +
-            " breaks the shell (" +
-            (check.non_positive_faces < 0
-                 ? std::string("a prism around them not positive, or meeting the surface")
-                 : std::to_string(check.non_positive_faces) + " prisms not positive, " +
-                       std::to_string(check.intersecting_input_faces) + " faces meeting it, " +
-                       std::to_string(check.non_section_faces) + " not a section") +
-            ")";
-      }
-    }
+    ShellVerification check;  // of the last change tried
+    const bool changed = shorten_in_halves(
+        shell, top, shrink, pairs, !verify_each,
+        [&](const std::vector<std::pair<int, int>>& group) {
+          std::set<int> vertices;
+          for (const auto& [f, g] : group)
+            for (int c = 0; c < 3; ++c) {
+              vertices.insert(shell.F(f, c));
+              vertices.insert(shell.F(g, c));
+            }
+          return vertices;
+        },
+        [&](const Shell& trial, const std::set<int>& vertices) {
+          check = ShellVerification{};
+          check.non_positive_faces = -1;  // not verified: the local screen refused it
+          if (!local.ok(trial, vertices)) return false;
+          if (verify_each) {
+            check = verify_shell(trial, surface);
+            if (!(check.positive() && check.separated() && check.section())) return false;
+            stats.verification = check;  // of the shell kept: no need to verify it again
+          }
+          shortened.insert(vertices.begin(), vertices.end());
+          return true;
+        },
+        [&](const std::vector<std::pair<int, int>>& group) {
+          if (!refused.empty()) return;
+          refused =
+              std::string("shortening the ") + name + " pillars of " +
+              (group.size() == 1 ? "faces " + std::to_string(group[0].first) + " and " +
+                                       std::to_string(group[0].second) +
+                                       " (a self-intersecting pair of the " + name + " surface)"
+                                 : "the faces of " + std::to_string(group.size()) +
+                                       " self-intersecting pairs of the " + name + " surface") +
+              " breaks the shell (" +
+              (check.non_positive_faces < 0
+                   ? std::string("a prism around them not positive, or meeting the surface")
+                   : std::to_string(check.non_positive_faces) + " prisms not positive, " +
+                         std::to_string(check.intersecting_input_faces) + " faces meeting it, " +
+                         std::to_string(check.non_section_faces) + " not a section") +
+              ")";
+        });
     if (!changed) {
       why = refused;
       break;
