@@ -11,8 +11,10 @@
 // With
 // --displacement-map a displacement map is baked through P (meshing/shell/displacement_map.hpp)
 // and the surface it rebuilds is checked against the input and against normal projection; with
-// --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp), with
-// --texture a tile is copied into every prism (meshing/shell/geometric_texture.hpp), with
+// --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp; a cage's
+// pinch points are shortened away before the next layer is built on it), with --texture a tile
+// is copied into every prism (meshing/shell/geometric_texture.hpp) of a copy of the shell whose
+// top (base) surface, where the tile reaches, was first freed of self-intersections, with
 // --boolean the shell is built on INPUT OP B (meshing/shell/boolean.hpp) and both operands'
 // fields are carried onto its coarse remeshing; each is checked by
 // tools/curvefem/shell_applications.hpp.
@@ -190,7 +192,8 @@ void register_shell(CLI::App& app) {
       ->check(CLI::Range(1, 16));
   sub->add_option("--texture", args->texture,
                   "copy a tile into every prism above the input (geometric texture): knob, ring, "
-                  "spike, or an OBJ whose vertices (a, b, t) lie in the unit prism; writes "
+                  "spike, or an OBJ whose vertices (a, b, t) lie in the unit prism; the shell's "
+                  "surfaces the tile reaches are freed of self-intersections first; writes "
                   "textured.obj");
   auto* boolean_opt =
       sub->add_option("--boolean", args->boolean,
