@@ -82,7 +82,7 @@ struct CageLayer {
   /// and after their top pillars and their neighbours' were shortened (unpinch_rounds rounds);
   /// not computed for the last layer.
   int top_pinch_points_before = 0, top_pinch_points = 0, unpinch_rounds = 0;
-  int unpinch_trials = 0;          ///< shortenings tried (each verified), the attempt kept
+  int unpinch_trials = 0;  ///< shortenings tried (each screened on its prisms), the attempt kept
   ShellVerification verification;  ///< the final shell against `surface`
   double seconds = 0;
 };
