@@ -20,9 +20,11 @@
 namespace curvefem::meshing::shell {
 namespace {
 
-std::vector<std::pair<int, int>> top_pairs(const Shell& shell) {
-  const auto degenerate = check::exactly_degenerate_faces(shell.top, shell.F);
-  return check::find_self_intersections(shell.top, shell.F, degenerate, true).pairs;
+/// Exactly self-intersecting face pairs of the shell's top (or base) surface.
+std::vector<std::pair<int, int>> side_pairs(const Shell& shell, bool top) {
+  const Eigen::MatrixXd& m = top ? shell.top : shell.base;
+  const auto degenerate = check::exactly_degenerate_faces(m, shell.F);
+  return check::find_self_intersections(m, shell.F, degenerate, true).pairs;
 }
 
 /// The prisms around moved pillar ends alone: positive (both halves), and their top and base
@@ -162,7 +164,7 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
         },
         [&](const Shell& trial, const std::set<int>& vertices) {
           ++layer.unpinch_trials;
-          if (!local.ok(trial, vertices) || !top_pairs(trial).empty()) return false;
+          if (!local.ok(trial, vertices) || !side_pairs(trial, true).empty()) return false;
           if (!verify_each) return true;
           const ShellVerification check = verify_shell(trial, layer.surface);
           if (check.valid()) layer.verification = check;
@@ -202,12 +204,7 @@ std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, do
   const Shell start = shell;
   const LocalCheck local(shell, surface);
   const char* name = top ? "top" : "base";
-  auto side_pairs = [&](const Shell& s) {
-    const Eigen::MatrixXd& m = top ? s.top : s.base;
-    const auto degenerate = check::exactly_degenerate_faces(m, s.F);
-    return check::find_self_intersections(m, s.F, degenerate, true).pairs;
-  };
-  auto pairs = side_pairs(shell);
+  auto pairs = side_pairs(shell, top);
   stats = SeparationStats{};
   stats.pairs_before = int(pairs.size());
   std::set<int> shortened;
@@ -268,7 +265,7 @@ std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, do
       break;
     }
     ++stats.rounds;
-    pairs = side_pairs(shell);
+    pairs = side_pairs(shell, top);
   }
   stats.shortened_pillars = int(shortened.size());
   // Changes were kept (also within a round that then stopped) on the local screen alone: the
