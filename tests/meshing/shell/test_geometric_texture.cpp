@@ -19,6 +19,29 @@
 namespace sh = curvefem::meshing::shell;
 using curvefem::SurfaceMesh;
 
+namespace {
+
+// A triangular slab over most of the reference triangle, from t0 to t1.
+SurfaceMesh slab_tile(double t0, double t1) {
+  SurfaceMesh tile;
+  tile.V.resize(6, 3);
+  tile.V << 0.05, 0.05, t0, 0.9, 0.05, t0, 0.05, 0.9, t0,  //
+      0.05, 0.05, t1, 0.9, 0.05, t1, 0.05, 0.9, t1;
+  tile.F.resize(8, 3);
+  tile.F << 0, 2, 1, 3, 4, 5, 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 2, 0, 3, 2, 3, 5;
+  sh::check_tile(tile, "slab");
+  return tile;
+}
+
+// Exactly self-intersecting pairs of a surface expected free of degenerate faces.
+std::size_t pairs(const SurfaceMesh& m) {
+  const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
+  EXPECT_EQ(std::count(degenerate.begin(), degenerate.end(), 1), 0);
+  return curvefem::check::find_self_intersections(m.V, m.F, degenerate, false).pairs.size();
+}
+
+}  // namespace
+
 TEST(GeometricTexture, SplitPiecesLieInOneTetOfTheReferencePrism) {
   for (const auto& name : sh::builtin_tile_names())
     for (bool type_a : {false, true}) {
@@ -98,18 +121,7 @@ TEST(GeometricTexture, TopSurfaceSelfIntersectionsAreShortenedAwaySoCopiesDoNotM
   // nested cages; separate_for_tile) removes the overlap.
   const SurfaceMesh input = curvefem::make_adversarial("split_ring_01");
   sh::Shell shell = curvefem::test::coarse_shell(input);
-  SurfaceMesh tile;  // a triangular slab over most of the face, t in [0.9, 0.97]
-  tile.V.resize(6, 3);
-  tile.V << 0.05, 0.05, 0.9, 0.9, 0.05, 0.9, 0.05, 0.9, 0.9,  //
-      0.05, 0.05, 0.97, 0.9, 0.05, 0.97, 0.05, 0.9, 0.97;
-  tile.F.resize(8, 3);
-  tile.F << 0, 2, 1, 3, 4, 5, 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 2, 0, 3, 2, 3, 5;
-  sh::check_tile(tile, "slab");
-  auto pairs = [](const SurfaceMesh& m) {
-    const auto degenerate = curvefem::check::exactly_degenerate_faces(m.V, m.F);
-    EXPECT_EQ(std::count(degenerate.begin(), degenerate.end(), 1), 0);
-    return curvefem::check::find_self_intersections(m.V, m.F, degenerate, false).pairs.size();
-  };
+  const SurfaceMesh tile = slab_tile(0.9, 0.97);
   {
     const sh::ShellProjection projection(shell, input);
     EXPECT_GT(pairs(sh::apply_geometric_texture(projection, tile).mesh), 0u);
@@ -127,6 +139,30 @@ TEST(GeometricTexture, TopSurfaceSelfIntersectionsAreShortenedAwaySoCopiesDoNotM
   top.V = shell.top;
   top.F = shell.F;
   EXPECT_EQ(pairs(top), 0u);
+  const sh::ShellProjection projection(shell, input);
+  EXPECT_EQ(pairs(sh::apply_geometric_texture(projection, tile).mesh), 0u);
+}
+
+TEST(GeometricTexture, ATileInTheLowerHalfSeparatesTheBaseSurface) {
+  // A slab at t in [0.03, 0.1] on a noisy sphere, whose simplified shell's base surface meets
+  // itself (17 pairs measured, removed in one round): only the base surface is separated (the
+  // top is left alone), and the copies below the middle surface do not meet.
+  const SurfaceMesh input = curvefem::make_adversarial("noise_sphere_5");
+  sh::Shell shell = curvefem::test::coarse_shell(input);
+  const SurfaceMesh tile = slab_tile(0.03, 0.1);
+  const Eigen::MatrixXd top_before = shell.top;
+  const sh::TileSeparation sep = sh::separate_for_tile(shell, input, tile);
+  EXPECT_FALSE(sep.top);
+  EXPECT_TRUE(sep.base);
+  EXPECT_EQ(sep.base_failure, "");
+  EXPECT_GT(sep.base_stats.pairs_before, 0);
+  EXPECT_GT(sep.base_stats.rounds, 0);
+  EXPECT_EQ(shell.top, top_before);  // the top is left alone
+  EXPECT_TRUE(sh::verify_shell(shell, input).valid());
+  SurfaceMesh base;
+  base.V = shell.base;
+  base.F = shell.F;
+  EXPECT_EQ(pairs(base), 0u);
   const sh::ShellProjection projection(shell, input);
   EXPECT_EQ(pairs(sh::apply_geometric_texture(projection, tile).mesh), 0u);
 }
