@@ -356,7 +356,6 @@ NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions
         if (layer.top_pinch_points == 0) break;
         log::info("nested cages: layer ", k + 1, ", ", attempts[a].name, ": ",
                   layer.top_pinch_points, " pinch points of the cage left");
-        if (a + 1 == attempts.size()) break;
         continue;
       }
       log::info("nested cages: layer ", k + 1, ", ", attempts[a].name, ": ", why);
