@@ -168,13 +168,15 @@ L.append("\nRebuilt through P: no self-intersecting pair on %d of %d inputs; few
 L.append("## Nested cages (`--cages %d`)\n" % args.cages)
 L.append("Per layer: faces, the shell kept (s = simplified, s0 = simplified without thickness "
          "growth, st = the same on a shell a quarter as thick, n = not simplified), singular "
-         "vertices of its shell (pinched: the cage touches the layer inside there), the cage's "
+         "vertices of its shell / of them filled (pinched: the cage is the top surface's union "
+         "with a small tetrahedron there, or touches the layer inside when not filled), the cage's "
          "pinch points before -> after unpinching (top vertices the next layer's shell would "
          "pinch; not computed for the last layer), top-surface pairs before shrinking / shrink "
          "rounds, min gap to the layer inside (relative). Between = exactly intersecting pairs over every two "
          "layers (input included); ok = every layer embedded, nested (winding number 1), and the "
-         "maps cage -> input -> cage return every sample.\n")
-L.append("| input | kind | layers (faces, shell, singular, pinch points, pairs/rounds, min gap) "
+         "maps cage -> input -> cage return every sample whose way down meets no fill.\n")
+L.append("| input | kind | layers (faces, shell, singular/filled, pinch points, pairs/rounds, "
+         "min gap) "
          "| between | ok | s | exit |")
 L.append("|---|---|---|---|---|---|---|")
 short = {"simplified": "s", "simplified without growth": "s0", "simplified, thinner": "st",
@@ -186,8 +188,9 @@ for r in rows:
                                                         c["error"][:120]))
         continue
     n = c["report"]["nested_cages"]
-    layers = "; ".join("%d %s %d %d->%d %d/%d %.1e" % (
+    layers = "; ".join("%d %s %d/%d %d->%d %d/%d %.1e" % (
         l["faces"], short.get(l["shell"], l["shell"]), l["singular_vertices"],
+        l.get("filled_points", 0),
         l["top_pinch_points_before_unpinching"], l["top_pinch_points"],
         l["self_intersecting_pairs_before_shrinking"], l["shrink_rounds"],
         l["min_gap_to_layer_inside_rel"]) for l in n["per_layer"])

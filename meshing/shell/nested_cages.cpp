@@ -3,17 +3,20 @@
 #include <tbb/parallel_for.h>
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <set>
 #include <string>
 
 #include "meshing/check/self_intersections.hpp"
+#include "meshing/check/surface_distance.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/prism_split.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/shell/bevel.hpp"
+#include "meshing/shell/boolean.hpp"
 #include "meshing/shell/prism_positivity.hpp"
 #include "meshing/shell/shell_intersection.hpp"
 
@@ -111,13 +114,15 @@ std::string shrink_top(Shell& shell, CageLayer& layer, const NestedCageOptions& 
 }
 
 /// Vertices of the top surface that the next layer's shell would pinch: no direction sees all
-/// their faces (extrusion_directions with the shell's tolerance).
+/// their faces (extrusion_directions with the shell's tolerance). Zero-length top pillars are
+/// left out when they will be filled (make_cage): the next layer is built on the filled cage.
 std::vector<int> pinch_points(const Shell& shell, const NestedCageOptions& options) {
   const ExtrusionDirections d =
       extrusion_directions(shell.top, shell.F, options.shell.singularity_tolerance);
   std::vector<int> out;
   for (int v = 0; v < int(d.singular.size()); ++v)
-    if (d.singular[std::size_t(v)]) out.push_back(v);
+    if (d.singular[std::size_t(v)] && !(options.fill && shell.top.row(v) == shell.mid.row(v)))
+      out.push_back(v);
   return out;
 }
 
@@ -197,6 +202,124 @@ int unpinch_top(Shell& shell, CageLayer& layer, const NestedCageOptions& options
     layer.verification = check;
   }
   return int(pinched.size());
+}
+
+/// The cage of a finished layer: its shell's top surface, filled around zero-length top pillars
+/// (nested_cages.hpp): the union with a regular tetrahedron centred on each, by CGAL's exact
+/// corefinement, each result face's parent the top face or the tetrahedron it lies in.
+void make_cage(const Shell& shell, CageLayer& layer, const NestedCageOptions& options) {
+  layer.cage.V = shell.top;
+  layer.cage.F = shell.F;
+  layer.cage_face_parent.clear();
+  layer.cage_corner_bary.clear();
+  layer.cage_face_on_fill.clear();
+  layer.filled_points = layer.unfilled_points = 0;
+  layer.fill_size = 0;
+  std::vector<int> points;
+  for (int v = 0; v < int(shell.top.rows()); ++v)
+    if (shell.top.row(v) == shell.mid.row(v)) points.push_back(v);
+  if (points.empty() || !options.fill) {
+    layer.unfilled_points = int(points.size());
+    return;
+  }
+  const int nv = int(shell.top.rows());
+  std::vector<std::vector<int>> ring(static_cast<std::size_t>(nv));
+  std::vector<int> a_face(static_cast<std::size_t>(nv), -1);
+  std::vector<char> at_point(static_cast<std::size_t>(nv), 0);
+  for (int p : points) at_point[std::size_t(p)] = 1;
+  std::vector<int> away;  // top faces at no filled point
+  for (int f = 0; f < int(shell.F.rows()); ++f) {
+    bool at = false;
+    for (int c = 0; c < 3; ++c) {
+      const int v = shell.F(f, c);
+      a_face[std::size_t(v)] = f;
+      at = at || at_point[std::size_t(v)];
+      for (int e = 1; e < 3; ++e) ring[std::size_t(v)].push_back(shell.F(f, (c + e) % 3));
+    }
+    if (!at) away.push_back(f);
+  }
+  Eigen::MatrixXd centres(Eigen::Index(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    centres.row(Eigen::Index(i)) = shell.top.row(points[i]);
+  Eigen::VectorXd clearance = Eigen::VectorXd::Constant(centres.rows(), HUGE_VAL);
+  if (!away.empty()) {
+    Eigen::MatrixXi F(Eigen::Index(away.size()), 3);
+    for (std::size_t i = 0; i < away.size(); ++i) F.row(Eigen::Index(i)) = shell.F.row(away[i]);
+    clearance = check::distances_to_surface(centres, shell.top, F);
+  }
+  // A regular tetrahedron of circumradius 1 around the origin, faces outward.
+  const double s3 = 1 / std::sqrt(3.0);
+  const Eigen::Matrix<double, 4, 3> unit =
+      (Eigen::Matrix<double, 4, 3>() << 1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1).finished() * s3;
+  const int tet_faces[4][3] = {{1, 3, 2}, {0, 2, 3}, {0, 3, 1}, {0, 1, 2}};
+  SurfaceMesh tets;
+  std::vector<int> filled;  // the point of each tetrahedron
+  std::vector<Eigen::RowVector3d> corners;
+  std::vector<Eigen::Vector3i> faces;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int p = points[i];
+    double r = clearance[Eigen::Index(i)];
+    for (int w : ring[std::size_t(p)]) {
+      r = std::min(r, 0.5 * (shell.top.row(w) - shell.top.row(p)).norm());
+      const double h = (shell.top.row(w) - shell.mid.row(w)).norm();
+      if (h > 0) r = std::min(r, h);
+    }
+    for (std::size_t j = 0; j < points.size(); ++j)
+      if (j != i)
+        r = std::min(r, 0.4 * (centres.row(Eigen::Index(j)) - centres.row(Eigen::Index(i))).norm());
+    r *= options.fill_size;
+    if (!(r > 0) || !std::isfinite(r)) {
+      ++layer.unfilled_points;
+      continue;
+    }
+    const int base = int(corners.size());
+    for (int c = 0; c < 4; ++c) corners.push_back(shell.top.row(p) + r * unit.row(c));
+    for (const auto& t : tet_faces) faces.emplace_back(base + t[0], base + t[1], base + t[2]);
+    filled.push_back(p);
+    layer.fill_size = std::max(layer.fill_size, r);
+  }
+  if (filled.empty()) return;
+  tets.V.resize(Eigen::Index(corners.size()), 3);
+  for (std::size_t i = 0; i < corners.size(); ++i) tets.V.row(Eigen::Index(i)) = corners[i];
+  tets.F.resize(Eigen::Index(faces.size()), 3);
+  for (std::size_t i = 0; i < faces.size(); ++i) tets.F.row(Eigen::Index(i)) = faces[i];
+  const SurfaceMesh top{shell.top, shell.F};
+  BooleanResult u = corefine_boolean(top, tets, BooleanOperation::union_of);
+  const int nf = u.mesh.num_faces();
+  layer.cage_face_parent.resize(std::size_t(nf));
+  layer.cage_corner_bary.resize(std::size_t(nf));
+  layer.cage_face_on_fill.assign(std::size_t(nf), 0);
+  for (int g = 0; g < nf; ++g) {
+    Eigen::Matrix3d bary;
+    int parent;
+    if (u.operand[std::size_t(g)] == 0) {
+      parent = u.operand_face[std::size_t(g)];
+      const Eigen::Vector3d a = shell.top.row(shell.F(parent, 0)),
+                            b = shell.top.row(shell.F(parent, 1)),
+                            c = shell.top.row(shell.F(parent, 2));
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d x = u.mesh.V.row(u.mesh.F(g, k));
+        Eigen::Vector3d w;
+        w[1] = std::max(0.0, n.dot((x - a).cross(c - a)) / n.squaredNorm());
+        w[2] = std::max(0.0, n.dot((b - a).cross(x - a)) / n.squaredNorm());
+        w[0] = std::max(0.0, 1 - w[1] - w[2]);
+        bary.col(k) = w / w.sum();
+      }
+    } else {
+      const int p = filled[std::size_t(u.operand_face[std::size_t(g)] / 4)];
+      parent = a_face[std::size_t(p)];
+      Eigen::Vector3d w = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k)
+        if (shell.F(parent, k) == p) w[k] = 1;
+      bary.colwise() = w;
+      layer.cage_face_on_fill[std::size_t(g)] = 1;
+    }
+    layer.cage_face_parent[std::size_t(g)] = parent;
+    layer.cage_corner_bary[std::size_t(g)] = bary;
+  }
+  layer.cage = std::move(u.mesh);
+  layer.filled_points = int(filled.size());
 }
 
 std::string separate_side(Shell& shell, const SurfaceMesh& surface, bool top, double shrink,
@@ -370,8 +493,7 @@ NestedCages build_nested_cages(const SurfaceMesh& input, const NestedCageOptions
     }
     if (layer.shrink_rounds == 0 && layer.unpinch_rounds == 0)
       layer.verification = verify_shell(shell, layer.surface);
-    layer.cage.V = shell.top;
-    layer.cage.F = shell.F;
+    make_cage(shell, layer, options);
     layer.shell = std::move(shell);
     layer.seconds = clock.seconds();
     log::info("nested cages: layer ", k + 1, ": ", layer.cage.num_faces(), " faces, ",
@@ -413,15 +535,21 @@ Eigen::MatrixXd walk(const Eigen::MatrixXd& points, int* failures, const Step& s
 }  // namespace
 
 Eigen::MatrixXd cage_to_input(const NestedCages& cages, int k, const std::vector<MeshPoint>& points,
-                              int* failures) {
+                              int* failures, std::vector<char>* on_fill) {
   CF_VERIFY(k >= 0 && k < int(cages.layers.size()), "cage_to_input: no such layer");
   Eigen::MatrixXd out(Eigen::Index(points.size()), 3);
   std::vector<char> failed(points.size(), 0);
+  if (on_fill) on_fill->assign(points.size(), 0);
   tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {
     MeshPoint p = points[i];
     std::optional<SurfacePoint> s;
     for (int j = k; j >= 0; --j) {
       const CageLayer& layer = cages.layers[std::size_t(j)];
+      if (!layer.cage_face_parent.empty()) {  // a filled cage's face to the top surface's
+        if (on_fill && layer.cage_face_on_fill[std::size_t(p.face)]) (*on_fill)[i] = 1;
+        p.bary = layer.cage_corner_bary[std::size_t(p.face)] * p.bary;
+        p.face = layer.cage_face_parent[std::size_t(p.face)];
+      }
       // (face, bary) of the top surface = the prism point (face, u, v, 1), rotated order.
       const Eigen::Vector3i F = layer.shell.F.row(p.face);
       const int r = min_rotation(F);

@@ -22,9 +22,15 @@
 // inside), each change kept only if the changed prisms stay positive and off the layer inside
 // and the top surface free of self-intersections, the whole shell verified at the end. Points
 // left over make the layer try its next, less coarsened shell; the shell with the fewest is kept.
-// At singular vertices of the input itself the first cage still touches the input: the thesis
-// fills the shell there (§4.5, pinching alternative); that is not done, and the touching is
-// reported (CageLayer::singular_vertices and the checks of `curvefem shell --cages`).
+// At singular vertices of the input itself (and at pinch points of a cage that unpinching left)
+// the shell's top pillar has zero length, and its top surface touches the layer inside. There
+// the cage is filled (thesis §4.5, "pinching alternative"): it is the union of the top surface
+// with a small regular tetrahedron centred on each such point (CGAL corefinement, exact, then
+// rounded), smaller than the pillars and edges around it. The point is then strictly inside the
+// cage; the cage's faces on a tetrahedron map to the point itself, so the map is not one to one
+// on them (and the layer inside's points whose fibers end inside a tetrahedron have no place on
+// the cage), as in the thesis, where every point of the filled region projects to the
+// singularity. CageLayer::cage_face_parent carries the cage's faces to the top surface.
 //
 // Maps. cage_to_input carries points of cage k + 1, given as a face and barycentric coordinates
 // (a point of the top surface is on the boundary of the shell, where locating a rounded position
@@ -61,10 +67,27 @@ struct NestedCageOptions {
   /// Shorten the top pillars around the cage's pinch points before the next layer is built on
   /// it (see CageLayer::top_pinch_points); false only to measure what it changes.
   bool unpinch = true;
+  /// Fill the cage around zero-length top pillars (see above); false only to measure it.
+  bool fill = true;
+  /// Each tetrahedron's circumradius, as a fraction of the smallest of: half the top edges at
+  /// the point, its neighbours' top pillars, the distance to the top faces away from it, and
+  /// 0.4 × the distance to the nearest other filled point.
+  double fill_size = 0.5;
 };
 
 struct CageLayer {
-  SurfaceMesh cage;     ///< the top surface of `shell` (its vertices, the shell's faces)
+  /// The top surface of `shell` (its vertices, the shell's faces), or when points were filled
+  /// its union with the fill tetrahedra (then cage_face_parent is not empty).
+  SurfaceMesh cage;
+  /// Per cage face when filled: the top surface's face (a face of shell.F) it lies in, and its
+  /// corners' barycentric coordinates there (column k: corner k). A face on a tetrahedron has a
+  /// face at the filled point as parent and every corner at that point. Empty: the identity.
+  std::vector<int> cage_face_parent;
+  std::vector<Eigen::Matrix3d> cage_corner_bary;
+  std::vector<char> cage_face_on_fill;  ///< per cage face when filled: on a tetrahedron
+  int filled_points = 0;                ///< zero-length top pillars filled
+  int unfilled_points = 0;              ///< zero-length top pillars with no room for a tetrahedron
+  double fill_size = 0;                 ///< the largest tetrahedron's circumradius
   SurfaceMesh surface;  ///< what the shell was built on: the layer inside (beveled if needed)
   /// surface's faces in the layer inside (bevel.hpp's BeveledSurface: identity when not beveled)
   std::vector<int> surface_face_parent;
@@ -126,10 +149,12 @@ struct MeshPoint {
 };
 
 /// Points of cage k + 1 (layers[k].cage) to the input: #P × 3 positions, NaN rows where a step
-/// could not map (counted in *failures).
+/// could not map (counted in *failures). *on_fill (when given): per point, 1 when its way down
+/// met a fill (a face of a filled cage on a tetrahedron), where the map is not one to one.
 Eigen::MatrixXd cage_to_input(const NestedCages& cages, int k, const std::vector<MeshPoint>& points,
-                              int* failures = nullptr);
-/// Points of the input (#P × 3) up to cage k + 1.
+                              int* failures = nullptr, std::vector<char>* on_fill = nullptr);
+/// Points of the input (#P × 3) up to cage k + 1: each point's fiber end on the top surface of
+/// every shell in turn. Near a filled point that end may lie inside the fill, not on the cage.
 Eigen::MatrixXd input_to_cage(const NestedCages& cages, int k, const Eigen::MatrixXd& points,
                               int* failures = nullptr);
 

@@ -12,7 +12,8 @@
 // --displacement-map a displacement map is baked through P (meshing/shell/displacement_map.hpp)
 // and the surface it rebuilds is checked against the input and against normal projection; with
 // --cages K nested cages are built around the input (meshing/shell/nested_cages.hpp; a cage's
-// pinch points are shortened away before the next layer is built on it), with --texture a tile
+// pinch points are shortened away before the next layer is built on it, and where a shell has
+// zero thickness the cage is filled with a small tetrahedron), with --texture a tile
 // is copied into every prism (meshing/shell/geometric_texture.hpp) of a copy of the shell whose
 // top (base) surface, where the tile reaches, was first freed of self-intersections, with
 // --boolean the shell is built on INPUT OP B (meshing/shell/boolean.hpp) and both operands'

@@ -152,12 +152,32 @@ nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
       start.row(Eigen::Index(i)) = x.transpose();
     }
     int down_failures = 0, up_failures = 0;
-    const Eigen::MatrixXd down = sh::cage_to_input(cages, int(k), points, &down_failures);
+    std::vector<char> on_fill;
+    const Eigen::MatrixXd down = sh::cage_to_input(cages, int(k), points, &down_failures, &on_fill);
+    // Samples whose way down meets a fill map to the filled point and are not one to one
+    // (nested_cages.hpp): the round trip is taken on the others.
+    std::vector<Eigen::Index> mapped;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (!on_fill[i]) mapped.push_back(Eigen::Index(i));
     double on_input = 0, roundtrip = 0;
     if (down_failures == 0) {
       on_input = check::distances_to_surface(down, input.V, input.F).maxCoeff() / unit;
-      const Eigen::MatrixXd up = sh::input_to_cage(cages, int(k), down, &up_failures);
-      if (up_failures == 0) roundtrip = (up - start).rowwise().norm().maxCoeff() / unit;
+      const Eigen::MatrixXd up =
+          sh::input_to_cage(cages, int(k), down(mapped, Eigen::all), &up_failures);
+      if (up_failures == 0 && !mapped.empty())
+        roundtrip = (up - start(mapped, Eigen::all)).rowwise().norm().maxCoeff() / unit;
+    }
+    int fill_faces = 0;
+    for (char c : layer.cage_face_on_fill) fill_faces += c;
+    // The share of the cage's area whose way down meets a fill, by the faces' centroids.
+    double area = 0, area_on_fills = 0;
+    for (int f = 0; f < layer.cage.num_faces(); ++f) {
+      const Eigen::Vector3d a = layer.cage.V.row(layer.cage.F(f, 0)),
+                            b = layer.cage.V.row(layer.cage.F(f, 1)),
+                            c = layer.cage.V.row(layer.cage.F(f, 2));
+      const double af = (b - a).cross(c - a).norm();
+      area += af;
+      if (on_fill[2 * std::size_t(f)]) area_on_fills += af;
     }
     const Eigen::VectorXd gap = check::distances_to_surface(
         check::surface_samples(layer.cage.V, layer.cage.F, 3), layers[k]->V, layers[k]->F);
@@ -173,6 +193,10 @@ nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
          {"top_pinch_points_before_unpinching", layer.top_pinch_points_before},
          {"top_pinch_points", layer.top_pinch_points},
          {"unpinch_rounds", layer.unpinch_rounds},
+         {"filled_points", layer.filled_points},
+         {"unfilled_points", layer.unfilled_points},
+         {"fill_faces", fill_faces},
+         {"fill_size_rel", layer.fill_size / unit},
          {"shell_verified", layer.verification.valid()},
          {"self_intersecting_pairs",
           check::count_self_intersecting_pairs(layer.cage.V, layer.cage.F)},
@@ -181,6 +205,8 @@ nlohmann::ordered_json run_nested_cages(const SurfaceMesh& input,
          {"min_gap_to_layer_inside_rel", gap.minCoeff() / unit},
          {"max_gap_to_layer_inside_rel", gap.maxCoeff() / unit},
          {"map_samples", int(points.size())},
+         {"map_samples_on_fills", int(points.size() - mapped.size())},
+         {"map_area_share_on_fills", area > 0 ? area_on_fills / area : 0.0},
          {"map_failures", down_failures + up_failures},
          {"map_to_input_max_distance_rel", on_input},
          {"map_roundtrip_max_rel", roundtrip},

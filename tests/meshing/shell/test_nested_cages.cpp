@@ -58,15 +58,26 @@ void expect_nested_and_mapped(const sh::NestedCages& cages, double roundtrip = 1
       }
     }
     int down_failures = -1, up_failures = -1;
-    const Eigen::MatrixXd down = sh::cage_to_input(cages, k, points, &down_failures);
+    std::vector<char> on_fill;
+    const Eigen::MatrixXd down = sh::cage_to_input(cages, k, points, &down_failures, &on_fill);
     ASSERT_EQ(down_failures, 0) << k;
     EXPECT_LT(curvefem::check::distances_to_surface(down, cages.input.V, cages.input.F).maxCoeff(),
               1e-13 * unit)
         << k;
-    const Eigen::MatrixXd up = sh::input_to_cage(cages, k, down, &up_failures);
+    // One to one except where the way down meets a fill (those points go to the filled point).
+    std::vector<Eigen::Index> mapped;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (!on_fill[i]) mapped.push_back(Eigen::Index(i));
+    ASSERT_FALSE(mapped.empty()) << k;
+    const Eigen::MatrixXd up = sh::input_to_cage(cages, k, down(mapped, Eigen::all), &up_failures);
     ASSERT_EQ(up_failures, 0) << k;
-    EXPECT_LT((up - start).rowwise().norm().maxCoeff(), roundtrip * unit) << k;
+    EXPECT_LT((up - start(mapped, Eigen::all)).rowwise().norm().maxCoeff(), roundtrip * unit) << k;
   }
+}
+
+// Pairs of faces, one of each surface, that intersect or touch.
+int pairs_between(const SurfaceMesh& a, const SurfaceMesh& b) {
+  return curvefem::check::intersecting_pairs_between(a.V, a.F, b.V, b.F);
 }
 
 }  // namespace
@@ -142,6 +153,64 @@ TEST(NestedCages, PinchPointsOfACadCageAreShortenedAwaySoTheNextCageDoesNotTouch
   // the second is about 4e-8 of the bbox), and the map's roundtrip loses digits across them:
   // measured 4e-10, held to `curvefem shell --cages`' own bound of 1e-9.
   expect_nested_and_mapped(cages, 1e-9);
+}
+
+TEST(NestedCages, SingularVerticesOfTheInputAreFilledSoTheFirstCageDoesNotTouchIt) {
+  // A sphere with 8 thin needles: no direction sees all faces at a needle's tip, so the first
+  // shell has zero thickness there (8 singular vertices) and its top surface touches the input.
+  // The cage is the top surface's union with a small tetrahedron around each tip (thesis §4.5,
+  // pinching alternative).
+  const SurfaceMesh input = curvefem::make_adversarial("needle_sphere_8");
+  sh::NestedCageOptions o;
+  o.layers = 2;
+  o.threads = 1;
+  {
+    o.fill = false;  // what it fixes
+    const sh::NestedCages touching = sh::build_nested_cages(input, o);
+    EXPECT_EQ(touching.layers[0].singular_vertices, 8);
+    EXPECT_EQ(touching.layers[0].unfilled_points, 8);
+    EXPECT_GT(pairs_between(input, touching.layers[0].cage), 0);
+  }
+  o.fill = true;
+  const sh::NestedCages cages = sh::build_nested_cages(input, o);
+  ASSERT_EQ(cages.layers.size(), 2u);
+  const sh::CageLayer& first = cages.layers[0];
+  EXPECT_EQ(first.singular_vertices, 8);
+  EXPECT_EQ(first.filled_points, 8);
+  EXPECT_EQ(first.unfilled_points, 0);
+  EXPECT_GT(first.fill_size, 0);
+  ASSERT_EQ(first.cage_face_parent.size(), std::size_t(first.cage.num_faces()));
+  // Each tip is strictly inside the first cage: off it, and wound once.
+  const sh::Shell& shell = first.shell;
+  Eigen::MatrixXd tips(8, 3);
+  int n = 0;
+  for (int v = 0; v < int(shell.top.rows()); ++v)
+    if (shell.top.row(v) == shell.mid.row(v)) {
+      ASSERT_LT(n, 8);
+      tips.row(n++) = shell.mid.row(v);
+    }
+  ASSERT_EQ(n, 8);
+  const Eigen::VectorXd off =
+      curvefem::check::distances_to_surface(tips, first.cage.V, first.cage.F);
+  EXPECT_GT(off.minCoeff(), 0);
+  for (int i = 0; i < 8; ++i)
+    EXPECT_NEAR(
+        curvefem::check::winding_number(first.cage.V, first.cage.F, tips.row(i).transpose()), 1.0,
+        1e-6);
+  // The fill's faces map to the tips themselves, the rest one to one (expect_nested_and_mapped).
+  std::vector<sh::MeshPoint> on;
+  for (int f = 0; f < first.cage.num_faces(); ++f)
+    if (first.cage_face_on_fill[std::size_t(f)]) on.push_back({f, Eigen::Vector3d(0.2, 0.3, 0.5)});
+  ASSERT_GT(on.size(), 0u);
+  std::vector<char> on_fill;
+  const Eigen::MatrixXd down = sh::cage_to_input(cages, 0, on, nullptr, &on_fill);
+  for (Eigen::Index i = 0; i < down.rows(); ++i) {
+    EXPECT_TRUE(on_fill[std::size_t(i)]);
+    double nearest = HUGE_VAL;
+    for (int t = 0; t < 8; ++t) nearest = std::min(nearest, (down.row(i) - tips.row(t)).norm());
+    EXPECT_EQ(nearest, 0) << i;
+  }
+  expect_nested_and_mapped(cages);
 }
 
 TEST(NestedCages, BadOptionsAreRefused) {
