@@ -203,21 +203,23 @@ for r in rows:
         "yes" if ok else "NO", c["wall"], c["exit"]))
 
 L.append("\n## Geometric textures (`--texture %s`)\n" % args.tile)
-L.append("One copy of the tile per prism of the simplified shell, split at the reference prism's "
+L.append("One copy of the tile per prism of the simplified shell but the pinched ones (a "
+         "singular vertex: flat tets; skipped = their number), split at the reference prism's "
          "tets (exact image). Pairs = exactly self-intersecting pairs of all copies; input pairs = "
          "pairs with the input (not a constraint: the input crosses the fibers at its own "
          "heights).\n")
-L.append("| input | kind | copies | faces | pairs | input pairs | s | exit |")
-L.append("|---|---|---|---|---|---|---|---|")
+L.append("| input | kind | copies | skipped | faces | pairs | input pairs | s | exit |")
+L.append("|---|---|---|---|---|---|---|---|---|")
 for r in rows:
     t = r["texture"]
     if t["report"] is None:
-        L.append("| %s | %s | | | | | %.1f | %d %s |" % (r["name"], r["kind"], t["wall"],
-                                                         t["exit"], t["error"][:80]))
+        L.append("| %s | %s | | | | | | %.1f | %d %s |" % (r["name"], r["kind"], t["wall"],
+                                                           t["exit"], t["error"][:80]))
         continue
     x = t["report"]["geometric_texture"]
-    L.append("| %s | %s | %d | %d | %d | %d | %.1f | %d |" % (
-        r["name"], r["kind"], x["copies"], x["faces"], x["self_intersecting_pairs"],
+    L.append("| %s | %s | %d | %d | %d | %d | %d | %.1f | %d |" % (
+        r["name"], r["kind"], x["copies"], x.get("prisms_pinched_skipped", 0), x["faces"],
+        x["self_intersecting_pairs"],
         x["pairs_with_input"], t["wall"], t["exit"]))
 L.append("\n## Boolean remeshing with correspondence (`--boolean OP --with B`)\n")
 L.append("A = the dev mesh, B = the same mesh shifted by (0.31, 0.17, 0.11) x its longest bbox "

@@ -147,16 +147,23 @@ TexturedSurface apply_geometric_texture(const ShellProjection& onto_input,
   const int nf = int(shell.F.rows());
   // Copy f starts at vertex first_v[f] and face first_f[f].
   std::vector<Eigen::Index> first_v(std::size_t(nf) + 1, 0), first_f(std::size_t(nf) + 1, 0);
-  for (int f = 0; f < nf; ++f) {
-    const SurfaceMesh& t = split[is_type_a(Eigen::Vector3i(shell.F.row(f))) ? 1 : 0];
-    first_v[std::size_t(f) + 1] = first_v[std::size_t(f)] + t.num_vertices();
-    first_f[std::size_t(f) + 1] = first_f[std::size_t(f)] + t.num_faces();
-  }
+  std::vector<char> pinched(std::size_t(nf), 0);
   TexturedSurface out;
+  for (int f = 0; f < nf; ++f) {
+    for (int c = 0; c < 3; ++c)
+      if (!shell.singular.empty() && shell.singular[std::size_t(shell.F(f, c))])
+        pinched[std::size_t(f)] = 1;
+    out.skipped_pinched += pinched[std::size_t(f)];
+    const SurfaceMesh& t = split[is_type_a(Eigen::Vector3i(shell.F.row(f))) ? 1 : 0];
+    const bool copy = !pinched[std::size_t(f)];
+    first_v[std::size_t(f) + 1] = first_v[std::size_t(f)] + (copy ? t.num_vertices() : 0);
+    first_f[std::size_t(f) + 1] = first_f[std::size_t(f)] + (copy ? t.num_faces() : 0);
+  }
   out.mesh.V.resize(first_v.back(), 3);
   out.mesh.F.resize(first_f.back(), 3);
   out.mesh.tags.resize(first_f.back());
   tbb::parallel_for(0, nf, [&](int f) {
+    if (pinched[std::size_t(f)]) return;
     const SurfaceMesh& piece = split[is_type_a(Eigen::Vector3i(shell.F.row(f))) ? 1 : 0];
     const int nv = piece.num_vertices(), nt = piece.num_faces();
     for (int v = 0; v < nv; ++v) {

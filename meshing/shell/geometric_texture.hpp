@@ -15,6 +15,7 @@
 // of the tile. So a tile free of self-intersections gives copies that meet neither themselves nor
 // each other wherever the shell's prisms are positive and do not overlap. Overlaps show where the
 // top (base) surface meets itself; separate_for_tile shortens the half-pillars there first.
+// A prism pinched at a singular vertex (zero-length pillar) has flat tets and gets no copy.
 // `curvefem shell --texture` does both and checks the result with exact predicates. The input is
 // not a constraint: it crosses the fibers at heights of its own, and a tile reaching below it meets
 // it (reported).
@@ -48,6 +49,10 @@ SurfaceMesh split_tile_at_tets(const SurfaceMesh& tile, bool type_a);
 
 struct TexturedSurface {
   SurfaceMesh mesh;  ///< one copy of the (split) tile per prism (tags: the prism's face)
+  /// Prisms pinched at a singular vertex (a zero-length pillar) get no copy: their canonical
+  /// split has flat tets, which would flatten the pieces of the tile in them (degenerate faces
+  /// meeting the neighbouring copies). Their number.
+  int skipped_pinched = 0;
 };
 
 /// Where the shell's top (base) surface meets itself, the upper (lower) halves of prisms overlap
@@ -61,7 +66,8 @@ struct TileSeparation {
 };
 TileSeparation separate_for_tile(Shell& shell, const SurfaceMesh& surface, const SurfaceMesh& tile);
 
-/// Copies `tile` into every prism of onto_input's shell (parallel over prisms).
+/// Copies `tile` into every prism of onto_input's shell but the pinched ones (parallel over
+/// prisms).
 TexturedSurface apply_geometric_texture(const ShellProjection& onto_input, const SurfaceMesh& tile);
 
 }  // namespace curvefem::meshing::shell

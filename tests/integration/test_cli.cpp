@@ -455,6 +455,7 @@ TEST(Cli, ShellGeometricTextureFromABuiltInTileAndAnObjTile) {
   const auto r = read_json(dir / "knob" / "report.json");
   const auto& t = r["geometric_texture"];
   EXPECT_EQ(t["copies"], 320);
+  EXPECT_EQ(t["prisms_pinched_skipped"], 0);
   EXPECT_EQ(t["self_intersecting_pairs"], 0);
   EXPECT_EQ(t["pairs_with_input"], 0);
   EXPECT_EQ(t["degenerate_faces"], 0);

@@ -450,9 +450,10 @@ void register_shell(CLI::App& app) {
     const bool texture_ok = args->texture.empty() || geometric_texture_ok(texture);
     if (!args->texture.empty())
       std::printf(
-          "geometric texture: %d copies of %s, %d faces, %d self-intersecting pairs "
-          "(%d pairs with the input): %s\n",
-          texture["copies"].get<int>(), args->texture.c_str(), texture["faces"].get<int>(),
+          "geometric texture: %d copies of %s (%d pinched prisms left out), %d faces, %d "
+          "self-intersecting pairs (%d pairs with the input): %s\n",
+          texture["copies"].get<int>(), args->texture.c_str(),
+          texture["prisms_pinched_skipped"].get<int>(), texture["faces"].get<int>(),
           texture["self_intersecting_pairs"].get<int>(), texture["pairs_with_input"].get<int>(),
           texture_ok ? "ok" : "FAILED");
     const bool boolean_checks_ok = !boolean || boolean_ok(boolean_block);

@@ -269,7 +269,9 @@ nlohmann::ordered_json run_geometric_texture(const sh::Shell& shell, const Surfa
   io::write_surface(out.path("textured.obj"), textured.mesh, io::SurfaceFormat::obj);
   nlohmann::ordered_json j = {{"tile", tile_spec},
                               {"tile_faces", tile.num_faces()},
-                              {"copies", int(shell.F.rows())},
+                              {"copies", int(shell.F.rows()) - textured.skipped_pinched},
+                              {"prisms", int(shell.F.rows())},
+                              {"prisms_pinched_skipped", textured.skipped_pinched},
                               {"faces", textured.mesh.num_faces()},
                               {"shell_separation", separation}};
   {

@@ -167,6 +167,31 @@ TEST(GeometricTexture, ATileInTheLowerHalfSeparatesTheBaseSurface) {
   EXPECT_EQ(pairs(sh::apply_geometric_texture(projection, tile).mesh), 0u);
 }
 
+TEST(GeometricTexture, PinchedPrismsGetNoCopyAndTheOthersDoNotMeet) {
+  // needle_sphere_8: the shell has zero thickness at the 8 needle tips, and the prisms there
+  // have flat tets, which would flatten the tile's pieces in them (`curvefem shell --texture
+  // knob` gave 180 degenerate faces and 1,636 meeting pairs before they were left out).
+  const SurfaceMesh input = curvefem::make_adversarial("needle_sphere_8");
+  const sh::Shell shell = curvefem::test::coarse_shell(input);
+  ASSERT_TRUE(sh::verify_shell(shell, input).valid());
+  int pinched = 0;
+  std::vector<char> at_tip(std::size_t(shell.F.rows()), 0);
+  for (int f = 0; f < shell.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (shell.singular[std::size_t(shell.F(f, c))]) at_tip[std::size_t(f)] = 1;
+  for (char c : at_tip) pinched += c;
+  EXPECT_EQ(std::count(shell.singular.begin(), shell.singular.end(), 1), 8);
+  ASSERT_GT(pinched, 0);
+  const sh::ShellProjection projection(shell, input);
+  const sh::TexturedSurface t = sh::apply_geometric_texture(projection, sh::builtin_tile("knob"));
+  EXPECT_EQ(t.skipped_pinched, pinched);
+  std::vector<char> copied(std::size_t(shell.F.rows()), 0);
+  for (int tag : t.mesh.tags) copied[std::size_t(tag)] = 1;
+  for (int f = 0; f < shell.F.rows(); ++f)
+    EXPECT_NE(copied[std::size_t(f)], at_tip[std::size_t(f)]) << f;  // a copy iff not pinched
+  EXPECT_EQ(pairs(t.mesh), 0u);
+}
+
 TEST(GeometricTexture, ATileOutsideTheUnitPrismOrUnknownIsRefused) {
   SurfaceMesh tile = sh::builtin_tile("spike");
   tile.V(3, 2) = 1.5;
