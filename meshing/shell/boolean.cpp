@@ -1,8 +1,5 @@
 #include "meshing/shell/boolean.hpp"
 
-#include <CGAL/AABB_face_graph_triangle_primitive.h>
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
@@ -10,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <map>
+#include <memory>
 
 #include "meshing/core/error.hpp"
 
@@ -20,10 +18,6 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 using EK = CGAL::Exact_predicates_exact_constructions_kernel;
 using ExactMesh = CGAL::Surface_mesh<EK::Point_3>;
 using IK = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Mesh = CGAL::Surface_mesh<IK::Point_3>;
-// AABB trees over a CGAL::Surface_mesh's faces: a template instantiation no other module uses.
-using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<IK, Primitive>>;
 
 template <class M>
 M to_cgal(const SurfaceMesh& s) {
@@ -39,17 +33,18 @@ M to_cgal(const SurfaceMesh& s) {
   return m;
 }
 
-struct Operand {
-  Mesh mesh;
-  std::unique_ptr<Tree> tree;
-  explicit Operand(const SurfaceMesh& s) : mesh(to_cgal<Mesh>(s)) {
-    tree = std::make_unique<Tree>(faces(mesh).first, faces(mesh).second, mesh);
-    tree->accelerate_distance_queries();
+// Each face's origin, tracked through the corefinement: a face property "f:origin" (A's faces
+// 0 … #A − 1, B's #A …) that split faces pass to their pieces and copies to the result.
+using ExactFace = ExactMesh::Face_index;
+struct OriginVisitor : PMP::Corefinement::Default_visitor<ExactMesh> {
+  std::shared_ptr<int> current = std::make_shared<int>(-1);  // the face being split
+  static ExactMesh::Property_map<ExactFace, int> origin(const ExactMesh& m) {
+    return m.property_map<ExactFace, int>("f:origin").first;
   }
-  /// Closest face to p and its squared distance.
-  std::pair<int, double> closest(const IK::Point_3& p) const {
-    const auto [q, f] = tree->closest_point_and_primitive(p);
-    return {int(f.idx()), CGAL::to_double(CGAL::squared_distance(p, q))};
+  void before_subface_creations(ExactFace f, ExactMesh& tm) { *current = origin(tm)[f]; }
+  void after_subface_created(ExactFace f, ExactMesh& tm) { origin(tm)[f] = *current; }
+  void after_face_copy(ExactFace from, const ExactMesh& source, ExactFace to, ExactMesh& target) {
+    origin(target)[to] = origin(source)[from];
   }
 };
 
@@ -76,16 +71,25 @@ BooleanOperation parse_boolean_operation(const std::string& name) {
 
 BooleanResult corefine_boolean(const SurfaceMesh& a, const SurfaceMesh& b, BooleanOperation op) {
   ExactMesh ea = to_cgal<ExactMesh>(a), eb = to_cgal<ExactMesh>(b), out;
+  {
+    auto oa = ea.add_property_map<ExactFace, int>("f:origin", -1).first;
+    for (ExactFace f : ea.faces()) oa[f] = int(f.idx());
+    auto ob = eb.add_property_map<ExactFace, int>("f:origin", -1).first;
+    for (ExactFace f : eb.faces()) ob[f] = a.num_faces() + int(f.idx());
+    out.add_property_map<ExactFace, int>("f:origin", -1);
+  }
+  const OriginVisitor visitor;
+  const auto np = PMP::parameters::visitor(visitor);
   bool ok = false;
   switch (op) {
     case BooleanOperation::union_of:
-      ok = PMP::corefine_and_compute_union(ea, eb, out);
+      ok = PMP::corefine_and_compute_union(ea, eb, out, np);
       break;
     case BooleanOperation::intersection:
-      ok = PMP::corefine_and_compute_intersection(ea, eb, out);
+      ok = PMP::corefine_and_compute_intersection(ea, eb, out, np);
       break;
     case BooleanOperation::difference:
-      ok = PMP::corefine_and_compute_difference(ea, eb, out);
+      ok = PMP::corefine_and_compute_difference(ea, eb, out, np);
       break;
   }
   if (!ok)
@@ -102,8 +106,11 @@ BooleanResult corefine_boolean(const SurfaceMesh& a, const SurfaceMesh& b, Boole
     r.mesh.V.row(i) << CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z());
   }
   r.mesh.F.resize(Eigen::Index(out.number_of_faces()), 3);
+  std::vector<int> origin;
+  const auto origin_map = OriginVisitor::origin(out);
   int f = 0;
   for (auto face : out.faces()) {
+    origin.push_back(origin_map[face]);
     int k = 0;
     for (auto v : CGAL::vertices_around_face(out.halfedge(face), out)) {
       CF_VERIFY(k < 3, "boolean: a result face is not a triangle");
@@ -112,21 +119,28 @@ BooleanResult corefine_boolean(const SurfaceMesh& a, const SurfaceMesh& b, Boole
     ++f;
   }
   if (r.mesh.num_faces() == 0) throw MeshingError("boolean: the result is empty");
-  const Operand oa(a), ob(b);
   r.operand.resize(std::size_t(r.mesh.num_faces()));
   r.operand_face.resize(std::size_t(r.mesh.num_faces()));
+  auto point = [](const Eigen::MatrixXd& V, int v) {
+    return IK::Point_3(V(v, 0), V(v, 1), V(v, 2));
+  };
   for (int g = 0; g < r.mesh.num_faces(); ++g) {
-    const Eigen::Vector3d c =
-        (r.mesh.V.row(r.mesh.F(g, 0)) + r.mesh.V.row(r.mesh.F(g, 1)) + r.mesh.V.row(r.mesh.F(g, 2)))
-            .transpose() /
-        3;
-    const IK::Point_3 p(c.x(), c.y(), c.z());
-    const auto [fa, da] = oa.closest(p);
-    const auto [fb, db] = ob.closest(p);
-    const bool from_a = da <= db;
+    const int o = origin[std::size_t(g)];
+    CF_VERIFY(o >= 0 && o < a.num_faces() + b.num_faces(),
+              "boolean: a result face has no origin in the operands");
+    const bool from_a = o < a.num_faces();
+    const SurfaceMesh& operand = from_a ? a : b;
+    const int face = from_a ? o : o - a.num_faces();
     r.operand[std::size_t(g)] = from_a ? 0 : 1;
-    r.operand_face[std::size_t(g)] = from_a ? fa : fb;
-    r.max_origin_distance = std::max(r.max_origin_distance, std::sqrt(from_a ? da : db));
+    r.operand_face[std::size_t(g)] = face;
+    // How far the rounded result face lies from its origin: its corners' distances.
+    const IK::Triangle_3 t(point(operand.V, operand.F(face, 0)),
+                           point(operand.V, operand.F(face, 1)),
+                           point(operand.V, operand.F(face, 2)));
+    for (int k = 0; k < 3; ++k)
+      r.max_origin_distance = std::max(
+          r.max_origin_distance,
+          std::sqrt(CGAL::to_double(CGAL::squared_distance(point(r.mesh.V, r.mesh.F(g, k)), t))));
   }
   return r;
 }

@@ -4,9 +4,10 @@
 // that attributes of both operands can be carried onto the result and, through a shell built on
 // the result, onto its coarse remeshing (`curvefem shell A --boolean OP --with B`).
 //
-// Origin: each result face lies in one operand face (corefinement only splits faces); it is found
-// by the closest operand face to the face's centroid (CGAL AABB trees of both operands), the
-// operand with the smaller distance winning (faces shared by coplanar operands go to A).
+// Origin: each result face lies in one operand face (corefinement only splits faces); which one
+// is tracked through the corefinement (a visitor passes a face's origin to its pieces and to the
+// result's copy), not guessed from positions, so slivers along the intersection curve, close to
+// faces of both operands, keep the right one.
 #pragma once
 
 #include <string>
@@ -25,7 +26,7 @@ struct BooleanResult {
   SurfaceMesh mesh;          ///< the result, vertices rounded to double
   std::vector<int> operand;  ///< per result face: 0 (A) or 1 (B)
   std::vector<int> operand_face;
-  double max_origin_distance = 0;  ///< largest centroid distance to its operand face
+  double max_origin_distance = 0;  ///< largest corner distance to its operand face (rounding)
 };
 
 /// MeshingError when CGAL's corefinement refuses (e.g. an operand is not closed or it
