@@ -284,7 +284,13 @@ void make_cage(const Shell& shell, CageLayer& layer, const NestedCageOptions& op
   tets.F.resize(Eigen::Index(faces.size()), 3);
   for (std::size_t i = 0; i < faces.size(); ++i) tets.F.row(Eigen::Index(i)) = faces[i];
   const SurfaceMesh top{shell.top, shell.F};
-  BooleanResult u = corefine_boolean(top, tets, BooleanOperation::union_of);
+  BooleanResult u;
+  try {
+    u = corefine_boolean(top, tets, BooleanOperation::union_of);
+  } catch (const MeshingError& e) {
+    throw MeshingError("nested cages: filling the cage at " + std::to_string(filled.size()) +
+                       " points of zero thickness: " + e.what());
+  }
   const int nf = u.mesh.num_faces();
   layer.cage_face_parent.resize(std::size_t(nf));
   layer.cage_corner_bary.resize(std::size_t(nf));
