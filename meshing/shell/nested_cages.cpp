@@ -292,6 +292,16 @@ void make_cage(const Shell& shell, CageLayer& layer, const NestedCageOptions& op
                        " points of zero thickness: " + e.what());
   }
   const int nf = u.mesh.num_faces();
+  // Every corner's barycentric coordinates in its face's origin (a top face, or a tetrahedron's).
+  Eigen::MatrixXd corner_points(3 * Eigen::Index(nf), 3);
+  std::vector<int> corner_faces(3 * std::size_t(nf));
+  for (int g = 0; g < nf; ++g)
+    for (int k = 0; k < 3; ++k) {
+      corner_points.row(3 * g + k) = u.mesh.V.row(u.mesh.F(g, k));
+      corner_faces[3 * std::size_t(g) + std::size_t(k)] = g;
+    }
+  const std::vector<OperandPoint> at =
+      locate_in_operands(top, tets, u, corner_points, corner_faces);
   layer.cage_face_parent.resize(std::size_t(nf));
   layer.cage_corner_bary.resize(std::size_t(nf));
   layer.cage_face_on_fill.assign(std::size_t(nf), 0);
@@ -300,19 +310,11 @@ void make_cage(const Shell& shell, CageLayer& layer, const NestedCageOptions& op
     int parent;
     if (u.operand[std::size_t(g)] == 0) {
       parent = u.operand_face[std::size_t(g)];
-      const Eigen::Vector3d a = shell.top.row(shell.F(parent, 0)),
-                            b = shell.top.row(shell.F(parent, 1)),
-                            c = shell.top.row(shell.F(parent, 2));
-      const Eigen::Vector3d n = (b - a).cross(c - a);
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d x = u.mesh.V.row(u.mesh.F(g, k));
-        Eigen::Vector3d w;
-        w[1] = std::max(0.0, n.dot((x - a).cross(c - a)) / n.squaredNorm());
-        w[2] = std::max(0.0, n.dot((b - a).cross(x - a)) / n.squaredNorm());
-        w[0] = std::max(0.0, 1 - w[1] - w[2]);
+      for (int k = 0; k < 3; ++k) {  // rounding can put a corner just outside its face
+        const Eigen::Vector3d w = at[3 * std::size_t(g) + std::size_t(k)].bary.cwiseMax(0.0);
         bary.col(k) = w / w.sum();
       }
-    } else {
+    } else {  // on a tetrahedron: every corner at its point
       const int p = filled[std::size_t(u.operand_face[std::size_t(g)] / 4)];
       parent = a_face[std::size_t(p)];
       Eigen::Vector3d w = Eigen::Vector3d::Zero();
