@@ -38,6 +38,8 @@ ap.add_argument("--iterations", type=int, default=30)
 ap.add_argument("--every", type=int, default=1,
                 help="1: also run every input with the scaffold rebuilt every iteration "
                      "(--rebuild-quality 0, the thesis) to compare with the default; 0: not")
+ap.add_argument("--extra", default="",
+                help="more `curvefem deform` options for every run, e.g. --extra=--sliver-rests")
 ap.add_argument("--out", default=os.path.join(root, "benchmarks/results/deform.md"))
 args = ap.parse_args()
 
@@ -71,7 +73,7 @@ def run(name, inp, extra, work):
     out = os.path.join(work, name + ".obj")
     rep = os.path.join(work, name + ".json")
     cmd = [args.exe, "deform", "-q", inp, "-o", out, "--iterations", str(args.iterations),
-           "--report", rep] + extra
+           "--report", rep] + extra + args.extra.split()
     p = subprocess.run(cmd, capture_output=True, text=True)
     r = json.load(open(rep)) if os.path.exists(rep) else {}
     return {"name": name, "cmd": " ".join(cmd[1:]).replace(work + "/", ""), "exit": p.returncode,

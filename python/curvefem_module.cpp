@@ -420,7 +420,7 @@ PYBIND11_MODULE(_curvefem, m) {
       [](const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const Eigen::VectorXi& target_vertices,
          const Eigen::MatrixXd& target_positions, double grow, double box, int iterations,
          double tolerance, bool untangle, double arap, bool way_back_targets,
-         double rebuild_quality, int threads) {
+         double rebuild_quality, bool sliver_rests, int threads) {
         namespace pa = meshing::param;
         if (target_vertices.size() != target_positions.rows() ||
             (target_positions.size() > 0 && target_positions.cols() != 3))
@@ -440,6 +440,7 @@ PYBIND11_MODULE(_curvefem, m) {
         request.untangle = untangle;
         request.options.arap_weight = arap;
         request.options.rebuild_quality = rebuild_quality;
+        request.options.replace_slivers = sliver_rests;
         request.untangle_options.way_back_targets = way_back_targets;
         py::gil_scoped_release release;
         const auto limit = limit_threads(threads);
@@ -472,17 +473,23 @@ PYBIND11_MODULE(_curvefem, m) {
         report["valid"] = outcome.valid();
         report["seconds"] = result.seconds;
         report["scaffold_kept"] = result.scaffold_kept;
+        int slivers = 0;
+        for (const auto& st : result.history) slivers = std::max(slivers, st.slivers);
+        report["sliver_rests"] = sliver_rests;
+        report["max_slivers"] = slivers;
         return std::make_tuple(result.V, report.dump());
       },
       py::arg("V"), py::arg("F"), py::arg("target_vertices"), py::arg("target_positions"),
       py::arg("grow") = 1.0, py::arg("box") = 2.0, py::arg("iterations") = 50,
       py::arg("tolerance") = 1e-5, py::arg("untangle") = false, py::arg("arap") = 0.0,
-      py::arg("way_back_targets") = true, py::arg("rebuild_quality") = 0.5, py::arg("threads") = 0,
+      py::arg("way_back_targets") = true, py::arg("rebuild_quality") = 0.5,
+      py::arg("sliver_rests") = false, py::arg("threads") = 0,
       "SCAF with a tet scaffold (meshing/param/scaf3d.hpp); returns (V, report JSON text). arap: "
       "weight of a surface ARAP term toward the input's shape; way_back_targets=False with "
       "untangle: the ARAP term alone brings the surface back (thesis Fig. 3.9); rebuild_quality: "
       "the scaffold is rebuilt when its worst tet fell below this x the last rebuild's (0: every "
-      "iteration).");
+      "iteration); sliver_rests: a flat scaffold tet's rest is a small regular tet, so the "
+      "scaffold keeps sheets of the surface apart (thesis 3.2.2).");
 
   m.def(
       "run_study",

@@ -6,9 +6,11 @@
 #include <Eigen/SVD>
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "meshing/core/error.hpp"
@@ -52,6 +54,7 @@ struct Problem {
   std::vector<int> dof;  // free index per row, −1 for the box
   int n_free = 0;
   int n_object = 0;  // tets [0, n_object) are the object's
+  int slivers = 0;   // scaffold tets whose rest is the ε regular tet
   std::vector<Eigen::Vector4i> tet;
   std::vector<Mat43> G;
   std::vector<double> weight;  // V_t / V_M on the object, λ on the scaffold
@@ -403,7 +406,7 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     X = grown;
   }
 
-  auto make_problem = [&](double e_object) {
+  auto make_problem = [&](double e_object, bool replace_slivers) {
     Problem p;
     p.X = X;
     p.dof.assign(std::size_t(X.rows()), -1);
@@ -417,10 +420,30 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
     }
     const double lambda =
         options.scaffold_weight * e_object / std::max<Eigen::Index>(1, scaffold.T.rows());
+    // ε = l³ / 16, l = the surface's shortest edge now (Deform3dOptions::replace_slivers).
+    double eps = 0;
+    Mat43 G_eps;
+    if (replace_slivers) {
+      double l = HUGE_VAL;
+      for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+        for (int k = 0; k < 3; ++k)
+          l = std::min(l, (X.row(surface.F(f, k)) - X.row(surface.F(f, (k + 1) % 3))).norm());
+      eps = l * l * l / 16;
+      // The regular tet of volume ε: edge a with a³ / (6√2) = ε.
+      const double a = std::cbrt(6 * std::sqrt(2.0) * eps);
+      Eigen::Matrix3d regular;
+      regular.col(0) << a, 0, 0;
+      regular.col(1) << a / 2, a * std::sqrt(3.0) / 2, 0;
+      regular.col(2) << a / 2, a * std::sqrt(3.0) / 6, a * std::sqrt(2.0 / 3.0);
+      G_eps = gradient_operator(regular);
+    }
     for (Eigen::Index t = 0; t < scaffold.T.rows(); ++t) {
       const Eigen::Vector4i tt = scaffold.T.row(t).transpose();
+      const Eigen::Matrix3d Dm = edge_matrix(X, tt);
+      const bool sliver = Dm.determinant() / 6 < eps;
+      p.slivers += sliver;
       p.tet.push_back(tt);
-      p.G.push_back(gradient_operator(edge_matrix(X, tt)));
+      p.G.push_back(sliver ? G_eps : gradient_operator(Dm));
       p.weight.push_back(lambda);
     }
     p.targets = targets;
@@ -484,7 +507,7 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
 
   {
     Deform3dIteration st0;
-    Problem p = make_problem(6.0);
+    Problem p = make_problem(6.0, false);
     double em = 0;
     st0.objective = evaluate(p, X, em);
     st0.energy = em;
@@ -526,43 +549,72 @@ Deform3dResult scaf3d_deform(const SurfaceMesh& surface, const std::vector<Posit
       st.scaffold_rebuilt = true;
     }
     const double e_prev = result.history.back().objective;
-    const Problem p = make_problem(result.history.back().energy);
-    if (rebuilt_quality < 0) rebuilt_quality = scaffold_quality(p, p.X);
+    // With slivers' rest the ε regular tet, the scaffold pushes back and the direction may trade
+    // E_M for it: the step must lower E (Armijo) without raising E_M; when no step does, the
+    // iteration is redone with every rest its current shape (thesis §3.2.2, as in 2-D).
+    const Problem standard = make_problem(result.history.back().energy, false);
+    if (rebuilt_quality < 0) rebuilt_quality = scaffold_quality(standard, standard.X);
     st.scaffold_reference_quality = rebuilt_quality;
-    const Eigen::MatrixXd target = solve_proxy(p, st.assemble_s, st.solve_s);
-    watch.reset();
-    const Eigen::MatrixXd D = target - p.X;
-    double em0 = 0, em = 0, e = 0;
-    const double e0 = evaluate(p, p.X, em0);
-    const double slope = directional_derivative(p, p.X, D);
-    st.max_step = std::min(1.0, 0.8 * flip_free_bound(p, p.X, D, 1.25));
-    double t = st.max_step;
+    std::optional<Problem> with_slivers;
+    if (options.replace_slivers) {
+      with_slivers.emplace(make_problem(result.history.back().energy, true));
+      st.slivers = with_slivers->slivers;
+      if (st.slivers == 0) with_slivers.reset();  // the same problem
+    }
+    const Problem* p = nullptr;
+    Eigen::MatrixXd D;
+    double em = 0, e = 0, t = 0;
+    double sliver_decrease = 0;  // of the ε problem's E over a step taken with it, relative
     bool accepted = false;
-    if (slope < 0 && t > 0)
-      for (int k = 0; k < 60 && t >= 1e-12 * st.max_step; ++k, t *= 0.5) {
-        e = evaluate(p, p.X + t * D, em);
-        if (std::isfinite(e) && e <= e0 + options.armijo * t * slope) {
-          accepted = true;
-          break;
+    for (const Problem* attempt :
+         std::array<const Problem*, 2>{with_slivers ? &*with_slivers : nullptr, &standard}) {
+      if (!attempt) continue;
+      p = attempt;
+      const bool guard = attempt != &standard;  // E_M may not rise
+      const Eigen::MatrixXd target = solve_proxy(*p, st.assemble_s, st.solve_s);
+      watch.reset();
+      D = target - p->X;
+      double em0 = 0;
+      const double e0 = evaluate(*p, p->X, em0);
+      const double slope = directional_derivative(*p, p->X, D);
+      st.max_step = std::min(1.0, 0.8 * flip_free_bound(*p, p->X, D, 1.25));
+      t = st.max_step;
+      if (slope < 0 && t > 0)
+        for (int k = 0; k < 60 && t >= 1e-12 * st.max_step; ++k, t *= 0.5) {
+          e = evaluate(*p, p->X + t * D, em);
+          if (std::isfinite(e) && e <= e0 + options.armijo * t * slope && (!guard || em <= em0)) {
+            accepted = true;
+            break;
+          }
+          ++st.backtracks;
         }
-        ++st.backtracks;
+      st.line_search_s += watch.seconds();
+      if (accepted) {
+        st.slivers_kept = guard;
+        if (guard) {
+          sliver_decrease = (e0 - e) / std::abs(e0);
+          e = evaluate(standard, p->X + t * D, em);  // E as the iterations compare it
+        }
+        break;
       }
-    st.line_search_s = watch.seconds();
+    }
     if (!accepted) {
       result.stop_reason = "line search";
       log::debug("scaf3d: iteration ", it, " stops: no acceptable step");
       break;
     }
-    X = p.X + t * D;
+    X = p->X + t * D;
     st.step = t;
     st.energy = em;
     st.objective = e;
-    measure(p, X, st);
+    measure(standard, X, st);
     st.seconds = iteration.seconds() + (it == 1 ? first_scaffold_s : 0.0);
     report(st);
     log::debug("scaf3d: iteration ", it, " E ", e, " E_M ", em, " step ", t, " (max ", st.max_step,
                "), target error ", st.target_error, ", ", st.seconds, " s");
-    if ((e_prev - e) / std::abs(e_prev) < options.tolerance) {
+    // A step taken with sliver rests may raise E (the scaffold pushed two sheets apart): it is
+    // judged by its own problem's decrease.
+    if ((st.slivers_kept ? sliver_decrease : (e_prev - e) / std::abs(e_prev)) < options.tolerance) {
       result.stop_reason = "tolerance";
       break;
     }

@@ -55,6 +55,10 @@ struct Deform3dIteration {
   double min_singular = 0, max_singular = 0;  ///< over object tets
   double min_volume_rel = 0;                  ///< min tet volume (object and scaffold) / L³
   int scaffold_tets = 0;
+  /// Scaffold tets whose rest was the ε regular tet (Deform3dOptions::replace_slivers), and
+  /// whether the step was taken with them (false: redone with every rest its current shape).
+  int slivers = 0;
+  bool slivers_kept = false;
   bool scaffold_rebuilt = false;  ///< false: kept (good enough, or Gmsh failed)
   /// The worst shape of a scaffold tet after the step: min over them of 6√2 V / ℓ_rms³ (1 for
   /// the regular tet, 0 when flat).
@@ -90,6 +94,13 @@ struct Deform3dOptions {
   /// 5 of 13 to 24 of 29 rebuilds skipped, whole runs 0.25–0.52× the time, final objectives
   /// within 0.25% (lower on spot and bunny).
   double rebuild_quality = 0.5;
+  /// Degeneracy prevention (thesis §3.2.2, as in 2-D): a scaffold tet whose volume is below ε =
+  /// l³ / 16 (l = the surface's shortest edge now; about half the volume of the regular tet of
+  /// edge l) gets the regular tet of volume ε as its rest instead of its current shape, so the
+  /// scaffold pushes back where two sheets of the surface come close. A step must then lower E
+  /// (Armijo) without raising E_M; when none does, the iteration is redone with every rest its
+  /// current shape. false: every rest is the current shape.
+  bool replace_slivers = false;
   /// Called with each iteration's statistics and the surface vertices (#V × 3).
   std::function<void(const Deform3dIteration&, const Eigen::MatrixXd&)> on_iteration;
 };

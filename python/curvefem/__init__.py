@@ -214,7 +214,8 @@ def check(path):
 
 
 def deform(vertices, faces, targets=None, grow=1.0, box=2.0, iterations=50, tolerance=1e-5,
-           untangle=False, arap=0.0, way_back_targets=True, rebuild_quality=0.5, threads=0):
+           untangle=False, arap=0.0, way_back_targets=True, rebuild_quality=0.5,
+           sliver_rests=False, threads=0):
     """Deforms a closed surface without self-intersection (SCAF with a tetrahedral scaffold, as
     `curvefem deform`): toward `targets` ({vertex: (x, y, z)}) and/or a rest shape `grow` times
     the input, inside the bounding box padded by (box - 1) / 2 x its longest extent. With
@@ -223,7 +224,9 @@ def deform(vertices, faces, targets=None, grow=1.0, box=2.0, iterations=50, tole
     `untangle=True, way_back_targets=False` it alone brings the surface back (the thesis' way,
     Fig. 3.9: the input's shape rather than its position). The scaffold is rebuilt only when its
     worst tet fell below `rebuild_quality` x that of the last rebuild (0: every iteration, as in
-    the thesis). Returns (new vertices as an (n, 3)
+    the thesis). `sliver_rests=True`: a scaffold tet flatter than a small regular tet gets that
+    tet as its rest, so the scaffold keeps sheets of the surface apart (thesis §3.2.2; report
+    `max_slivers`). Returns (new vertices as an (n, 3)
     array, report dict); the report's
     `self_intersecting_pairs` and `non_positive_tets` come from exact checks independent of the
     solver, `valid` is true when both are 0."""
@@ -232,7 +235,8 @@ def deform(vertices, faces, targets=None, grow=1.0, box=2.0, iterations=50, tole
     pos = _np.array([targets[i] for i in ids], dtype=float).reshape(-1, 3)
     V, text = _curvefem.deform(_np.asarray(vertices, dtype=float), _np.asarray(faces, dtype=_np.int32),
                                ids, pos, grow, box, iterations, tolerance, untangle, float(arap),
-                               bool(way_back_targets), float(rebuild_quality), threads)
+                               bool(way_back_targets), float(rebuild_quality),
+                               bool(sliver_rests), threads)
     return V, _json.loads(text)
 
 

@@ -51,6 +51,12 @@ def test_pulling_the_ends_of_a_split_ring_across_keeps_it_embedded(tmp_path):
     assert report0["valid"] is True
     assert report0["scaffold_kept"] == 0
     assert report["scaffold_kept"] > 0
+    assert report["sliver_rests"] is False and report["max_slivers"] == 0
+    # sliver rests: the flattened scaffold between the ends pushes back, still embedded
+    W1, report1 = curvefem.deform(V, F, targets, iterations=20, sliver_rests=True)
+    assert report1["valid"] is True
+    assert report1["max_self_intersecting_pairs_over_iterations"] == 0
+    assert report1["sliver_rests"] is True and report1["max_slivers"] > 0
 
 
 def test_untangle_and_bad_input(tmp_path):

@@ -67,6 +67,10 @@ void register_deform(CLI::App& app) {
                   "below this x that of the last rebuild (default 0.5); 0: every iteration (the "
                   "thesis)")
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_flag("--sliver-rests", args->options.replace_slivers,
+                "a scaffold tet below l^3 / 16 in volume (l: the surface's shortest edge) gets "
+                "the regular tet of that volume as its rest, so the scaffold keeps sheets of the "
+                "surface apart (thesis 3.2.2); off: every rest is the current shape");
   sub->add_option("--arap", args->options.arap_weight,
                   "weight of a surface ARAP term toward the input's shape (rotation-invariant per "
                   "vertex; with --untangle the thesis' way back); 0: none")
@@ -115,6 +119,8 @@ void register_deform(CLI::App& app) {
                             {"min_tet_volume_rel", st.min_volume_rel},
                             {"scaffold_tets", st.scaffold_tets},
                             {"scaffold_rebuilt", st.scaffold_rebuilt},
+                            {"slivers", st.slivers},
+                            {"slivers_kept", st.slivers_kept},
                             {"scaffold_min_quality", st.scaffold_min_quality},
                             {"self_intersecting_pairs", pairs},
                             {"time_s",
@@ -172,6 +178,7 @@ void register_deform(CLI::App& app) {
           {"scaffold_rebuild_failures", result.scaffold_failures},
           {"scaffold_kept", result.scaffold_kept},
           {"rebuild_quality", args->options.rebuild_quality},
+          {"sliver_rests", args->options.replace_slivers},
           {"initial_objective", h.front().objective},
           {"objective", h.back().objective},
           {"initial_energy", h.front().energy},

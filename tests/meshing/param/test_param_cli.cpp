@@ -270,6 +270,22 @@ TEST(DeformCli, EndsOfASplitRingPulledAcrossStayApartAndBadInputIsRefused) {
   const SurfaceMesh closed = io::read_surface(dir / "closed.obj");
   EXPECT_EQ(closed.F, ring.F);
   EXPECT_EQ(check::count_self_intersecting_pairs(closed.V, closed.F), 0);
+  EXPECT_EQ(r["sliver_rests"], false);
+  // --sliver-rests: the flattened scaffold between the ends pushes back (Scaf3d test).
+  ASSERT_EQ(test::run_command(cli() + " deform -q " + in + " -o " + (dir / "apart.obj").string() +
+                                  " --targets " + (dir / "targets.txt").string() +
+                                  " --iterations 20 --sliver-rests --report " +
+                                  (dir / "apart.json").string(),
+                              &out),
+            0)
+      << out;
+  const auto a = read_json(dir / "apart.json");
+  EXPECT_EQ(a["sliver_rests"], true);
+  EXPECT_EQ(a["valid"], true);
+  EXPECT_EQ(a["max_self_intersecting_pairs_over_iterations"], 0);
+  int slivers = 0;
+  for (const auto& it : a["history"]) slivers = std::max(slivers, it["slivers"].get<int>());
+  EXPECT_GT(slivers, 0);
   // --untangle: the ring with its ends already swapped (self-intersecting) comes back embedded.
   SurfaceMesh tangled = ring;
   for (int k = 0; k < 4; ++k) tangled.V.row(k).swap(tangled.V.row(4 * n + k));
