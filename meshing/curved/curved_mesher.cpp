@@ -2032,6 +2032,11 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       stats.optimize.worst_mips_moves = w.worst_mips_moves;
       stats.optimize.worst_mips_before = w.worst_mips_before;
       stats.optimize.worst_mips_after = w.worst_mips_after;
+      stats.optimize.mean_mips_movable = w.mean_mips_movable;
+      stats.optimize.mean_mips_visits = w.mean_mips_visits;
+      stats.optimize.mean_mips_moves = w.mean_mips_moves;
+      stats.optimize.mean_mips_before = w.mean_mips_before;
+      stats.optimize.mean_mips_after = w.mean_mips_after;
       stats.optimize.rejected_by_certificate += w.rejected_by_certificate;
       stats.optimize.max_energy_after = w.max_energy_after;
       stats.optimize.mean_energy_after = w.mean_energy_after;

@@ -394,7 +394,10 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
   // worst_mips), keeping every cell's scaled Jacobian above min(the star's before, the worst
   // search's threshold): a near-flat cell's MIPS can be far above the goal while its sampled
   // scaled Jacobian is above that threshold (thin_plate_05, K = 3: MIPS 1.03e4 at 0.027).
-  auto worst_visit = [&](int v, std::atomic<long long>& rejected, bool by_mips) {
+  // mean (OptimizeOptions::mean_sweeps): the star's summed curved MIPS instead, its worst cell's
+  // scaled Jacobian and curved MIPS no worse than before.
+  auto worst_visit = [&](int v, std::atomic<long long>& rejected, bool by_mips, bool mean) {
+    by_mips = by_mips || mean;
     const bool corner_move = is_corner[v];
     std::vector<std::pair<int, double>> moved;  // node, weight (of k)
     std::vector<std::pair<double, int>> cells;  // scaled Jacobian before, cell; worst first
@@ -451,19 +454,21 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // worst cell is above worst_mips_slack_above); the value is minus the worst MIPS (from the
     // nodes value() gathered).
     const double sj_keep = std::min(cells.front().first, options.worst_scaled_jacobian);
-    const double sj_floor = by_mips && mips_max_before > options.worst_mips_slack_above
+    const double sj_floor = mean ? cells.front().first
+                            : by_mips && mips_max_before > options.worst_mips_slack_above
                                 ? std::max((1 - options.worst_mips_sj_slack) * sj_keep,
                                            std::min(cells.front().first, 2e-3))
                                 : sj_keep;
     auto mips_value = [&](double bar) {
-      double worst = 0;
+      double worst = 0, sum = 0;
       for (std::size_t i = 0; i < cells.size(); ++i) {
-        const int c = cells[i].second;
         trial_mips[i] = curved_mips(k, nodes_of[i]);
-        if (!(-trial_mips[i] > bar)) return -k_inf;
+        if (mean ? !(trial_mips[i] <= mips_max_before) : !(-trial_mips[i] > bar)) return -k_inf;
         worst = std::max(worst, trial_mips[i]);
+        sum += trial_mips[i];
+        if (mean && !(-sum > bar)) return -k_inf;  // already no better than the best so far
       }
-      return -worst;
+      return mean ? -sum : -worst;
     };
     auto value = [&](const Eigen::Vector3d& d, double bar) {
       place(d);
@@ -473,6 +478,10 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         if (by_mips || (curved_cell[cells[i].second] && k > 1))
           for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
             nodes_of[i].row(n) = mesh.nodes.row(mesh.cells(cells[i].second, n));
+      // mean: the summed MIPS first (most trials fail it, and it stops at the first cell that
+      // takes the sum past the best), the scaled Jacobians only for a better sum.
+      double mean_value = 0;
+      if (mean && (mean_value = mips_value(bar)) == -k_inf) return -k_inf;
       // Any cell clearly below the bar at its hint fails the trial, whichever cell the full
       // evaluations below would have stopped at.
       const double sj_bar = by_mips ? sj_floor : bar;
@@ -497,7 +506,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         if (!(trial_sj[i] > sj_bar)) return -k_inf;
         m = std::min(m, trial_sj[i]);
       }
-      return by_mips ? mips_value(bar) : m;
+      return mean ? mean_value : by_mips ? mips_value(bar) : m;
     };
     static const std::array<Eigen::Vector3d, 14> directions = [] {
       std::array<Eigen::Vector3d, 14> d;
@@ -510,11 +519,14 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
             Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1) / std::sqrt(3.0);
       return d;
     }();
-    const double before = by_mips ? -mips_max_before : cells.front().first;
+    const double before = mean      ? -mips_sum_before
+                          : by_mips ? -mips_max_before
+                                    : cells.front().first;
     double best = before;
     Eigen::Vector3d delta = Eigen::Vector3d::Zero();
     int evaluations = 0;
-    for (double h = 0.25 * length; h > 1e-3 * length && evaluations < 200;) {
+    const int max_evaluations = mean ? options.mean_evaluations : 200;
+    for (double h = 0.25 * length; h > 1e-3 * length && evaluations < max_evaluations;) {
       bool improved = false;
       for (const Eigen::Vector3d& d : directions) {
         ++evaluations;
@@ -532,8 +544,9 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     // cells' shape for it (tr12j_occt K = 3: mean curved MIPS 322 -> 358), so the star's summed
     // curved MIPS may not grow, nor its worst above max(its value before, mips_ceiling).
     // (by_mips: the values are negative, so the worst MIPS must fall below before / 1.05.)
-    const double gain = by_mips ? 1.0 / 1.05 : 1.05;
-    const double mips_cap = std::max(mips_max_before, options.mips_ceiling);
+    const double gain = mean ? 1.0 / 1.01 : by_mips ? 1.0 / 1.05 : 1.05;
+    const double mips_cap =
+        mean ? mips_max_before : std::max(mips_max_before, options.mips_ceiling);
     std::vector<double> mips_after(cells.size());
     bool accepted = false;
     for (int attempt = 0; attempt < 4 && !accepted; ++attempt) {
@@ -686,8 +699,9 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       return (is_corner[v] || node_ok[std::size_t(v)]) && !fixed[v] &&
              star_min_sj(v) < options.worst_scaled_jacobian;
     };
-    const Sweeps w = run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, false); },
-                         options.worst_sweeps, worst_eligible, star_min_sj, "worst");
+    const Sweeps w =
+        run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, false, false); },
+            options.worst_sweeps, worst_eligible, star_min_sj, "worst");
     stats.worst_movable = w.movable;
     stats.worst_sweeps = w.sweeps;
     stats.worst_visits = w.visits;
@@ -707,7 +721,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       for (int c = 0; c < nc; ++c)
         stats.worst_mips_before = std::max(stats.worst_mips_before, mips_of(c));
       const Sweeps x =
-          run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, true); },
+          run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, true, false); },
               options.worst_sweeps, mips_eligible, [&](int v) { return -star_max_mips(v); },
               "worst MIPS", std::size_t(std::max(0, options.worst_mips_visits)));
       stats.worst_mips_movable = x.movable;
@@ -717,6 +731,33 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       for (int c = 0; c < nc; ++c)
         stats.worst_mips_after = std::max(stats.worst_mips_after, mips_of(c));
       stats.worst_sj_after = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
+    }
+    if (options.mean_sweeps > 0) {
+      // Last, the mean: stars holding a cell above mean_mips_above, their summed curved MIPS
+      // lowered without their worst cell getting worse (OptimizeOptions::mean_sweeps).
+      auto star_max_mips = [&](int v) {
+        double m = 0;
+        for (const auto& [c, local] : star[v]) m = std::max(m, mips_of(c));
+        return m;
+      };
+      double sum_before = 0;
+      for (int c = 0; c < nc; ++c) sum_before += mips_of(c);
+      stats.mean_mips_before = sum_before / std::max(nc, 1);
+      const Sweeps y =
+          run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, false, true); },
+              options.mean_sweeps,
+              [&](int v) {
+                return (is_corner[v] || node_ok[std::size_t(v)]) && !fixed[v] &&
+                       star_max_mips(v) > options.mean_mips_above;
+              },
+              [&](int v) { return -star_max_mips(v); }, "mean MIPS");
+      stats.mean_mips_movable = y.movable;
+      stats.mean_mips_visits = y.visits;
+      stats.mean_mips_moves = y.moves;
+      stats.rejected_by_certificate += y.rejected;
+      double sum_after = 0;
+      for (int c = 0; c < nc; ++c) sum_after += mips_of(c);
+      stats.mean_mips_after = sum_after / std::max(nc, 1);
     }
     stats.worst_seconds = worst_watch.seconds();
   }

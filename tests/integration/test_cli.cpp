@@ -411,6 +411,41 @@ TEST(Cli, ShellNestedCagesAreWrittenCheckedAndReported) {
   EXPECT_GT(c["per_layer"][0]["self_intersecting_pairs_before_shrinking"].get<int>(), 0);
 }
 
+TEST(Cli, MeshMeanPolishLowersTheMeanCurvedMipsAndNoWorstCell) {
+  // --optimize-mean-sweeps: stars holding a cell above curved MIPS 50 get their summed MIPS
+  // lowered, their worst scaled Jacobian and MIPS no worse (torus_coarse, K = 3: mean 23.9 ->
+  // 23.2, 15 moves measured).
+  const auto dir = test::scratch_dir("cli_mesh_mean_polish");
+  std::string out;
+  ASSERT_EQ(
+      test::run_command(cli() + " generate torus_coarse -q -o " + (dir / "t.obj").string(), &out),
+      0)
+      << out;
+  nlohmann::json r[2];
+  for (int ms = 0; ms < 2; ++ms) {
+    const auto o = dir / ("m" + std::to_string(ms));
+    ASSERT_EQ(test::run_command(cli() + " mesh -q " + (dir / "t.obj").string() + " -o " +
+                                    o.string() + " --order 3 --threads 1 --optimize-mean-sweeps " +
+                                    std::to_string(2 * ms),
+                                &out),
+              0)
+        << out;
+    r[ms] = read_json(o / "report.json");
+    ASSERT_EQ(r[ms]["valid"], true);
+  }
+  const auto& v0 = r[0]["validation"];
+  const auto& v1 = r[1]["validation"];
+  const auto& w = r[1]["optimize"]["worst"];
+  EXPECT_EQ(r[0]["optimize"]["worst"]["mean_mips_moves"], 0);
+  EXPECT_GT(w["mean_mips_moves"].get<int>(), 0);
+  EXPECT_EQ(r[0]["output_tets"], r[1]["output_tets"]);  // the polish only moves nodes
+  EXPECT_LT(v1["mean_mips"].get<double>(), 0.99 * v0["mean_mips"].get<double>());
+  EXPECT_LE(v1["max_mips"].get<double>(), v0["max_mips"].get<double>());
+  EXPECT_GE(v1["min_scaled_jacobian"].get<double>(), v0["min_scaled_jacobian"].get<double>());
+  EXPECT_NEAR(w["mean_mips_after"].get<double>(), v1["mean_mips"].get<double>(),
+              1e-9 * v1["mean_mips"].get<double>());
+}
+
 TEST(Cli, ShellNestedCageIsFilledAtTheInputsSingularVertices) {
   // needle_sphere_8: 8 needle tips no direction sees, where the shell has zero thickness.
   const auto dir = test::scratch_dir("cli_shell_cages_fill");

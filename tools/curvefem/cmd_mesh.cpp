@@ -71,6 +71,7 @@ struct MeshArgs {
   int optimize_sweeps = meshing::curved::OptimizeOptions{}.sweeps;
   int optimize_node_sweeps = meshing::curved::OptimizeOptions{}.node_sweeps;
   int optimize_worst_sweeps = meshing::curved::OptimizeOptions{}.worst_sweeps;
+  int optimize_mean_sweeps = meshing::curved::OptimizeOptions{}.mean_sweeps;
   double optimize_worst_mips = meshing::curved::OptimizeOptions{}.worst_mips;
   double optimize_worst_mips_sj_slack = meshing::curved::OptimizeOptions{}.worst_mips_sj_slack;
   int optimize_edit_passes = meshing::curved::CurvedEditOptions{}.passes;
@@ -168,6 +169,10 @@ void register_mesh(CLI::App& app) {
   sub->add_option("--optimize-worst-sweeps", args->optimize_worst_sweeps,
                   "last, sweeps moving the free corners of cells whose sampled scaled Jacobian "
                   "is below 0.02 to raise their star's minimum (default 3; 0: off)")
+      ->check(CLI::Range(0, 100));
+  sub->add_option("--optimize-mean-sweeps", args->optimize_mean_sweeps,
+                  "after the worst-cell sweeps, sweeps lowering the summed curved MIPS of stars "
+                  "holding a cell above 50, their worst cell no worse (0: off)")
       ->check(CLI::Range(0, 100));
   sub->add_option("--optimize-worst-mips", args->optimize_worst_mips,
                   "then the same sweeps lower the worst curved MIPS of stars holding a cell "
@@ -340,6 +345,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.sweeps = args->optimize_sweeps;
     options.optimize.node_sweeps = args->optimize_node_sweeps;
     options.optimize.worst_sweeps = args->optimize_worst_sweeps;
+    options.optimize.mean_sweeps = args->optimize_mean_sweeps;
     options.optimize.worst_mips = args->optimize_worst_mips;
     options.optimize.worst_mips_sj_slack = args->optimize_worst_mips_sj_slack;
     options.optimize.node_energy = args->optimize_node_energy;
