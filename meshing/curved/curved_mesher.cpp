@@ -2008,14 +2008,14 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
     const std::vector<char> frozen = frozen_nodes();
     const OptimizeStats::Flips flips = stats.optimize.flips;
     OptimizeOptions smoothing = options.optimize;
-    smoothing.worst_sweeps = 0;
+    smoothing.worst_sweeps = smoothing.mean_sweeps = 0;
     stats.optimize = optimize_vertices(out.mesh, smoothing, progress, &frozen);
     stats.optimize.flips = flips;
     edit();
     // The search for the worst cells comes last: the edits after the smoothing would otherwise
     // undo its moves (cheese K = 3: 107 tets below 0.01 with the search before them, 100 without
     // it).
-    if (options.optimize.worst_sweeps > 0) {
+    if (options.optimize.worst_sweeps > 0 || options.optimize.mean_sweeps > 0) {
       OptimizeOptions worst = options.optimize;
       worst.sweeps = worst.node_sweeps = 0;
       const std::vector<char> frozen_now = frozen_nodes();

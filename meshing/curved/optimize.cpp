@@ -680,7 +680,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     stats.node_moves = b.moves;
     stats.rejected_by_certificate += b.rejected;
   }
-  if (options.worst_sweeps > 0) {
+  // (The mean polish runs on the same set-up, also without the worst-cell sweeps.)
+  if (options.worst_sweeps > 0 || options.mean_sweeps > 0) {
     Stopwatch worst_watch;
     tbb::parallel_for(0, nc, [&](int c) { sj_of(c); });
     stats.worst_sj_before = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
@@ -708,12 +709,12 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     stats.worst_moves = w.moves;
     stats.rejected_by_certificate += w.rejected;
     stats.worst_sj_after = std::min(1.0, *std::min_element(cell_sj.begin(), cell_sj.end()));
+    auto star_max_mips = [&](int v) {
+      double m = 0;
+      for (const auto& [c, local] : star[v]) m = std::max(m, mips_of(c));
+      return m;
+    };
     if (options.worst_mips > 0) {
-      auto star_max_mips = [&](int v) {
-        double m = 0;
-        for (const auto& [c, local] : star[v]) m = std::max(m, mips_of(c));
-        return m;
-      };
       auto mips_eligible = [&](int v) {
         return (is_corner[v] || node_ok[std::size_t(v)]) && !fixed[v] &&
                star_max_mips(v) > options.worst_mips;
@@ -735,14 +736,12 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
     if (options.mean_sweeps > 0) {
       // Last, the mean: stars holding a cell above mean_mips_above, their summed curved MIPS
       // lowered without their worst cell getting worse (OptimizeOptions::mean_sweeps).
-      auto star_max_mips = [&](int v) {
-        double m = 0;
-        for (const auto& [c, local] : star[v]) m = std::max(m, mips_of(c));
-        return m;
+      auto mean_mips = [&] {
+        double sum = 0;
+        for (int c = 0; c < nc; ++c) sum += mips_of(c);
+        return sum / std::max(nc, 1);
       };
-      double sum_before = 0;
-      for (int c = 0; c < nc; ++c) sum_before += mips_of(c);
-      stats.mean_mips_before = sum_before / std::max(nc, 1);
+      stats.mean_mips_before = mean_mips();
       const Sweeps y =
           run([&](int v, std::atomic<long long>& r) { return worst_visit(v, r, false, true); },
               options.mean_sweeps,
@@ -755,9 +754,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       stats.mean_mips_visits = y.visits;
       stats.mean_mips_moves = y.moves;
       stats.rejected_by_certificate += y.rejected;
-      double sum_after = 0;
-      for (int c = 0; c < nc; ++c) sum_after += mips_of(c);
-      stats.mean_mips_after = sum_after / std::max(nc, 1);
+      stats.mean_mips_after = mean_mips();
     }
     stats.worst_seconds = worst_watch.seconds();
   }
