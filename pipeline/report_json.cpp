@@ -198,6 +198,7 @@ nlohmann::ordered_json optimize_json(const meshing::curved::OptimizeStats& s) {
         {"mean_mips_moves", s.mean_mips_moves},
         {"mean_mips_before", s.mean_mips_before},
         {"mean_mips_after", s.mean_mips_after},
+        {"mean_mips_variation_guard", s.mean_variation_guard},
         {"seconds", s.worst_seconds}}},
       {"energy_before", {{"mean", s.mean_energy_before}, {"max", s.max_energy_before}}},
       {"energy_after", {{"mean", s.mean_energy_after}, {"max", s.max_energy_after}}},

@@ -2035,6 +2035,7 @@ CurvedMesh build_attempt(const SurfaceMesh& input, const CurvedMeshOptions& opti
       stats.optimize.mean_mips_movable = w.mean_mips_movable;
       stats.optimize.mean_mips_visits = w.mean_mips_visits;
       stats.optimize.mean_mips_moves = w.mean_mips_moves;
+      stats.optimize.mean_variation_guard = w.mean_variation_guard;
       stats.optimize.mean_mips_before = w.mean_mips_before;
       stats.optimize.mean_mips_after = w.mean_mips_after;
       stats.optimize.rejected_by_certificate += w.rejected_by_certificate;

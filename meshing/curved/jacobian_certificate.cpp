@@ -762,17 +762,18 @@ double curved_mips(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes) {
   const MipsTable& mt = mips_table(order);
   double sum = 0.0;
   for (const Eigen::MatrixXd& g : mt.grads) {
-    const Eigen::Matrix3d J = jacobian_at(nodes, g);  // J(r, c) = Σ_i x_i,r ∂N_i/∂ξ_c
-    const double det = J.determinant();
-    if (!(det > 0.0)) return std::numeric_limits<double>::infinity();
-    // ‖J⁻¹‖²_F = ‖adj J‖²_F / det²; adj J = det · J⁻¹ computed via the cofactors.
-    Eigen::Matrix3d cof;
-    cof.col(0) = J.col(1).cross(J.col(2));
-    cof.col(1) = J.col(2).cross(J.col(0));
-    cof.col(2) = J.col(0).cross(J.col(1));
-    sum += J.squaredNorm() * cof.squaredNorm() / (det * det);
+    // J(r, c) = Σ_i x_i,r ∂N_i/∂ξ_c; ‖J⁻¹‖²_F = ‖adj J‖²_F / det² (curved_mips_term).
+    const double term = curved_mips_term(jacobian_at(nodes, g));
+    if (term == std::numeric_limits<double>::infinity()) return term;
+    sum += term;
   }
   return sum / static_cast<double>(mt.grads.size());
+}
+
+const std::vector<Eigen::MatrixXd>& curved_mips_gradients(int order) {
+  if (order < 1 || order > 4)
+    throw InputError("curved_mips_gradients: order " + std::to_string(order) + " is outside 1..4");
+  return mips_table(order).grads;
 }
 
 }  // namespace curvefem::meshing::curved

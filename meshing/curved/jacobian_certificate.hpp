@@ -50,7 +50,10 @@
 // use and are immutable afterwards); call them from a oneTBB loop freely.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <limits>
+#include <vector>
 
 namespace curvefem::meshing::curved {
 
@@ -153,5 +156,19 @@ inline Eigen::Matrix3d jacobian_at(const Eigen::Ref<const Eigen::MatrixXd>& X,
 /// the reference tet itself scores 9 (a regular tet scores more; the thesis threshold 100 refers
 /// to this convention). +∞ when det J ≤ 0 at a sample. An estimate, not a certificate.
 double curved_mips(int order, const Eigen::Ref<const Eigen::MatrixXd>& nodes);
+
+/// The order-k shape gradients (n × 3) at curved_mips' 56 sample points, in its order: for callers
+/// that update the Jacobians there in place (a move of some nodes changes each by a rank-one term).
+const std::vector<Eigen::MatrixXd>& curved_mips_gradients(int order);
+/// curved_mips' term at one sample, ‖J‖²_F ‖J⁻¹‖²_F (+∞ when det J ≤ 0): their mean is curved_mips.
+inline double curved_mips_term(const Eigen::Matrix3d& J) {
+  const double det = J.determinant();
+  if (!(det > 0.0)) return std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d cof;
+  cof.col(0) = J.col(1).cross(J.col(2));
+  cof.col(1) = J.col(2).cross(J.col(0));
+  cof.col(2) = J.col(0).cross(J.col(1));
+  return J.squaredNorm() * cof.squaredNorm() / (det * det);
+}
 
 }  // namespace curvefem::meshing::curved

@@ -14,6 +14,7 @@
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/timer.hpp"
+#include "meshing/curved/element_distortion.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 
 namespace curvefem::meshing::curved {
@@ -450,6 +451,16 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       mips_sum_before += mips_of(c);
       mips_max_before = std::max(mips_max_before, mips_of(c));
     }
+    // mean: a guard per cell, so that no cell pays for the sum: none may fall below min(its
+    // scaled Jacobian before, mean_sj_floor) nor rise above max(its curved MIPS before,
+    // mean_mips_above). (The star's minimum and maximum alone let a cell other than the worst
+    // fall to the worst's value: octocat K = 4, the slab's min scaled Jacobian 1.8e-3 ->
+    // 2.2e-4.)
+    std::vector<double> mips_bar(cells.size(), mips_max_before);
+    std::vector<double> sj_bar_of(cells.size());
+    if (mean)
+      for (std::size_t i = 0; i < cells.size(); ++i)
+        mips_bar[i] = std::max(mips_of(cells[i].second), options.mean_mips_above);
     // by_mips: no cell's scaled Jacobian at or below sj_floor (with the slack where the star's
     // worst cell is above worst_mips_slack_above); the value is minus the worst MIPS (from the
     // nodes value() gathered).
@@ -459,36 +470,102 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
                                 ? std::max((1 - options.worst_mips_sj_slack) * sj_keep,
                                            std::min(cells.front().first, 2e-3))
                                 : sj_keep;
-    auto mips_value = [&](double bar) {
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      sj_bar_of[i] = mean ? std::min(cells[i].first, options.mean_sj_floor) : sj_floor;
+    // by_mips: each cell's Jacobians at curved_mips' samples at the start, and their change per
+    // unit move (J(d) = J0 + d gᵀ, g = Σ of the moved nodes' weight times their shape gradient),
+    // so that a trial's curved MIPS costs a rank-one update per sample instead of a sum over the
+    // cell's nodes (the accepted move's values are computed from the nodes again, below).
+    const std::vector<Eigen::MatrixXd>& mips_grads = curved_mips_gradients(k);
+    const std::size_t ns = mips_grads.size();
+    std::vector<Eigen::Matrix3d> mips_J0;
+    std::vector<Eigen::Vector3d> mips_g;
+    if (by_mips) {
+      mips_J0.resize(cells.size() * ns);
+      mips_g.resize(cells.size() * ns);
+      Eigen::VectorXd w(mesh.cells.cols());
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        const int c = cells[i].second;
+        const Eigen::MatrixXd X = cell_nodes(mesh, c);
+        for (Eigen::Index n = 0; n < w.size(); ++n) {
+          const auto it = std::lower_bound(moved.begin(), moved.end(),
+                                           std::make_pair(mesh.cells(c, n), -k_inf));
+          w[n] = it != moved.end() && it->first == mesh.cells(c, n) ? it->second / k : 0.0;
+        }
+        for (std::size_t p = 0; p < ns; ++p) {
+          mips_J0[i * ns + p] = jacobian_at(X, mips_grads[p]);
+          mips_g[i * ns + p] = mips_grads[p].transpose() * w;
+        }
+      }
+    }
+    auto trial_cell_mips = [&](std::size_t i, const Eigen::Vector3d& d) {
+      double sum = 0;
+      for (std::size_t p = 0; p < ns; ++p) {
+        const double term =
+            curved_mips_term(mips_J0[i * ns + p] + d * mips_g[i * ns + p].transpose());
+        if (term == k_inf) return k_inf;
+        sum += term;
+      }
+      return sum / double(ns);
+    };
+    // mean, a single node moved (OptimizeOptions::mean_variation_guard): no star cell's Jacobian
+    // variation Σ|J − J̄|²/|J̄|² over the same samples may grow (as in the node phase): the MIPS
+    // alone bought its fall with the maps' higher derivatives, and the FEM error on those maps
+    // rose (the geometry matrix's cylinder, k = 4, p = 3 elasticity L2 7.4e-3 -> 1.5e-1).
+    const bool guard_variation = mean && !corner_move && options.mean_variation_guard;
+    auto cell_variation = [&](std::size_t i, const Eigen::Vector3d& d) {
+      Eigen::Matrix3d mean_J = Eigen::Matrix3d::Zero();
+      for (std::size_t p = 0; p < ns; ++p)
+        mean_J += mips_J0[i * ns + p] + d * mips_g[i * ns + p].transpose();
+      mean_J /= double(ns);
+      double var = 0;
+      for (std::size_t p = 0; p < ns; ++p)
+        var += (mips_J0[i * ns + p] + d * mips_g[i * ns + p].transpose() - mean_J).squaredNorm();
+      return var / (double(ns) * mean_J.squaredNorm());
+    };
+    std::vector<double> variation_before(guard_variation ? cells.size() : 0);
+    for (std::size_t i = 0; i < variation_before.size(); ++i)
+      variation_before[i] = cell_variation(i, Eigen::Vector3d::Zero());
+    // And no cell's distortion d2, d3 (element_distortion.hpp: ‖D²F‖‖DF⁻¹‖, ‖D³F‖‖DF⁻¹‖, what
+    // the FEM error constants carry) may grow.
+    std::vector<ElementDistortion> distortion_before(guard_variation ? cells.size() : 0);
+    for (std::size_t i = 0; i < distortion_before.size(); ++i)
+      distortion_before[i] = element_distortion(k, cell_nodes(mesh, cells[i].second));
+    auto variation_kept = [&](const Eigen::Vector3d& d) {
+      for (std::size_t i = 0; i < variation_before.size(); ++i)
+        if (!(cell_variation(i, d) <= variation_before[i])) return false;
+      return true;
+    };
+    auto mips_value = [&](const Eigen::Vector3d& d, double bar) {
       double worst = 0, sum = 0;
       for (std::size_t i = 0; i < cells.size(); ++i) {
-        trial_mips[i] = curved_mips(k, nodes_of[i]);
-        if (mean ? !(trial_mips[i] <= mips_max_before) : !(-trial_mips[i] > bar)) return -k_inf;
+        trial_mips[i] = trial_cell_mips(i, d);
+        if (mean ? !(trial_mips[i] <= mips_bar[i]) : !(-trial_mips[i] > bar)) return -k_inf;
         worst = std::max(worst, trial_mips[i]);
         sum += trial_mips[i];
         if (mean && !(-sum > bar)) return -k_inf;  // already no better than the best so far
       }
+      if (guard_variation && !variation_kept(d)) return -k_inf;
       return mean ? -sum : -worst;
     };
     auto value = [&](const Eigen::Vector3d& d, double bar) {
-      place(d);
-      // Each curved cell's nodes are gathered once per trial, into buffers kept over the visit.
-      // (by_mips: every cell's, for its curved MIPS.)
-      for (std::size_t i = 0; i < cells.size(); ++i)
-        if (by_mips || (curved_cell[cells[i].second] && k > 1))
-          for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
-            nodes_of[i].row(n) = mesh.nodes.row(mesh.cells(cells[i].second, n));
       // mean: the summed MIPS first (most trials fail it, and it stops at the first cell that
       // takes the sum past the best), the scaled Jacobians only for a better sum.
       double mean_value = 0;
-      if (mean && (mean_value = mips_value(bar)) == -k_inf) return -k_inf;
+      if (mean && (mean_value = mips_value(d, bar)) == -k_inf) return -k_inf;
+      place(d);
+      // Each curved cell's nodes are gathered once per trial, into buffers kept over the visit.
+      for (std::size_t i = 0; i < cells.size(); ++i)
+        if (curved_cell[cells[i].second] && k > 1)
+          for (Eigen::Index n = 0; n < mesh.cells.cols(); ++n)
+            nodes_of[i].row(n) = mesh.nodes.row(mesh.cells(cells[i].second, n));
       // Any cell clearly below the bar at its hint fails the trial, whichever cell the full
       // evaluations below would have stopped at.
-      const double sj_bar = by_mips ? sj_floor : bar;
-      const double clearly_below = sj_bar - 1e-12 * std::abs(sj_bar) - 1e-300;
+      auto sj_bar = [&](std::size_t i) { return by_mips ? sj_bar_of[i] : bar; };
       for (std::size_t i = 0; i < cells.size(); ++i) {
         const int c = cells[i].second;
         if (!curved_cell[c] || k == 1) continue;
+        const double clearly_below = sj_bar(i) - 1e-12 * std::abs(sj_bar(i)) - 1e-300;
         for (int j : cell_hint[std::size_t(c)])
           if (j >= 0 && scaled_jacobian_at(k, nodes_of[i], j) < clearly_below) return -k_inf;
       }
@@ -503,10 +580,15 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         } else {
           trial_sj[i] = cell_sj_now(c);
         }
-        if (!(trial_sj[i] > sj_bar)) return -k_inf;
+        if (!(trial_sj[i] > sj_bar(i))) return -k_inf;
         m = std::min(m, trial_sj[i]);
       }
-      return mean ? mean_value : by_mips ? mips_value(bar) : m;
+      for (std::size_t i = 0; i < distortion_before.size(); ++i) {
+        if (!curved_cell[cells[i].second] || k == 1) continue;  // straight, and stays so
+        const ElementDistortion e = element_distortion(k, nodes_of[i]);
+        if (!(e.d2 <= distortion_before[i].d2 && e.d3 <= distortion_before[i].d3)) return -k_inf;
+      }
+      return mean ? mean_value : by_mips ? mips_value(d, bar) : m;
     };
     static const std::array<Eigen::Vector3d, 14> directions = [] {
       std::array<Eigen::Vector3d, 14> d;
@@ -564,6 +646,8 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
         flat_after += trial_sj[i] < options.worst_flat;
       }
       accepted = sum <= mips_sum_before && max <= mips_cap && flat_after <= flat_before;
+      for (std::size_t i = 0; i < cells.size() && accepted && mean; ++i)
+        accepted = mips_after[i] <= mips_bar[i] && trial_sj[i] >= sj_bar_of[i];
       for (std::size_t i = 0; i < cells.size() && accepted; ++i)
         accepted = certify_tet_jacobian(k, cell_nodes(mesh, cells[i].second)).verdict ==
                    JacobianVerdict::positive;
@@ -753,6 +837,7 @@ OptimizeStats optimize_vertices(LagrangeMesh& mesh, const OptimizeOptions& optio
       stats.mean_mips_movable = y.movable;
       stats.mean_mips_visits = y.visits;
       stats.mean_mips_moves = y.moves;
+      stats.mean_variation_guard = options.mean_variation_guard;
       stats.rejected_by_certificate += y.rejected;
       stats.mean_mips_after = mean_mips();
     }

@@ -100,16 +100,28 @@ struct OptimizeOptions {
   // the goal.
   double worst_mips_slack_above = 1e4;
   // Last, the same search lowering the star's SUMMED curved MIPS by 1% at least, for stars
-  // holding a cell above mean_mips_above, while the star's smallest scaled Jacobian and largest
-  // curved MIPS get no worse (and the other guards above): the mean, without trading the worst
-  // cells for it. Corners and the high-order nodes of curved stars move, as in the worst-cell
-  // search. Measured at K = 4 with 2 sweeps (benchmarks/results/robustness_mean_polish.md): mean
-  // curved MIPS knight 39.1 -> 35.2, spot 33.5 -> 29.2, bunny 52.6 -> 42.8, fandisk 44.9 ->
-  // 39.9 (bichon's P4: 47.9, 56.0, 52.4, 40.5), min scaled Jacobian and max MIPS no worse, P2
-  // Poisson CG iterations and errors the same; but the optimize stage takes 4-13 s more on these
-  // 500-1,700-tet meshes. 0 sweeps (the default): off.
+  // holding a cell above mean_mips_above, under the per-cell guards below (and the other guards
+  // above): the mean, without trading any cell's shape for it. Corners and the high-order nodes
+  // of curved stars move, as in the worst-cell search; a trial's MIPS is a rank-one update of
+  // each cell's Jacobians at curved_mips' samples. 0 sweeps (the default): off. Measured at K = 4
+  // with 2 sweeps (benchmarks/results/robustness_mean_polish.md): WITHOUT the maps' guards
+  // (mean_variation_guard false) the mean falls 11-15% (bunny 52.6 -> 45.0, fandisk 44.9 -> 37.4;
+  // bichon's P4 52.4 and 40.5), but by bending the maps: the FEM error on them rose up to 20x.
+  // With them, 2-3% (bunny 51.0, fandisk 43.7) for 2-9 s more of the optimize stage.
   int mean_sweeps = 0;
   double mean_mips_above = 50;
+  // Each cell of the star keeps its own guard (not only the star's worst): its sampled scaled
+  // Jacobian may not fall below min(its value before, mean_sj_floor), nor its curved MIPS rise
+  // above max(its value before, mean_mips_above).
+  double mean_sj_floor = 0.1;
+  // The maps' guards: a single high-order node's move may not raise any star cell's Jacobian
+  // variation Σ|J − J̄|²/|J̄|² over curved_mips' samples (as in the node phase), nor its
+  // distortion d2 or d3 (element_distortion.hpp). Without them the polish bought most of its fall
+  // of the mean with the maps' higher derivatives, and the FEM error on them rose: the geometry
+  // matrix (tests/mapping/test_geometry_matrix.cpp) at k = 4, p = 3, cylinder Poisson L2 3.5e-3
+  // -> 2.1e-2 and elasticity 7.4e-3 -> 1.5e-1; with them 3.6e-3 and 8.6e-3, the other entries
+  // within 3%. (Corner moves add an affine field per cell: D²F and D³F stay.)
+  bool mean_variation_guard = true;
   int mean_evaluations = 100;  // trial positions per visit at most
   // Collapses and flips of the stitched curved mesh before the smoothing (curved_edit.hpp; run by
   // the curved mesher, not by optimize_vertices).
@@ -132,6 +144,7 @@ struct OptimizeStats {
   int mean_mips_movable = 0;                           // OptimizeOptions::mean_sweeps
   long long mean_mips_visits = 0, mean_mips_moves = 0;
   double mean_mips_before = 0, mean_mips_after = 0;  // the mesh's mean curved MIPS
+  bool mean_variation_guard = false;                 // that polish ran with it
   double worst_seconds = 0;
   long long node_visits = 0, node_moves = 0;
   double max_energy_before = 0, max_energy_after = 0;

@@ -413,8 +413,7 @@ TEST(Cli, ShellNestedCagesAreWrittenCheckedAndReported) {
 
 TEST(Cli, MeshMeanPolishLowersTheMeanCurvedMipsAndNoWorstCell) {
   // --optimize-mean-sweeps: stars holding a cell above curved MIPS 50 get their summed MIPS
-  // lowered, their worst scaled Jacobian and MIPS no worse (torus_coarse, K = 3: mean 23.9 ->
-  // 23.2, 15 moves measured).
+  // lowered, their worst scaled Jacobian and MIPS no worse (torus_coarse, K = 3).
   const auto dir = test::scratch_dir("cli_mesh_mean_polish");
   std::string out;
   ASSERT_EQ(
@@ -454,6 +453,18 @@ TEST(Cli, MeshMeanPolishLowersTheMeanCurvedMipsAndNoWorstCell) {
       << out;
   EXPECT_GT(
       read_json(dir / "m2" / "report.json")["optimize"]["worst"]["mean_mips_moves"].get<int>(), 0);
+  // The maps' guards are on unless --optimize-mean-free-nodes, which the report says.
+  EXPECT_EQ(w["mean_mips_variation_guard"], true);
+  ASSERT_EQ(test::run_command(cli() + " mesh -q " + (dir / "t.obj").string() + " -o " +
+                                  (dir / "m3").string() +
+                                  " --order 3 --threads 1 --optimize-mean-sweeps 2 "
+                                  "--optimize-mean-free-nodes",
+                              &out),
+            0)
+      << out;
+  const auto r3 = read_json(dir / "m3" / "report.json");
+  EXPECT_EQ(r3["optimize"]["worst"]["mean_mips_variation_guard"], false);
+  EXPECT_EQ(r3["valid"], true);
 }
 
 TEST(Cli, ShellNestedCageIsFilledAtTheInputsSingularVertices) {

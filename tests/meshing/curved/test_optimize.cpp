@@ -619,6 +619,7 @@ TEST(Optimize, TheWorstCellSearchNeverRaisesTheMeshsMipsNorLowersItsMinimum) {
   cv::CurvedMeshOptions o;
   o.order = 3;
   o.optimize.worst_sweeps = 0;
+  o.optimize.mean_sweeps = 0;  // the worst-cell search alone
   cv::CurvedMeshStats off_stats;
   const cv::CurvedMesh off = cv::build_curved_mesh(sphere, o, off_stats);
   o.optimize.worst_sweeps = 3;
@@ -641,6 +642,89 @@ TEST(Optimize, TheWorstCellSearchNeverRaisesTheMeshsMipsNorLowersItsMinimum) {
   EXPECT_GT(on_stats.optimize.worst_seconds, 0);
   EXPECT_EQ(off_stats.optimize.worst_seconds, 0);
   EXPECT_LE(b.mean_mips, a.mean_mips * (1 + 1e-12));
+}
+
+TEST(Optimize, TheMeanPolishLowersTheMeanAndKeepsEachCellsOwnGuard) {
+  // The polish alone (without the maps' guards) on a curved sphere mesh made without it, with a low
+  // threshold and a high floor so that most stars are visited and the guards bind: the summed
+  // curved MIPS falls while no cell falls below min(its scaled Jacobian before, the floor) nor
+  // rises above max(its MIPS before, the threshold). A guard on the star's minimum and maximum
+  // alone let a cell fall to its star's worst.
+  const curvefem::SurfaceMesh sphere = curvefem::make_icosphere(3);
+  for (int k : {2, 3}) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    cv::CurvedMeshOptions o;
+    o.order = k;
+    o.threads = 1;
+    o.optimize.mean_sweeps = 0;
+    cv::CurvedMeshStats stats;
+    LagrangeMesh m = cv::build_curved_mesh(sphere, o, stats).mesh;
+    const int nc = m.num_cells();
+    std::vector<double> sj(static_cast<std::size_t>(nc)), mips(sj.size());
+    double sum_before = 0;
+    for (int c = 0; c < nc; ++c) {
+      const Eigen::MatrixXd X = cell_nodes(m, c);
+      sj[std::size_t(c)] = cv::min_scaled_jacobian(k, X);
+      mips[std::size_t(c)] = cv::curved_mips(k, X);
+      sum_before += mips[std::size_t(c)];
+    }
+    cv::OptimizeOptions p;
+    p.sweeps = p.node_sweeps = p.worst_sweeps = 0;
+    p.worst_mips = 0;
+    p.flips = false;
+    p.mean_sweeps = 2;
+    p.mean_mips_above = 15;
+    p.mean_sj_floor = 0.4;
+    // The per-cell guards alone: with the maps' guards (variation, distortion) few node moves pass
+    // here (6 at k = 2); tests/mapping/test_geometry_matrix.cpp measures what those guards keep.
+    p.mean_variation_guard = false;
+    const Eigen::MatrixXd before = m.nodes;
+    const cv::OptimizeStats s = cv::optimize_vertices(m, p);
+    EXPECT_GT(s.mean_mips_moves, 10);
+    EXPECT_NEAR(s.mean_mips_before, sum_before / nc, 1e-9 * sum_before / nc);
+    double sum_after = 0;
+    int lowered = 0, raised = 0;
+    for (int c = 0; c < nc; ++c) {
+      const Eigen::MatrixXd X = cell_nodes(m, c);
+      const double a = cv::min_scaled_jacobian(k, X), q = cv::curved_mips(k, X);
+      sum_after += q;
+      EXPECT_GE(a, std::min(sj[std::size_t(c)], p.mean_sj_floor)) << "cell " << c;
+      EXPECT_LE(q, std::max(mips[std::size_t(c)], p.mean_mips_above)) << "cell " << c;
+      lowered += a < sj[std::size_t(c)];
+      raised += q > mips[std::size_t(c)];
+    }
+    std::printf("k = %d: %lld moves, mean MIPS %.3f -> %.3f; %d cells' SJ lower, %d MIPS higher\n",
+                k, s.mean_mips_moves, sum_before / nc, sum_after / nc, lowered, raised);
+    EXPECT_NEAR(s.mean_mips_after, sum_after / nc, 1e-9 * sum_after / nc);
+    EXPECT_LT(sum_after, 0.995 * sum_before);
+    // Some cells did pay for the sum, within their guards (else the test shows nothing).
+    EXPECT_GT(raised, 0);
+    EXPECT_TRUE(all_certified(m));
+    // The boundary's vertices are where they were.
+    std::vector<char> on_boundary(std::size_t(m.num_nodes()), 0);
+    {
+      const auto& lattice = curvefem::lagrange_lattice(CellKind::tetrahedron, k);
+      std::array<int, 4> row{};
+      for (std::size_t n = 0; n < lattice.size(); ++n)
+        for (int j = 0; j < 4; ++j)
+          if (lattice[n][std::size_t(j)] == k) row[std::size_t(j)] = int(n);
+      std::map<std::array<int, 3>, int> faces;
+      for (int c = 0; c < nc; ++c)
+        for (int skip = 0; skip < 4; ++skip) {
+          std::array<int, 3> f;
+          int n = 0;
+          for (int j = 0; j < 4; ++j)
+            if (j != skip) f[std::size_t(n++)] = m.cells(c, row[std::size_t(j)]);
+          std::sort(f.begin(), f.end());
+          ++faces[f];
+        }
+      for (const auto& [f, count] : faces)
+        if (count == 1)
+          for (int v : f) on_boundary[std::size_t(v)] = 1;
+    }
+    for (int v = 0; v < m.num_nodes(); ++v)
+      if (on_boundary[std::size_t(v)]) EXPECT_EQ(m.nodes.row(v), before.row(v)) << "vertex " << v;
+  }
 }
 
 // The curved edits' node map (open addressing) answers as std::map does: inserts that keep the
