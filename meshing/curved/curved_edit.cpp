@@ -53,6 +53,9 @@ class CurvedEditMesh : public TetMesh {
   int k = 1;
   bool mips_guard = false;  // every operation: the cavity's worst curved MIPS may not grow
   double locked_mips = 0;   // CurvedEditOptions::locked_mips
+  // The mean pass (CurvedEditOptions::mean_flips): its checks replace invariants()'s.
+  bool mean_mode = false;
+  double mean_above = 50, mean_ref = 0, mean_sj_floor = 0.1;
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
   std::vector<Eigen::Vector3d> pos;                      // node positions (grows)
@@ -219,7 +222,66 @@ class CurvedEditMesh : public TetMesh {
     return !is_boundary_edge(t) && !curved_edge_face.count(sorted_edge(t.vid, other_vertex(t)));
   }
 
+  // The mean pass's checks (CurvedEditOptions::mean_flips): the cavity's Σ(MIPS − mean_ref)
+  // falls by 1% of its summed MIPS at least, no new cell above max(its worst, mean_above) nor
+  // below min(its smallest scaled Jacobian, mean_sj_floor), no locked cell above locked_mips
+  // that was not there, every new cell certified.
+  bool mean_invariants(const OperationRecord& r) {
+    ++stats->attempted;
+    std::vector<Cell> new_cells;
+    new_cells.reserve(r.new_cells.size());
+    for (Id t : r.new_cells) new_cells.push_back(cell(t));
+    const Cavity cavity(new_cells);
+    auto locked = [&](const Cell& c) {
+      return vertex_fixed[c[0]] && vertex_fixed[c[1]] && vertex_fixed[c[2]] && vertex_fixed[c[3]];
+    };
+    double sum_before = 0, max_before = 0, sj_before = k_inf, locked_before = 0;
+    for (Id t : r.old_cells) {
+      const double x = mips[t];
+      sum_before += x;
+      max_before = std::max(max_before, x);
+      sj_before = std::min(sj_before, scaled_jacobian[t]);
+      if (locked(cell(t))) locked_before = std::max(locked_before, x);
+    }
+    const double n_before = double(r.old_cells.size()), n_after = double(r.new_cells.size());
+    const double limit = sum_before - mean_ref * (n_before - n_after) - 0.01 * sum_before;
+    const double cap = std::max(max_before, mean_above);
+    const double locked_bound = std::max(locked_mips, locked_before);
+    std::map<NodeKey, Eigen::Vector3d> staged;
+    std::vector<Eigen::MatrixXd> Xs;
+    const std::size_t nn = r.new_cells.size();
+    std::vector<double> new_mips(nn), new_sj(nn), new_energy(nn);
+    double sum_after = 0;
+    for (std::size_t i = 0; i < nn; ++i) {
+      build_nodes(cell(r.new_cells[i]), cavity, staged, Xs.emplace_back());
+      new_mips[i] = curved_mips(k, Xs[i]);
+      sum_after += new_mips[i];
+      if (!(new_mips[i] <= cap) || !(sum_after < limit)) return refuse(false);
+      if (locked_mips > 0 && locked(cell(r.new_cells[i])) && !(new_mips[i] <= locked_bound))
+        return refuse(false, true);
+    }
+    const double sj_needed = std::min(sj_before, mean_sj_floor);
+    for (std::size_t i = 0; i < nn; ++i) {
+      new_sj[i] = min_scaled_jacobian(k, Xs[i]);
+      if (!(new_sj[i] >= sj_needed)) return refuse(false);
+    }
+    for (std::size_t i = 0; i < nn; ++i)
+      if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive) return refuse(true);
+    for (std::size_t i = 0; i < nn; ++i) {
+      energy.set(r.new_cells[i], cell_energy(k, Xs[i]));
+      scaled_jacobian.set(r.new_cells[i], new_sj[i]);
+      mips.set(r.new_cells[i], new_mips[i]);
+    }
+    for (const auto& [key, x] : staged) {
+      node_of.assign(key, int(pos.size()));
+      pos.push_back(x);
+    }
+    memo.stamp({&r.old_cells, &r.new_cells, &r.affected_cells});
+    return true;
+  }
+
   bool invariants(const OperationRecord& r) override {
+    if (mean_mode) return mean_invariants(r);
     ++stats->attempted;
     std::vector<Cell> new_cells;
     new_cells.reserve(r.new_cells.size());
@@ -523,6 +585,11 @@ void accumulate(CurvedEditStats& total, const CurvedEditStats& next) {
   total.collapses += next.collapses;
   total.flips += next.flips;
   total.splits += next.splits;
+  total.mean_flips += next.mean_flips;
+  if (next.mean_flips > 0 || next.mean_mips_before > 0) {
+    if (!(total.mean_mips_before > 0)) total.mean_mips_before = next.mean_mips_before;
+    total.mean_mips_after = next.mean_mips_after;
+  }
   total.attempted += next.attempted;
   total.rejected_certificate += next.rejected_certificate;
   total.rejected_energy += next.rejected_energy;
@@ -629,7 +696,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     const Eigen::MatrixXd X = m.cell_nodes(cells[std::size_t(c)]);
     m.energy.set(Id(c), cell_energy(k, X));
     m.scaled_jacobian.set(Id(c), min_scaled_jacobian(k, X));
-    if (options.mips_guard || options.locked_mips > 0 || options.splits)
+    if (options.mips_guard || options.locked_mips > 0 || options.splits || options.mean_flips)
       m.mips.set(Id(c), curved_mips(k, X));
   }
   auto summarize = [&](double& mean, double& max, int& targets) {
@@ -646,9 +713,10 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
   summarize(stats.mean_energy_before, stats.max_energy_before, stats.targets_before);
 
   using Pass = editing::ExecutePass<TetMesh>;
-  enum class Mode { collapse, flip, split };
+  enum class Mode { collapse, flip, split, mean_flip };
   auto wanted = [&](Id t, Mode mode) {
     if (m.is_cell_removed(t)) return false;
+    if (mode == Mode::mean_flip) return m.mips[t] > options.mean_mips_above;
     return mode == Mode::split ? m.is_split_target(t, options.energy, options.split_scaled_jacobian)
                                : m.is_target(t, options.energy);
   };
@@ -693,7 +761,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
             }
           }
         }
-      } else {
+      } else {  // Mode::flip, Mode::mean_flip
         for (const auto& f : m.faces_of_tets({t})) work.emplace_back("swap23", f);
         for (const auto& e : m.edges_of_tets({t})) {
           work.emplace_back("swap32", e);
@@ -723,7 +791,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
           m.remember_topology(t.vid, mm.other_vertex(t));
         return done;
       };
-    } else {
+    } else {  // Mode::flip, Mode::mean_flip
       pass.operations["swap23"] = [](TetMesh& mm, const TetMesh::Tuple& t) {
         return mm.swap_face_23(t);
       };
@@ -746,6 +814,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     };
     pass.priority = [&m, mode, &star_energy](const TetMesh&, const std::string&,
                                              const TetMesh::Tuple& t) {
+      if (mode == Mode::mean_flip) return m.mips[t.tid];
       return mode == Mode::collapse ? star_energy(t.vid) : m.energy[t.tid];
     };
     pass.should_process = [&wanted, &star_energy, &options, mode](const TetMesh&,
@@ -758,9 +827,10 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     };
     const auto s = pass.run(m, target_work(m.live_cells(), mode));
     log::debug("optimize: curved edits, ",
-               mode == Mode::collapse ? "collapses"
-               : mode == Mode::flip   ? "flips"
-                                      : "splits",
+               mode == Mode::collapse    ? "collapses"
+               : mode == Mode::flip      ? "flips"
+               : mode == Mode::mean_flip ? "flips for the mean"
+                                         : "splits",
                ": ", s.summary());
     stats.rejected_topology += (long long)(s.rejected_topology);
     return (long long)(s.succeeded);
@@ -786,6 +856,28 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     }
     ++stats.passes;
     if (done == 0) break;
+  }
+  if (options.mean_flips) {
+    // The mean pass: its own checks (mean_invariants); refusals are not replayed (the memo's
+    // were judged by the other checks).
+    auto mean_mips = [&m] {
+      const auto live = m.live_cells();
+      double sum = 0;
+      for (Id t : live) sum += m.mips[t];
+      return sum / double(std::max<std::size_t>(live.size(), 1));
+    };
+    for (Id t : m.live_cells())
+      if (std::isnan(m.mips[t])) m.mips.set(t, curved_mips(k, m.cell_nodes(m.cell(t))));
+    stats.mean_mips_before = m.mean_ref = mean_mips();
+    m.mean_mode = true;
+    m.mean_above = options.mean_mips_above;
+    m.mean_sj_floor = options.mean_sj_floor;
+    const bool replay = m.replay;
+    m.replay = false;
+    stats.mean_flips = run(Mode::mean_flip);
+    m.replay = replay;
+    m.mean_mode = false;
+    stats.mean_mips_after = mean_mips();
   }
   if (progress) progress("optimize: curved edits", 1.0);
   summarize(stats.mean_energy_after, stats.max_energy_after, stats.targets_after);

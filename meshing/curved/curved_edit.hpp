@@ -77,11 +77,28 @@ struct CurvedEditOptions {
   bool precheck_collapse_energy = true;
   // At most this share of the cells at the start of a pass is split in that pass.
   double max_split_share = 0.2;
+  // Last, a flip pass for the mean: 2-3 / 3-2 / 4-4 flips around cells whose curved MIPS is above
+  // mean_mips_above, kept when they lower the cavity's summed curved MIPS less c per cell (c the
+  // mesh's mean at the start of the pass: so the mesh's mean falls) by 1% of its sum at least,
+  // with no new cell's MIPS above max(the cavity's worst, mean_mips_above), no new cell's sampled
+  // scaled Jacobian below min(the cavity's smallest, mean_sj_floor), and the other checks above
+  // (certificate, locked cells). Each kept flip lowers Σ(MIPS − c) over a finite set of
+  // triangulations, so the pass ends. The curved mesher runs it alone, last of all (after the
+  // search for the worst cells), so it cannot lower the mesh's smallest scaled Jacobian below
+  // min(its value, mean_sj_floor) nor raise its worst MIPS above max(its value, the threshold).
+  // Measured at K = 4 (benchmarks/results/robustness_mean_flips.md): mean curved MIPS
+  // knight 39.1 -> 37.1, spot 33.5 -> 31.8, bunny 52.6 -> 51.2, fandisk 44.9 -> 42.7 (bichon's
+  // P4: 47.9, 56.0, 52.4, 40.5), worst cells unchanged, edits +0.1-0.5 s.
+  bool mean_flips = true;
+  double mean_mips_above = 30;
+  double mean_sj_floor = 0.1;
 };
 
 struct CurvedEditStats {
   int passes = 0;
   long long collapses = 0, flips = 0, splits = 0;
+  long long mean_flips = 0;  // CurvedEditOptions::mean_flips (not counted in flips)
+  double mean_mips_before = 0, mean_mips_after = 0;  // the mean pass's, where it ran
   long long attempted = 0;             // operations the engine carried out before the checks
   long long rejected_certificate = 0;  // a new cell not certified positive
   long long rejected_energy = 0;       // the worst energy did not drop, or the scaled Jacobian did

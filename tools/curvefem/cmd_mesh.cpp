@@ -79,6 +79,7 @@ struct MeshArgs {
   double optimize_edit_energy = meshing::curved::CurvedEditOptions{}.energy;
   double optimize_edit_locked_mips = meshing::curved::CurvedEditOptions{}.locked_mips;
   bool optimize_edit_splits = meshing::curved::CurvedEditOptions{}.splits;
+  bool optimize_no_mean_flips = !meshing::curved::CurvedEditOptions{}.mean_flips;
   double optimize_node_energy = meshing::curved::OptimizeOptions{}.node_energy;
   double padding = 0.25;
   GlobalOptions global;
@@ -201,6 +202,10 @@ void register_mesh(CLI::App& app) {
   sub->add_flag("--optimize-edit-splits", args->optimize_edit_splits,
                 "the curved edits also split interior edges of cells with a scaled Jacobian below "
                 "0.01 (kept when the cavity's worst scaled Jacobian rises by half)");
+  sub->add_flag("--optimize-no-mean-flips", args->optimize_no_mean_flips,
+                "skip the last curved edits' 2-3/3-2/4-4 flips around cells above curved MIPS 30 "
+                "that lower the mesh's mean curved MIPS (no new cell above max(the replaced "
+                "cells' worst, 30) nor below min(their smallest scaled Jacobian, 0.1))");
   sub->add_option("--optimize-edit-locked-mips", args->optimize_edit_locked_mips,
                   "curved edits: no new cell with all four corners fixed (on the curved surface or "
                   "a boundary face; the smoothing cannot move them) and a curved MIPS above M, "
@@ -359,6 +364,7 @@ void register_mesh(CLI::App& app) {
     options.optimize.edits.energy = args->optimize_edit_energy;
     options.optimize.edits.locked_mips = args->optimize_edit_locked_mips;
     options.optimize.edits.splits = args->optimize_edit_splits;
+    options.optimize.edits.mean_flips = !args->optimize_no_mean_flips;
     options.exterior = args->exterior;
     options.recurve = !args->no_recurve;
     options.low_degree_slabs = args->low_degree_slabs;
