@@ -413,7 +413,8 @@ TEST(Cli, ShellNestedCagesAreWrittenCheckedAndReported) {
 
 TEST(Cli, MeshMeanPolishLowersTheMeanCurvedMipsAndNoWorstCell) {
   // --optimize-mean-sweeps: stars holding a cell above curved MIPS 50 get their summed MIPS
-  // lowered, their worst scaled Jacobian and MIPS no worse (torus_coarse, K = 3).
+  // lowered, their worst scaled Jacobian and MIPS no worse (torus_coarse, K = 3; without the flips
+  // for the mean, which run after the polish).
   const auto dir = test::scratch_dir("cli_mesh_mean_polish");
   std::string out;
   ASSERT_EQ(
@@ -423,11 +424,13 @@ TEST(Cli, MeshMeanPolishLowersTheMeanCurvedMipsAndNoWorstCell) {
   nlohmann::json r[2];
   for (int ms = 0; ms < 2; ++ms) {
     const auto o = dir / ("m" + std::to_string(ms));
-    ASSERT_EQ(test::run_command(cli() + " mesh -q " + (dir / "t.obj").string() + " -o " +
-                                    o.string() + " --order 3 --threads 1 --optimize-mean-sweeps " +
-                                    std::to_string(2 * ms),
-                                &out),
-              0)
+    ASSERT_EQ(
+        test::run_command(cli() + " mesh -q " + (dir / "t.obj").string() + " -o " + o.string() +
+                              " --order 3 --threads 1 --optimize-no-mean-flips "
+                              "--optimize-mean-sweeps " +
+                              std::to_string(2 * ms),
+                          &out),
+        0)
         << out;
     r[ms] = read_json(o / "report.json");
     ASSERT_EQ(r[ms]["valid"], true);
@@ -465,6 +468,47 @@ TEST(Cli, MeshMeanPolishLowersTheMeanCurvedMipsAndNoWorstCell) {
   const auto r3 = read_json(dir / "m3" / "report.json");
   EXPECT_EQ(r3["optimize"]["worst"]["mean_mips_variation_guard"], false);
   EXPECT_EQ(r3["valid"], true);
+}
+
+TEST(Cli, MeshFlipsForTheMeanAreOnByDefaultAndKeepTheWorstCells) {
+  // The flips for the mean run last (CurvedEditOptions::mean_flips): the mesh without them is the
+  // mesh they start from, so its mean is the report's mean before; after them the mean is lower,
+  // the worst MIPS no higher than max(before, 30), the min scaled Jacobian no lower than
+  // min(before, 0.1). --optimize-no-mean-flips turns them off (torus_coarse, K = 3 and 4).
+  const auto dir = test::scratch_dir("cli_mesh_mean_flips");
+  std::string out;
+  ASSERT_EQ(
+      test::run_command(cli() + " generate torus_coarse -q -o " + (dir / "t.obj").string(), &out),
+      0)
+      << out;
+  for (int k : {3, 4}) {
+    SCOPED_TRACE("order " + std::to_string(k));
+    nlohmann::json r[2];
+    for (int off = 0; off < 2; ++off) {
+      const auto o = dir / ("m" + std::to_string(k) + std::to_string(off));
+      ASSERT_EQ(test::run_command(cli() + " mesh -q " + (dir / "t.obj").string() + " -o " +
+                                      o.string() + " --threads 1 --order " + std::to_string(k) +
+                                      (off ? " --optimize-no-mean-flips" : ""),
+                                  &out),
+                0)
+          << out;
+      r[off] = read_json(o / "report.json");
+      ASSERT_EQ(r[off]["valid"], true);
+    }
+    const auto& on = r[0]["validation"];
+    const auto& off = r[1]["validation"];
+    const auto& f = r[0]["optimize"]["curved_edits"]["mean_flips"];
+    EXPECT_EQ(r[1]["optimize"]["curved_edits"]["mean_flips"]["flips"], 0);
+    EXPECT_GT(f["flips"].get<int>(), 0);
+    EXPECT_NEAR(f["mean_mips_before"].get<double>(), off["mean_mips"].get<double>(),
+                1e-9 * off["mean_mips"].get<double>());
+    EXPECT_NEAR(f["mean_mips_after"].get<double>(), on["mean_mips"].get<double>(),
+                1e-9 * on["mean_mips"].get<double>());
+    EXPECT_LT(on["mean_mips"].get<double>(), off["mean_mips"].get<double>());
+    EXPECT_LE(on["max_mips"].get<double>(), std::max(off["max_mips"].get<double>(), 30.0));
+    EXPECT_GE(on["min_scaled_jacobian"].get<double>(),
+              std::min(off["min_scaled_jacobian"].get<double>(), 0.1) * (1 - 1e-9));
+  }
 }
 
 TEST(Cli, ShellNestedCageIsFilledAtTheInputsSingularVertices) {

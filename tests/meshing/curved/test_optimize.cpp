@@ -621,6 +621,7 @@ TEST(Optimize, TheWorstCellSearchNeverRaisesTheMeshsMipsNorLowersItsMinimum) {
   o.order = 3;
   o.optimize.worst_sweeps = 0;
   o.optimize.mean_sweeps = 0;  // the worst-cell search alone
+  o.optimize.edits.mean_flips = false;
   cv::CurvedMeshStats off_stats;
   const cv::CurvedMesh off = cv::build_curved_mesh(sphere, o, off_stats);
   o.optimize.worst_sweeps = 3;
