@@ -265,10 +265,20 @@ class CurvedEditMesh : public TetMesh {
       new_sj[i] = min_scaled_jacobian(k, Xs[i]);
       if (!(new_sj[i] >= sj_needed)) return refuse(false);
     }
-    for (std::size_t i = 0; i < nn; ++i)
-      if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive) return refuse(true);
-    for (std::size_t i = 0; i < nn; ++i) {
-      energy.set(r.new_cells[i], cell_energy(k, Xs[i]));
+    for (std::size_t i = 0; i < nn; ++i) new_energy[i] = cell_energy(k, Xs[i]);
+    return certify_and_keep(r, Xs, staged, new_energy, new_sj, new_mips);
+  }
+
+  // The last check of an operation, the certificate of every new cell; then the new cells'
+  // values and their new nodes are kept.
+  bool certify_and_keep(const OperationRecord& r, const std::vector<Eigen::MatrixXd>& Xs,
+                        const std::map<NodeKey, Eigen::Vector3d>& staged,
+                        const std::vector<double>& new_energy, const std::vector<double>& new_sj,
+                        const std::vector<double>& new_mips) {
+    for (const Eigen::MatrixXd& X : Xs)
+      if (certify_tet_jacobian(k, X).verdict != JacobianVerdict::positive) return refuse(true);
+    for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
+      energy.set(r.new_cells[i], new_energy[i]);
       scaled_jacobian.set(r.new_cells[i], new_sj[i]);
       mips.set(r.new_cells[i], new_mips[i]);
     }
@@ -389,19 +399,7 @@ class CurvedEditMesh : public TetMesh {
           if (locked(cell(r.new_cells[i])) && !(new_mips[i] <= locked_bound))
             return refuse(false, true);
     }
-    for (std::size_t i = 0; i < nn; ++i)
-      if (certify_tet_jacobian(k, Xs[i]).verdict != JacobianVerdict::positive) return refuse(true);
-    for (std::size_t i = 0; i < r.new_cells.size(); ++i) {
-      energy.set(r.new_cells[i], new_energy[i]);
-      scaled_jacobian.set(r.new_cells[i], new_sj[i]);
-      mips.set(r.new_cells[i], new_mips[i]);
-    }
-    for (const auto& [key, x] : staged) {
-      node_of.assign(key, int(pos.size()));
-      pos.push_back(x);
-    }
-    memo.stamp({&r.old_cells, &r.new_cells, &r.affected_cells});
-    return true;
+    return certify_and_keep(r, Xs, staged, new_energy, new_sj, new_mips);
   }
 
   // The boundary of the cavity that `cells` fill (the new cells of an operation): the faces used
