@@ -55,7 +55,7 @@ class CurvedEditMesh : public TetMesh {
   double locked_mips = 0;   // CurvedEditOptions::locked_mips
   // The mean pass (CurvedEditOptions::mean_flips): its checks replace invariants()'s.
   bool mean_mode = false;
-  double mean_above = 50, mean_ref = 0, mean_sj_floor = 0.1;
+  double mean_above = 50, mean_ref = 0, mean_sj_floor = 0.1, mean_flat = 0.01;
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
   std::vector<Eigen::Vector3d> pos;                      // node positions (grows)
@@ -224,8 +224,8 @@ class CurvedEditMesh : public TetMesh {
 
   // The mean pass's checks (CurvedEditOptions::mean_flips): the cavity's Σ(MIPS − mean_ref)
   // falls by 1% of its summed MIPS at least, no new cell above max(its worst, mean_above) nor
-  // below min(its smallest scaled Jacobian, mean_sj_floor), no locked cell above locked_mips
-  // that was not there, every new cell certified.
+  // below min(its smallest scaled Jacobian, mean_sj_floor), no more cells below mean_flat than
+  // it had, no locked cell above locked_mips that was not there, every new cell certified.
   bool mean_invariants(const OperationRecord& r) {
     ++stats->attempted;
     std::vector<Cell> new_cells;
@@ -236,11 +236,13 @@ class CurvedEditMesh : public TetMesh {
       return vertex_fixed[c[0]] && vertex_fixed[c[1]] && vertex_fixed[c[2]] && vertex_fixed[c[3]];
     };
     double sum_before = 0, max_before = 0, sj_before = k_inf, locked_before = 0;
+    int flat_before = 0;
     for (Id t : r.old_cells) {
       const double x = mips[t];
       sum_before += x;
       max_before = std::max(max_before, x);
       sj_before = std::min(sj_before, scaled_jacobian[t]);
+      flat_before += scaled_jacobian[t] < mean_flat;
       if (locked(cell(t))) locked_before = std::max(locked_before, x);
     }
     const double n_before = double(r.old_cells.size()), n_after = double(r.new_cells.size());
@@ -261,9 +263,11 @@ class CurvedEditMesh : public TetMesh {
         return refuse(false, true);
     }
     const double sj_needed = std::min(sj_before, mean_sj_floor);
+    int flat_after = 0;
     for (std::size_t i = 0; i < nn; ++i) {
       new_sj[i] = min_scaled_jacobian(k, Xs[i]);
-      if (!(new_sj[i] >= sj_needed)) return refuse(false);
+      flat_after += new_sj[i] < mean_flat;
+      if (!(new_sj[i] >= sj_needed) || flat_after > flat_before) return refuse(false);
     }
     for (std::size_t i = 0; i < nn; ++i) new_energy[i] = cell_energy(k, Xs[i]);
     return certify_and_keep(r, Xs, staged, new_energy, new_sj, new_mips);
@@ -870,6 +874,7 @@ CurvedEditResult edit_curved_mesh(LagrangeMesh& mesh, const std::vector<char>& f
     m.mean_mode = true;
     m.mean_above = options.mean_mips_above;
     m.mean_sj_floor = options.mean_sj_floor;
+    m.mean_flat = options.mean_flat;
     const bool replay = m.replay;
     m.replay = false;
     stats.mean_flips = run(Mode::mean_flip);

@@ -769,6 +769,9 @@ TEST(CurvedEdit, TheFlipsForTheMeanLowerTheMeanAndKeepTheWorstAndTheBoundary) {
     EXPECT_LE(b.max_mips, std::max(a.max_mips, o.optimize.edits.mean_mips_above));
     EXPECT_GE(b.min_scaled_jacobian,
               std::min(a.min_scaled_jacobian, o.optimize.edits.mean_sj_floor) * (1 - 1e-9));
+    // No more cells below 0.01 (CurvedEditOptions::mean_flat).
+    std::printf("k = %d: tets below 0.01 %d -> %d\n", k, a.tets_sj_below_1e2, b.tets_sj_below_1e2);
+    EXPECT_LE(b.tets_sj_below_1e2, a.tets_sj_below_1e2);
     ASSERT_EQ(plain.map.boundary.cells, flipped.map.boundary.cells);
     EXPECT_EQ(plain.map.boundary.nodes, flipped.map.boundary.nodes);
     for (Eigen::Index i = 0; i < flipped.map.boundary_node_to_volume.size(); ++i)
