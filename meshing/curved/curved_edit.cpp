@@ -55,7 +55,7 @@ class CurvedEditMesh : public TetMesh {
   double locked_mips = 0;   // CurvedEditOptions::locked_mips
   // The mean pass (CurvedEditOptions::mean_flips): its checks replace invariants()'s.
   bool mean_mode = false;
-  double mean_above = 50, mean_ref = 0, mean_sj_floor = 0.1, mean_flat = 0.01;
+  double mean_above = 30, mean_ref = 0, mean_sj_floor = 0.1, mean_flat = 0.01;
   const std::vector<std::array<int, 4>>* lattice = nullptr;
   const std::vector<std::array<int, 4>>* tri_lattice = nullptr;
   std::vector<Eigen::Vector3d> pos;                      // node positions (grows)

@@ -99,6 +99,18 @@ void expect_octahedron_surface_kept(const LagrangeMesh& m, const Eigen::MatrixXd
   }
 }
 
+// The curved boundary of `b` is that of `a`, bit for bit, at the renumbered volume nodes (the
+// optimization moves and renumbers interior nodes only).
+void expect_same_boundary(const cv::CurvedMesh& a, const cv::CurvedMesh& b) {
+  ASSERT_EQ(a.map.boundary.cells, b.map.boundary.cells);
+  EXPECT_EQ(a.map.boundary.nodes, b.map.boundary.nodes);
+  ASSERT_EQ(a.map.boundary_node_to_volume.size(), b.map.boundary_node_to_volume.size());
+  for (Eigen::Index i = 0; i < b.map.boundary_node_to_volume.size(); ++i)
+    EXPECT_EQ(b.mesh.nodes.row(b.map.boundary_node_to_volume[i]),
+              a.mesh.nodes.row(a.map.boundary_node_to_volume[i]))
+        << "boundary node " << i;
+}
+
 }  // namespace
 
 TEST(Optimize, RegularTetScoresOneAndEnergyIsScaleInvariant) {
@@ -226,11 +238,7 @@ TEST(Optimize, CurvedSphereMeshImprovesAndKeepsItsGuarantees) {
   const cv::CurvedMesh smooth = cv::build_curved_mesh(sphere, o, stats);
   // Same coarse mesh (deterministic), bit-identical boundary; the interior is flipped (fewer
   // tets) and smoothed.
-  ASSERT_EQ(plain.map.boundary.cells, smooth.map.boundary.cells);
-  EXPECT_EQ(plain.map.boundary.nodes, smooth.map.boundary.nodes);
-  for (Eigen::Index i = 0; i < smooth.map.boundary_node_to_volume.size(); ++i)
-    EXPECT_EQ(smooth.mesh.nodes.row(smooth.map.boundary_node_to_volume[i]),
-              plain.mesh.nodes.row(plain.map.boundary_node_to_volume[i]));
+  expect_same_boundary(plain, smooth);
   EXPECT_EQ(stats.slab_tets, plain_stats.slab_tets);
   EXPECT_GT(stats.optimize.flips.count, 0);
   EXPECT_EQ(stats.optimize.flips.tets_after, stats.interior_tets);
@@ -452,11 +460,7 @@ TEST(CurvedEdit, CurvedSphereMeshStaysValidWithItsBoundary) {
   EXPECT_LT(e.targets_after, e.targets_before);
   EXPECT_LE(e.max_energy_after, e.max_energy_before);
   // Same boundary, bit for bit, at the renumbered nodes.
-  ASSERT_EQ(plain.map.boundary.cells, edited.map.boundary.cells);
-  EXPECT_EQ(plain.map.boundary.nodes, edited.map.boundary.nodes);
-  for (Eigen::Index i = 0; i < edited.map.boundary_node_to_volume.size(); ++i)
-    EXPECT_EQ(edited.mesh.nodes.row(edited.map.boundary_node_to_volume[i]),
-              plain.mesh.nodes.row(plain.map.boundary_node_to_volume[i]));
+  expect_same_boundary(plain, edited);
   const cv::CurvedValidation a = cv::validate_curved_mesh(plain.mesh, plain.map, sphere);
   const cv::CurvedValidation b = cv::validate_curved_mesh(edited.mesh, edited.map, sphere);
   EXPECT_TRUE(b.valid(1e-2));
@@ -772,11 +776,7 @@ TEST(CurvedEdit, TheFlipsForTheMeanLowerTheMeanAndKeepTheWorstAndTheBoundary) {
     // No more cells below 0.01 (CurvedEditOptions::mean_flat).
     std::printf("k = %d: tets below 0.01 %d -> %d\n", k, a.tets_sj_below_1e2, b.tets_sj_below_1e2);
     EXPECT_LE(b.tets_sj_below_1e2, a.tets_sj_below_1e2);
-    ASSERT_EQ(plain.map.boundary.cells, flipped.map.boundary.cells);
-    EXPECT_EQ(plain.map.boundary.nodes, flipped.map.boundary.nodes);
-    for (Eigen::Index i = 0; i < flipped.map.boundary_node_to_volume.size(); ++i)
-      EXPECT_EQ(flipped.mesh.nodes.row(flipped.map.boundary_node_to_volume[i]),
-                plain.mesh.nodes.row(plain.map.boundary_node_to_volume[i]));
+    expect_same_boundary(plain, flipped);
   }
 }
 
