@@ -8,6 +8,7 @@
 #include "mapping/selection.hpp"
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
 #include "meshing/core/primitives.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -253,6 +254,7 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
                                                : " (curvefem check " + spec.surface.string() +
                                                      " gives the full diagnosis)"),
                      {.file = spec.case_file.string()});
+  for (const check::Defect& w : report.warnings) log::warn(where, ": ", w.kind, ": ", w.message);
   for (const LoadCase& load : spec.loads())
     for (const auto& bc : load.boundary_conditions)
       if (!mapping::uses_outer_box(bc.select))  // may select the box only: checked on the mesh

@@ -11,6 +11,7 @@
 #include "meshing/io/boundary_map_io.hpp"
 #include "meshing/io/msh_io.hpp"
 #include "meshing/io/surface_io.hpp"
+#include "pipeline/input_floors.hpp"
 #include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
 
@@ -137,6 +138,8 @@ void validate_domain(Domain& d, double eps_rel) {
   d.report["validation"] = j;
   d.report["max_distance_rel"] = v.max_distance_rel;
   d.report["min_jacobian_certified"] = v.certified();
+  d.report["input_floors"] = input_floors_json(
+      input_floors(d.input, *d.curved_map, d.mesh, v.cell_mips, v.cell_scaled_jacobian));
   d.cell_quality = curved_validation_cell_fields(v);
 }
 

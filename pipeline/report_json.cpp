@@ -20,6 +20,8 @@ nlohmann::json check_report_json(const check::CheckReport& r) {
   j["non_manifold_vertices"] = r.non_manifold_vertices;
   j["consistently_oriented"] = r.consistently_oriented;
   j["inconsistent_edges"] = r.inconsistent_edges;
+  j["orientable"] = r.orientable;
+  j["faces_to_flip"] = r.faces_to_flip;
   j["orientation_sign"] = r.orientation_sign;
   j["signed_volume"] = r.signed_volume;
   j["euler_characteristic"] = r.euler_characteristic;
@@ -30,18 +32,24 @@ nlohmann::json check_report_json(const check::CheckReport& r) {
   j["duplicate_vertices"] = r.duplicate_vertices;
   j["duplicate_faces"] = r.duplicate_faces;
   j["self_intersections_checked"] = r.self_intersections_checked;
+  j["self_intersections_mesh_api"] = r.self_intersections_mesh_api;
   j["self_intersecting_pairs"] = r.self_intersecting_pairs;
   j["volume_bounded"] = r.volume_bounded;
   j["bbox_longest_edge"] = r.bbox_longest_edge;
   j["acceptable"] = r.acceptable;
   j["time_s"] = r.time_s;
-  j["defects"] = nlohmann::json::array();
-  for (const auto& d : r.defects)
-    j["defects"].push_back({{"kind", d.kind},
-                            {"count", d.count},
-                            {"id_kind", d.id_kind},
-                            {"ids", d.ids},
-                            {"message", d.message}});
+  auto list = [](const std::vector<check::Defect>& defects) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& d : defects)
+      a.push_back({{"kind", d.kind},
+                   {"count", d.count},
+                   {"id_kind", d.id_kind},
+                   {"ids", d.ids},
+                   {"message", d.message}});
+    return a;
+  };
+  j["defects"] = list(r.defects);
+  j["warnings"] = list(r.warnings);
   return j;
 }
 

@@ -12,7 +12,8 @@
 
 namespace curvefem::pipeline {
 
-/// Every field of a CheckReport, defects as an array of {kind, count, id_kind, ids, message}.
+/// Every field of a CheckReport, defects and warnings as arrays of {kind, count, id_kind, ids,
+/// message}.
 nlohmann::json check_report_json(const check::CheckReport& report);
 
 /// {"stage": seconds, ...} in stage order.

@@ -207,6 +207,76 @@ std::pair<double, double> angle_range(const Eigen::MatrixXd& V, const Eigen::Mat
   return any ? std::pair{lo, hi} : std::pair{0.0, 0.0};
 }
 
+// A warning of `kind` over `items` (id lists with their angle, worst first): the count, the
+// listed ids and the worst item's angle and position.
+struct Flagged {
+  std::vector<long long> ids;  // one id (face) or two (edge: its vertices)
+  double angle = 0;            // degrees
+  Eigen::Vector3d at;
+};
+Defect make_warning(std::string kind, std::vector<Flagged> items, std::size_t max_ids,
+                    const std::string& id_kind, const std::string& what,
+                    const std::string& angle_what, bool worst_is_largest) {
+  std::stable_sort(items.begin(), items.end(), [&](const Flagged& a, const Flagged& b) {
+    return worst_is_largest ? a.angle > b.angle : a.angle < b.angle;
+  });
+  std::vector<long long> ids;
+  for (std::size_t i = 0; i < items.size() && i < max_ids; ++i)
+    ids.insert(ids.end(), items[i].ids.begin(), items[i].ids.end());
+  Defect d = make_defect(std::move(kind), static_cast<long long>(items.size()), id_kind,
+                         std::move(ids), what);
+  const Flagged& w = items.front();
+  d.message += "; worst " + angle_what + " " + format_g(w.angle) + " deg at (" + format_g(w.at[0]) +
+               ", " + format_g(w.at[1]) + ", " + format_g(w.at[2]) + ")";
+  return d;
+}
+
+// Unit normal of face f, zero for a face of zero area.
+Eigen::Vector3d unit_normal(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, int f) {
+  const Eigen::Vector3d p0 = V.row(F(f, 0)).transpose(), p1 = V.row(F(f, 1)).transpose(),
+                        p2 = V.row(F(f, 2)).transpose();
+  const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+  return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+}
+
+double angle_between_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
+}
+
+std::vector<std::pair<int, double>> needle_faces_of(const Eigen::MatrixXd& V,
+                                                    const Eigen::MatrixXi& F,
+                                                    const std::vector<char>& degenerate,
+                                                    double angle) {
+  std::vector<std::pair<int, double>> out;
+  for (int f = 0; f < F.rows(); ++f) {
+    if (degenerate[f]) continue;
+    double smallest = 180.0;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d p = V.row(F(f, k)).transpose();
+      smallest = std::min(smallest, angle_between_deg(V.row(F(f, (k + 1) % 3)).transpose() - p,
+                                                      V.row(F(f, (k + 2) % 3)).transpose() - p));
+    }
+    if (smallest < angle) out.emplace_back(f, smallest);
+  }
+  return out;
+}
+
+std::vector<FoldEdge> near_fold_edges_of(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                         const Topology& t, double angle) {
+  std::vector<FoldEdge> out;
+  for (const Edge& e : t.edges) {
+    if (e.count != 2) continue;
+    const HalfEdge& a = t.half_edges[e.begin];
+    const HalfEdge& b = t.half_edges[e.begin + 1];
+    if (a.forward == b.forward) continue;
+    const Eigen::Vector3d na = unit_normal(V, F, a.face), nb = unit_normal(V, F, b.face);
+    if (na.isZero() || nb.isZero()) continue;
+    const double turn = angle_between_deg(na, nb);
+    if (turn > angle) out.push_back({e.lo, e.hi, turn});
+  }
+  return out;
+}
+
 // Referenced vertices whose coordinates equal (==) those of a lower referenced id. Compared as
 // values: -0.0 equals 0.0 (same point), otherwise this is bit equality (readers reject NaN).
 std::vector<int> duplicate_vertices(const Eigen::MatrixXd& V, const std::vector<char>& referenced) {
@@ -242,6 +312,16 @@ std::vector<int> duplicate_faces(const Eigen::MatrixXi& F) {
 }
 
 }  // namespace
+
+std::vector<std::pair<int, double>> needle_faces(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                                 double angle_deg) {
+  return needle_faces_of(V, F, exactly_degenerate_faces(V, F), angle_deg);
+}
+
+std::vector<FoldEdge> near_fold_edges(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                      double angle_deg) {
+  return near_fold_edges_of(V, F, build_topology(F), angle_deg);
+}
 
 CheckReport check_surface(const SurfaceMesh& mesh, const CheckOptions& options,
                           const ProgressFn& progress) {
@@ -407,6 +487,26 @@ CheckReport check_surface(const SurfaceMesh& mesh, const CheckOptions& options,
     if (degenerate_ids.size() < max_ids) degenerate_ids.push_back(f);
   }
   std::tie(r.min_angle_deg, r.max_angle_deg) = angle_range(V, F);
+  // Warnings: needle faces and near folds (CheckReport::warnings).
+  std::vector<Flagged> needles, folds;
+  for (const auto& [f, angle] : needle_faces_of(V, F, degenerate, options.needle_angle_deg))
+    needles.push_back(
+        {{f}, angle, (V.row(F(f, 0)) + V.row(F(f, 1)) + V.row(F(f, 2))).transpose() / 3.0});
+  for (const FoldEdge& e : near_fold_edges_of(V, F, t, options.fold_angle_deg))
+    folds.push_back({{e.lo, e.hi}, e.turn_deg, 0.5 * (V.row(e.lo) + V.row(e.hi)).transpose()});
+  if (!needles.empty())
+    r.warnings.push_back(
+        make_warning("needle", std::move(needles), max_ids, "face",
+                     "needle faces (a corner angle below " + format_g(options.needle_angle_deg) +
+                         " deg: where the coarse surface keeps one, the tet on it is as flat)",
+                     "corner angle", /*worst_is_largest=*/false));
+  if (!folds.empty())
+    r.warnings.push_back(make_warning("near_fold", std::move(folds), max_ids, "edge",
+                                      "near folds (edges whose face normals turn by more than " +
+                                          format_g(options.fold_angle_deg) +
+                                          " deg: the surface doubles back on itself, and the shell "
+                                          "and the tets there are as thin)",
+                                      "normal turn", /*worst_is_largest=*/true));
   r.duplicate_vertices = static_cast<long long>(duplicate_vertices(V, referenced).size());
   r.duplicate_faces = static_cast<long long>(duplicate_faces(F).size());
   ticker.tick(5);
@@ -478,10 +578,11 @@ CheckReport check_surface(const SurfaceMesh& mesh, const CheckOptions& options,
   r.acceptable = r.defects.empty();
   r.time_s = watch.seconds();
   log::info("check: ", nf, " faces, ", r.components, " components, genus ", r.genus, ", ",
-            r.defects.size(), " defect classes, ", r.self_intersecting_pairs,
-            " self-intersecting pairs", r.self_intersections_checked ? "" : " (not checked)",
-            " in ", format_g(r.time_s), " s (topology and faces ", format_g(topology_s),
-            " s, self-intersections ", format_g(r.time_s - topology_s), " s, ",
+            r.defects.size(), " defect classes, ", r.warnings.size(), " warning classes, ",
+            r.self_intersecting_pairs, " self-intersecting pairs",
+            r.self_intersections_checked ? "" : " (not checked)", " in ", format_g(r.time_s),
+            " s (topology and faces ", format_g(topology_s), " s, self-intersections ",
+            format_g(r.time_s - topology_s), " s, ",
             r.self_intersections_mesh_api ? "PMP mesh" : "soup", ")");
   return r;
 }

@@ -310,6 +310,21 @@ TEST(Cli, AKnifeEdgeMeshesWithItsPillarsHeldToHalfTheirOwnCosine) {
   EXPECT_LT(r["coarse_faces"].get<int>(), 600);
   EXPECT_EQ(r["valid"], true);
   EXPECT_GT(r["min_scaled_jacobian"].get<double>(), 5e-4);
+  // The rim's 64 edges are near folds (face normals turning by 179.2°): `check` warns of them and
+  // so does the report; the coarse rim joins rim vertices further apart, so none is kept as it is
+  // (input_floors; the coarse rim's own wedge is in validation.boundary_limits).
+  ASSERT_EQ(r["input_warnings"].size(), 1u);
+  EXPECT_EQ(r["input_warnings"][0]["kind"], "near_fold");
+  EXPECT_EQ(r["input_warnings"][0]["count"], 64);
+  EXPECT_EQ(r["input_floors"]["near_fold_edges"], 64);
+  EXPECT_EQ(r["input_floors"]["near_fold_edges_kept"], 0);
+  EXPECT_EQ(r["input_floors"]["tets_at_kept"], 0);
+  EXPECT_LT(r["validation"]["boundary_limits"]["min_dihedral_deg"].get<double>(), 10.0);
+  ASSERT_EQ(test::run_command(cli() + " check -q --json " + (dir / "knife.obj").string(), &out), 0)
+      << out;
+  const auto checked = nlohmann::json::parse(out);
+  EXPECT_EQ(checked["acceptable"], true);
+  EXPECT_EQ(checked["warnings"], r["input_warnings"]);
 }
 
 TEST(Cli, ShellRemeshSectionWritesSurfaceAndReport) {
@@ -953,6 +968,31 @@ TEST(Cli, TheWorstMipsSearchMayLowerACurvedNeighboursScaledJacobianALittle) {
       *path, dir / "strict", "--optimize-worst-mips-sj-slack 0 --optimize-no-mean-flips");
   EXPECT_TRUE(strict["valid"].get<bool>());
   EXPECT_GT(strict["validation"]["max_mips"].get<double>(), 1e4);
+}
+
+TEST(Cli, TheHandsWorstTetSitsOnAnInputFoldTheBoundaryKept) {
+  // CGAL's hand.off (libcgal-dev's data), K = 3: a sliver 0.003 wide folded back by 177.9° on the
+  // palm (input edges 1143-1185 and 1151-1185). `check` accepts it with a near_fold warning; the
+  // coarse boundary keeps both edges as they are (the shell there is 3e-4 thick), and the slab tet
+  // on them is the mesh's worst (curved MIPS 4.4e6): the report's input_floors says so.
+  const auto dir = test::scratch_dir("cli_hand_floors");
+  const auto path = test::cgal_data_mesh("hand", dir);
+  if (!path) GTEST_SKIP() << test::k_no_cgal_data_message;
+  std::string out;
+  ASSERT_EQ(test::run_command(cli() + " check --json -q " + path->string(), &out), 0) << out;
+  const auto c = nlohmann::json::parse(out);
+  ASSERT_EQ(c["warnings"].size(), 2u) << out;
+  EXPECT_EQ(c["warnings"][1]["kind"], "near_fold");
+  EXPECT_EQ(c["warnings"][1]["ids"], nlohmann::json::parse("[1151, 1185, 1143, 1185]"));
+  const auto j = mesh_k3_one_thread(*path, dir / "m");
+  EXPECT_TRUE(j["valid"].get<bool>());
+  const auto& f = j["input_floors"];
+  EXPECT_EQ(f["near_fold_edges"], 2);
+  EXPECT_EQ(f["near_fold_edges_kept"], 2);
+  EXPECT_TRUE(f["worst_mips_tet_at_kept"].get<bool>());
+  EXPECT_TRUE(f["worst_scaled_jacobian_tet_at_kept"].get<bool>());
+  EXPECT_EQ(f["max_mips_at_kept"].get<double>(), j["validation"]["max_mips"].get<double>());
+  EXPECT_EQ(j["input_warnings"].size(), 2u);
 }
 
 TEST(Cli, AnUnseenCadPartsShapeRefinedMapRoundTripsAtEitherPillarBound) {

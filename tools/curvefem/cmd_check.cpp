@@ -8,6 +8,7 @@
 
 #include "meshing/check/check_surface.hpp"
 #include "meshing/io/surface_io.hpp"
+#include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
 #include "tools/curvefem/commands.hpp"
 
@@ -20,49 +21,6 @@ struct CheckArgs {
   bool skip_self_intersections = false;
   GlobalOptions global;
 };
-
-nlohmann::ordered_json to_json(const std::string& input, const check::CheckReport& r) {
-  nlohmann::ordered_json defects = nlohmann::ordered_json::array();
-  for (const check::Defect& d : r.defects)
-    defects.push_back({{"kind", d.kind},
-                       {"count", d.count},
-                       {"id_kind", d.id_kind},
-                       {"ids", d.ids},
-                       {"message", d.message}});
-  return {{"input", input},
-          {"vertices", r.vertices},
-          {"faces", r.faces},
-          {"referenced_vertices", r.referenced_vertices},
-          {"unreferenced_vertices", r.unreferenced_vertices},
-          {"components", r.components},
-          {"closed", r.closed},
-          {"boundary_edges", r.boundary_edges},
-          {"edge_manifold", r.edge_manifold},
-          {"non_manifold_edges", r.non_manifold_edges},
-          {"vertex_manifold", r.vertex_manifold},
-          {"non_manifold_vertices", r.non_manifold_vertices},
-          {"consistently_oriented", r.consistently_oriented},
-          {"inconsistent_edges", r.inconsistent_edges},
-          {"orientable", r.orientable},
-          {"faces_to_flip", r.faces_to_flip},
-          {"signed_volume", r.signed_volume},
-          {"orientation_sign", r.orientation_sign},
-          {"genus", r.genus},
-          {"euler_characteristic", r.euler_characteristic},
-          {"degenerate_faces", r.degenerate_faces},
-          {"min_angle_deg", r.min_angle_deg},
-          {"max_angle_deg", r.max_angle_deg},
-          {"duplicate_vertices", r.duplicate_vertices},
-          {"duplicate_faces", r.duplicate_faces},
-          {"self_intersections_checked", r.self_intersections_checked},
-          {"self_intersections_mesh_api", r.self_intersections_mesh_api},
-          {"self_intersecting_pairs", r.self_intersecting_pairs},
-          {"volume_bounded", r.volume_bounded},
-          {"bbox_longest_edge", r.bbox_longest_edge},
-          {"defects", defects},
-          {"acceptable", r.acceptable},
-          {"time_s", r.time_s}};
-}
 
 const char* yes_no(bool b) { return b ? "yes" : "no"; }
 
@@ -101,6 +59,8 @@ void print_human(const std::string& input, const check::CheckReport& r) {
   row("check time", buf);
   for (const check::Defect& d : r.defects)
     std::printf("%s: %s\n", d.kind.c_str(), d.message.c_str());
+  for (const check::Defect& w : r.warnings)
+    std::printf("warning: %s: %s\n", w.kind.c_str(), w.message.c_str());
   std::printf("acceptable for meshing: %s\n", yes_no(r.acceptable));
   // What a user can still do with a closed, oriented surface whose only defect is that it
   // passes through itself.
@@ -130,9 +90,11 @@ void register_check(CLI::App& app) {
     options.self_intersections = !args->skip_self_intersections;
     const check::CheckReport report = check::check_surface(mesh, options, progress->callback());
     progress.reset();  // finish the progress line on stderr before the report on stdout
-    if (args->json)
-      std::printf("%s\n", to_json(args->input, report).dump(2).c_str());
-    else
+    if (args->json) {
+      nlohmann::json j = pipeline::check_report_json(report);
+      j["input"] = args->input;
+      std::printf("%s\n", j.dump(2).c_str());
+    } else
       print_human(args->input, report);
     std::fflush(stdout);
     return report.acceptable ? 0 : 2;

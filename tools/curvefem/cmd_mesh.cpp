@@ -18,6 +18,7 @@
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/curved_mesher.hpp"
 #include "meshing/curved/curved_validate.hpp"
@@ -28,6 +29,7 @@
 #include "meshing/io/vtu_io.hpp"
 #include "meshing/shell/fibers_of.hpp"
 #include "pipeline/eps_field.hpp"
+#include "pipeline/input_floors.hpp"
 #include "pipeline/mesh_dir.hpp"
 #include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
@@ -345,6 +347,8 @@ void register_mesh(CLI::App& app) {
           args->input + ": not a valid meshing input: " +
           (report.defects.empty() ? std::string("empty surface") : report.defects.front().message) +
           " (curvefem check " + args->input + " gives the full diagnosis)");
+    for (const check::Defect& w : report.warnings)
+      log::warn(args->input, ": ", w.kind, ": ", w.message);
     cv::CurvedMeshOptions options;
     options.order = args->order;
     options.eps_rel = args->eps;
@@ -479,6 +483,8 @@ void register_mesh(CLI::App& app) {
       stages["write"] = write.seconds();
       nlohmann::ordered_json j = {
           {"input", input_abs},
+          {"input_warnings",
+           nlohmann::ordered_json::parse(pipeline::check_report_json(report)["warnings"].dump())},
           {"features", feature_source},
           {"eps_field", args->eps_field.empty() ? nlohmann::ordered_json(nullptr)
                                                 : nlohmann::ordered_json(args->eps_field)},
@@ -520,6 +526,12 @@ void register_mesh(CLI::App& app) {
            "triangles within each boundary face; the shell's section property is reported in "
            "shell_section_verified"},
           {"validation", curved_validation_json(check, eps)},
+          {"input_floors",
+           nlohmann::ordered_json::parse(
+               pipeline::input_floors_json(pipeline::input_floors(input, result.map, result.mesh,
+                                                                  check.cell_mips,
+                                                                  check.cell_scaled_jacobian))
+                   .dump())},
           {"valid", ok},
           {"threads", args->global.threads},
           {"deterministic", !args->nondeterministic},

@@ -70,6 +70,52 @@ TEST(CheckSurface, IcosphereIsAcceptableGenus0) {
   EXPECT_TRUE(r.volume_bounded);
   EXPECT_GT(r.min_angle_deg, 40.0);
   EXPECT_LT(r.max_angle_deg, 80.0);
+  EXPECT_TRUE(r.warnings.empty());
+}
+
+// Warnings (CheckReport::warnings) do not make a surface unacceptable; they name what bounds the
+// elements of any mesh whose boundary keeps it. A flat tetrahedron of height 0.02 over a base of
+// legs 2: its three base edges are folds (face normals turning by 177.7°, 177.7° and 178.4°; the
+// hypotenuse is the sharpest), its faces are not needles.
+TEST(CheckSurface, AFlatTetrahedronIsAcceptableAndWarnsOfItsThreeFolds) {
+  const SurfaceMesh m = from_lists({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, 0.02}},
+                                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const CheckReport r = check_surface(m);
+  EXPECT_TRUE(r.acceptable);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  const Defect& w = r.warnings[0];
+  EXPECT_EQ(w.kind, "near_fold");
+  EXPECT_EQ(w.count, 3);
+  EXPECT_EQ(w.id_kind, "edge");
+  EXPECT_EQ(w.ids, (std::vector<long long>{1, 2, 0, 1, 0, 2}));  // worst first
+  EXPECT_NE(w.message.find("worst normal turn 178.4 deg at (1, 1, 0)"), std::string::npos)
+      << w.message;
+  // The thresholds are options: at 179° nothing is flagged.
+  CheckOptions o;
+  o.fold_angle_deg = 179.0;
+  EXPECT_TRUE(check_surface(m, o).warnings.empty());
+}
+
+// A tetrahedron whose base (0, 2, 1) has corner angles of 0.573°: a needle face, and the
+// tetrahedron is flat across it too (the faces on edges 0-3 and 1-3 turn by 179.2°).
+TEST(CheckSurface, ANeedleFaceIsNamedWithItsAngle) {
+  const SurfaceMesh m = from_lists({{0, 0, 0}, {2, 0, 0}, {1, 0.01, 0}, {1, 0, 1}},
+                                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const CheckReport r = check_surface(m);
+  EXPECT_TRUE(r.acceptable);
+  ASSERT_EQ(r.warnings.size(), 2u);
+  EXPECT_EQ(r.warnings[0].kind, "needle");
+  EXPECT_EQ(r.warnings[0].count, 1);
+  EXPECT_EQ(r.warnings[0].ids, std::vector<long long>{0});
+  EXPECT_NE(r.warnings[0].message.find("worst corner angle 0.5729 deg"), std::string::npos)
+      << r.warnings[0].message;
+  EXPECT_EQ(r.warnings[1].kind, "near_fold");
+  EXPECT_EQ(r.warnings[1].ids, (std::vector<long long>{0, 3, 1, 3}));
+  EXPECT_NEAR(r.min_angle_deg, 0.5729, 1e-4);
+  CheckOptions o;
+  o.needle_angle_deg = 0.5;
+  o.fold_angle_deg = 179.5;
+  EXPECT_TRUE(check_surface(m, o).warnings.empty());
 }
 
 TEST(CheckSurface, TorusHasGenus1) {
