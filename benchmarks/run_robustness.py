@@ -120,6 +120,11 @@ for name, path, kind in inputs:
                            by_tag=v.get("quality_by_tag", {}),
                            bnd_mips_floor=v.get("boundary_limits", {}).get("mips_floor"),
                            bnd_sj_ceiling=v.get("boundary_limits", {}).get("sj_ceiling"))
+                fl = r.get("input_floors")
+                if fl is not None:  # since 4249525 (pipeline/input_floors.hpp)
+                    rec.update(floor_kept=fl["needle_faces_kept"] + fl["near_fold_edges_kept"],
+                               floor_worst=fl["worst_mips_tet_at_kept"]
+                               or fl["worst_scaled_jacobian_tet_at_kept"])
         except (OSError, ValueError, KeyError):
             pass
         records.append(rec)
@@ -186,6 +191,13 @@ if qual:
                      "(MIPS floor > 1e4 or SJ ceiling < 1e-3)"
                      + (": " + ", ".join(f"{r['name']} K = {r['order']}" for r in forced)
                         if forced else "") + ".")
+    at_input = [r for r in qual if r not in good and r.get("floor_worst")]
+    if any("floor_worst" in r for r in qual):
+        lines.append(f"Misses whose worst tet (largest MIPS or smallest SJ) sits on an input needle "
+                     f"face or near-fold edge the boundary kept as it is (report.json "
+                     f"input_floors): {len(at_input)}"
+                     + (": " + ", ".join(f"{r['name']} K = {r['order']}" for r in at_input)
+                        if at_input else "") + ".")
 # bichon (reference-notes/bichon-measured.md, P4, eps 1e-2): mean curved MIPS on four dev meshes.
 BICHON_MEAN_MIPS = {"knight_decimated": 47.9, "spot": 56.0, "bunny": 52.4, "fandisk": 40.5}
 rows = [r for r in records if r["name"] in BICHON_MEAN_MIPS and r["order"] == 4 and r.get("valid")]
