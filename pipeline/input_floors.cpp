@@ -76,9 +76,15 @@ InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const
   for (std::size_t i = 0; i < kept.size(); ++i)
     for (int n : kept[i])
       if (n >= 0) items_of_node[n].push_back(i);
-  const auto worst_mips = std::max_element(cell_mips.begin(), cell_mips.end()) - cell_mips.begin();
-  const auto worst_sj = std::min_element(cell_scaled_jacobian.begin(), cell_scaled_jacobian.end()) -
-                        cell_scaled_jacobian.begin();
+  // (-1: no per-tet values.)
+  const long worst_mips =
+      cell_mips.empty() ? -1
+                        : std::max_element(cell_mips.begin(), cell_mips.end()) - cell_mips.begin();
+  const long worst_sj =
+      cell_scaled_jacobian.empty()
+          ? -1
+          : std::min_element(cell_scaled_jacobian.begin(), cell_scaled_jacobian.end()) -
+                cell_scaled_jacobian.begin();
   for (int t = 0; t < mesh.num_cells(); ++t) {
     std::array<int, 4> corners{mesh.cells(t, 0), mesh.cells(t, 1), mesh.cells(t, 2),
                                mesh.cells(t, 3)};
