@@ -993,6 +993,10 @@ TEST(Cli, TheHandsWorstTetSitsOnAnInputFoldTheBoundaryKept) {
   EXPECT_TRUE(f["worst_scaled_jacobian_tet_at_kept"].get<bool>());
   EXPECT_EQ(f["max_mips_at_kept"].get<double>(), j["validation"]["max_mips"].get<double>());
   EXPECT_EQ(j["input_warnings"].size(), 2u);
+  // `validate` finds the same from the saved files.
+  ASSERT_EQ(test::run_command(cli() + " validate --json -q " + (dir / "m").string(), &out), 0)
+      << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["input_floors"], f);
 }
 
 TEST(Cli, AnUnseenCadPartsShapeRefinedMapRoundTripsAtEitherPillarBound) {

@@ -14,6 +14,7 @@
 #include "meshing/io/boundary_map_io.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "meshing/io/vtu_io.hpp"
+#include "pipeline/input_floors.hpp"
 #include "pipeline/mesh_validity.hpp"
 #include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
@@ -82,6 +83,8 @@ void register_validate(CLI::App& app) {
     const double roundtrip = trip.max_error_rel;
     const int roundtrip_failures = trip.failures;
     const bool ok = pipeline::curved_mesh_valid(v, eps, trip);
+    const pipeline::InputFloors floors =
+        pipeline::input_floors(input, map, vtu.mesh, v.cell_mips, v.cell_scaled_jacobian);
     progress.reset();
     if (args->json) {
       auto j = curved_validation_json(v, eps);
@@ -91,6 +94,7 @@ void register_validate(CLI::App& app) {
       j["map_roundtrip_worst_vertex"] = trip.worst_vertex;
       j["map_roundtrip_first_failure"] = trip.first_failure;
       j["valid"] = ok;
+      j["input_floors"] = nlohmann::ordered_json::parse(pipeline::input_floors_json(floors).dump());
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       std::printf("validate %s (input %s)\n", args->dir.c_str(), input_path.c_str());
@@ -127,6 +131,12 @@ void register_validate(CLI::App& app) {
                     : v.points_max_scaled_distance_rel <= eps ? ""
                                                               : "  EXCEEDS eps");
       std::printf("  unmapped vertices    %d\n", v.unmapped_vertices);
+      std::printf(
+          "  input floors (diag.) %d of %d needle faces and %d of %d near folds of the input kept "
+          "as they are; the worst tet is %son one\n",
+          floors.needle_faces_kept, floors.needle_faces, floors.near_fold_edges_kept,
+          floors.near_fold_edges,
+          floors.worst_mips_tet_at_kept || floors.worst_scaled_jacobian_tet_at_kept ? "" : "not ");
       if (v.feature_edges > 0)
         std::printf(
             "  feature edges        %d, %d not along a boundary edge%s\n", v.feature_edges,
