@@ -209,7 +209,9 @@ def resolved(case):
 
 
 def check(path):
-    """The `curvefem check` report of a surface file, as a dict ("acceptable", "defects", ...)."""
+    """The `curvefem check` report of a surface file, as a dict ("acceptable", "defects", ...;
+    "warnings" lists needle faces and near folds, which do not make the surface unacceptable but
+    bound the elements of a mesh whose boundary keeps them)."""
     return _json.loads(_curvefem.check_surface(_os.fspath(path)))
 
 

@@ -166,6 +166,17 @@ def test_a_missing_surface_raises_and_check_reports_defects(tmp_path):
     assert report["boundary_edges"] == 3
 
 
+def test_check_warns_of_the_folds_of_a_flat_tetrahedron(tmp_path):
+    # Height 0.02 over a base of legs 2: its three base edges fold by 177.7-178.4 degrees.
+    wafer = tmp_path / "wafer.obj"
+    wafer.write_text("v 0 0 0\nv 2 0 0\nv 0 2 0\nv 0.5 0.5 0.02\n"
+                     "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    report = curvefem.check(wafer)
+    assert report["acceptable"] is True and report["defects"] == []
+    assert [(w["kind"], w["count"]) for w in report["warnings"]] == [("near_fold", 3)]
+    assert report["warnings"][0]["ids"] == [1, 2, 0, 1, 0, 2]
+
+
 def test_resolved_case_fills_the_defaults():
     r = curvefem.resolved(sphere_case())
     assert r["meshing"]["order"] == 2 and r["meshing"]["eps"] == 0.02
