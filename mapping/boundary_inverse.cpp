@@ -5,7 +5,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <mutex>
 #include <numeric>
 #include <string>
@@ -15,6 +14,7 @@
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/fiber_projection.hpp"
+#include "meshing/core/position_key.hpp"
 
 namespace curvefem::mapping {
 namespace {
@@ -48,21 +48,6 @@ void clamp_to_triangle(double& u, double& v) {
     if (u < 0) v = 1, u = 0;
     if (v < 0) u = 1, v = 0;
   }
-}
-
-struct BitsKey {
-  std::array<std::uint64_t, 3> bits;
-  bool operator==(const BitsKey&) const = default;
-};
-struct BitsHash {
-  std::size_t operator()(const BitsKey& k) const {
-    return k.bits[0] * 0x9E3779B97F4A7C15ull ^ (k.bits[1] + 0x7F4A7C15ull) * 31 ^ k.bits[2];
-  }
-};
-BitsKey bits_of(const Eigen::Vector3d& p) {
-  BitsKey k;
-  for (int i = 0; i < 3; ++i) std::memcpy(&k.bits[i], &p[i], sizeof(double));
-  return k;
 }
 
 }  // namespace
@@ -336,7 +321,7 @@ struct BoundaryInverse::Impl {
   std::unique_ptr<TriangleLocator> locator;
   std::unique_ptr<FiberProjection> projection;  // curved pipeline only
   mutable std::mutex mutex;
-  mutable std::unordered_map<BitsKey, std::optional<InputPoint>, BitsHash> cache;
+  mutable std::unordered_map<PositionKey, std::optional<InputPoint>, PositionHash> cache;
 };
 
 BoundaryInverse::BoundaryInverse() : m_impl(std::make_unique<Impl>()) {}
@@ -390,7 +375,7 @@ std::optional<BoundaryPoint> BoundaryInverse::locate(const Eigen::Vector3d& x) c
 }
 
 std::optional<InputPoint> BoundaryInverse::operator()(const Eigen::Vector3d& x) const {
-  const BitsKey key = bits_of(x);
+  const PositionKey key = position_key(x);
   {
     std::lock_guard<std::mutex> lock(m_impl->mutex);
     auto it = m_impl->cache.find(key);

@@ -1,13 +1,13 @@
 // Stage discretize (stages.hpp): the solve geometry, the function space, the boundary face tags of
 // a given mesh and φ⁻¹ on the solve geometry's boundary.
 #include <algorithm>
-#include <cstring>
 #include <map>
 #include <unordered_map>
 
 #include "meshing/core/error.hpp"
 #include "meshing/core/geometry_degree.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/core/position_key.hpp"
 #include "meshing/curved/jacobian_certificate.hpp"
 #include "meshing/io/msh_io.hpp"
 #include "pipeline/stages.hpp"
@@ -15,21 +15,6 @@
 namespace curvefem::pipeline {
 namespace {
 using json = nlohmann::json;
-
-struct PositionKey {
-  std::array<std::uint64_t, 3> bits;
-  bool operator==(const PositionKey&) const = default;
-};
-struct PositionHash {
-  std::size_t operator()(const PositionKey& k) const {
-    return k.bits[0] * 0x9E3779B97F4A7C15ull ^ (k.bits[1] + 0x7F4A7C15ull) * 31 ^ k.bits[2];
-  }
-};
-PositionKey key_of(const Eigen::Vector3d& p) {
-  PositionKey k;
-  for (int i = 0; i < 3; ++i) std::memcpy(&k.bits[i], &p[i], sizeof(double));
-  return k;
-}
 
 /// Physical tag of every boundary face, from the triangles stored in the mesh file (-1 if none).
 std::vector<int> boundary_face_tags(const std::filesystem::path& path, const LagrangeMesh& mesh,
@@ -44,14 +29,13 @@ std::vector<int> boundary_face_tags(const std::filesystem::path& path, const Lag
   }
   if (!triangles.has_tags()) return tags;
   std::unordered_map<PositionKey, int, PositionHash> node_of;
-  for (int n = 0; n < mesh.num_nodes(); ++n)
-    node_of.emplace(key_of(mesh.nodes.row(n).transpose()), n);
+  for (int n = 0; n < mesh.num_nodes(); ++n) node_of.emplace(position_key(mesh.nodes.row(n)), n);
   std::map<std::array<int, 3>, int> tag_of;
   for (int f = 0; f < triangles.num_faces(); ++f) {
     std::array<int, 3> ids;
     bool found = true;
     for (int c = 0; c < 3; ++c) {
-      auto it = node_of.find(key_of(triangles.V.row(triangles.F(f, c)).transpose()));
+      auto it = node_of.find(position_key(triangles.V.row(triangles.F(f, c))));
       if (it == node_of.end())
         found = false;
       else

@@ -1,21 +1,13 @@
 #include "pipeline/input_floors.hpp"
 
 #include <algorithm>
-#include <bit>
-#include <cstdint>
 #include <map>
 #include <set>
+#include <unordered_map>
+
+#include "meshing/core/position_key.hpp"
 
 namespace curvefem::pipeline {
-namespace {
-
-using Key = std::array<std::uint64_t, 3>;
-Key point_key(const Eigen::Vector3d& x) {
-  auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v == 0.0 ? 0.0 : v); };
-  return {bits(x[0]), bits(x[1]), bits(x[2])};
-}
-
-}  // namespace
 
 InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const LagrangeMesh& mesh,
                          const std::vector<double>& cell_mips,
@@ -30,19 +22,19 @@ InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const
 
   // The boundary's corners by position (exact), its faces and edges by corner ids.
   const LagrangeMesh& b = map.boundary;
-  std::map<Key, int> corner_at;
+  std::unordered_map<PositionKey, int, PositionHash> corner_at;
   std::set<std::array<int, 3>> faces;
   std::set<std::array<int, 2>> edges;
   for (int c = 0; c < b.num_cells(); ++c) {
     std::array<int, 3> f{b.cells(c, 0), b.cells(c, 1), b.cells(c, 2)};
-    for (int id : f) corner_at.emplace(point_key(b.nodes.row(id).transpose()), id);
+    for (int id : f) corner_at.emplace(position_key(b.nodes.row(id)), id);
     for (int k = 0; k < 3; ++k)
       edges.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
     std::sort(f.begin(), f.end());
     faces.insert(f);
   }
   auto corner_of = [&](int v) {
-    const auto it = corner_at.find(point_key(input.V.row(v).transpose()));
+    const auto it = corner_at.find(position_key(input.V.row(v)));
     return it == corner_at.end() ? -1 : it->second;
   };
 

@@ -5,6 +5,17 @@
 
 namespace curvefem::pipeline {
 
+nlohmann::json defects_json(const std::vector<check::Defect>& defects) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& d : defects)
+    a.push_back({{"kind", d.kind},
+                 {"count", d.count},
+                 {"id_kind", d.id_kind},
+                 {"ids", d.ids},
+                 {"message", d.message}});
+  return a;
+}
+
 nlohmann::json check_report_json(const check::CheckReport& r) {
   nlohmann::json j;
   j["vertices"] = r.vertices;
@@ -38,18 +49,8 @@ nlohmann::json check_report_json(const check::CheckReport& r) {
   j["bbox_longest_edge"] = r.bbox_longest_edge;
   j["acceptable"] = r.acceptable;
   j["time_s"] = r.time_s;
-  auto list = [](const std::vector<check::Defect>& defects) {
-    nlohmann::json a = nlohmann::json::array();
-    for (const auto& d : defects)
-      a.push_back({{"kind", d.kind},
-                   {"count", d.count},
-                   {"id_kind", d.id_kind},
-                   {"ids", d.ids},
-                   {"message", d.message}});
-    return a;
-  };
-  j["defects"] = list(r.defects);
-  j["warnings"] = list(r.warnings);
+  j["defects"] = defects_json(r.defects);
+  j["warnings"] = defects_json(r.warnings);
   return j;
 }
 

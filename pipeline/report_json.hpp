@@ -2,6 +2,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
@@ -12,8 +13,10 @@
 
 namespace curvefem::pipeline {
 
-/// Every field of a CheckReport, defects and warnings as arrays of {kind, count, id_kind, ids,
-/// message}.
+/// A CheckReport's defects or warnings as an array of {kind, count, id_kind, ids, message}.
+nlohmann::json defects_json(const std::vector<check::Defect>& defects);
+
+/// Every field of a CheckReport, defects and warnings as defects_json arrays.
 nlohmann::json check_report_json(const check::CheckReport& report);
 
 /// {"stage": seconds, ...} in stage order.

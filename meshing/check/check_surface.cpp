@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -15,6 +14,7 @@
 #include "meshing/check/self_intersections.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
+#include "meshing/core/position_key.hpp"
 #include "meshing/core/timer.hpp"
 
 namespace curvefem::check {
@@ -280,13 +280,9 @@ std::vector<FoldEdge> near_fold_edges_of(const Eigen::MatrixXd& V, const Eigen::
 // Referenced vertices whose coordinates equal (==) those of a lower referenced id. Compared as
 // values: -0.0 equals 0.0 (same point), otherwise this is bit equality (readers reject NaN).
 std::vector<int> duplicate_vertices(const Eigen::MatrixXd& V, const std::vector<char>& referenced) {
-  using Key = std::array<std::uint64_t, 3>;
-  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x == 0.0 ? 0.0 : x); };
-  std::vector<std::pair<Key, int>> keys;
-  for (int v = 0; v < V.rows(); ++v) {
-    if (!referenced[v]) continue;
-    keys.push_back({{bits(V(v, 0)), bits(V(v, 1)), bits(V(v, 2))}, v});
-  }
+  std::vector<std::pair<PositionKey, int>> keys;
+  for (int v = 0; v < V.rows(); ++v)
+    if (referenced[v]) keys.push_back({position_key(V.row(v)), v});
   std::sort(keys.begin(), keys.end());
   std::vector<int> dups;
   for (std::size_t i = 1; i < keys.size(); ++i)

@@ -484,7 +484,7 @@ void register_mesh(CLI::App& app) {
       nlohmann::ordered_json j = {
           {"input", input_abs},
           {"input_warnings",
-           nlohmann::ordered_json::parse(pipeline::check_report_json(report)["warnings"].dump())},
+           nlohmann::ordered_json::parse(pipeline::defects_json(report.warnings).dump())},
           {"features", feature_source},
           {"eps_field", args->eps_field.empty() ? nlohmann::ordered_json(nullptr)
                                                 : nlohmann::ordered_json(args->eps_field)},
