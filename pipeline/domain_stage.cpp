@@ -228,7 +228,7 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
 
 int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
 
-SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
+SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann::json* warnings) {
   if (!spec.mesh_dir.empty()) return {};  // the input is the saved mesh's (mesh_domain)
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "load_surface");
@@ -255,6 +255,7 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx) {
                                                      " gives the full diagnosis)"),
                      {.file = spec.case_file.string()});
   for (const check::Defect& w : report.warnings) log::warn(where, ": ", w.kind, ": ", w.message);
+  if (warnings) *warnings = defects_json(report.warnings);
   for (const LoadCase& load : spec.loads())
     for (const auto& bc : load.boundary_conditions)
       if (!mapping::uses_outer_box(bc.select))  // may select the box only: checked on the mesh

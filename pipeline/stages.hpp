@@ -60,8 +60,10 @@ struct StageContext {
 
 /// The dense input of a curved | dense case: read (or built), checked (InputError naming the
 /// defect when `curvefem check` would reject it), and every boundary condition's selection checked
-/// to select something on it.
-SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx = {});
+/// to select something on it. `warnings`, when given, receives `curvefem check`'s warnings as
+/// report.json's `input_warnings` (a list; pipeline::defects_json), each also logged.
+SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx = {},
+                         nlohmann::json* warnings = nullptr);
 
 /// The input feature edges of a case (geometry.features: auto | angle | file | none).
 std::vector<std::array<int, 2>> case_feature_edges(const CaseSpec& spec, const SurfaceMesh& input);

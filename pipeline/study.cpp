@@ -99,7 +99,10 @@ SharedMeshing mesh_shared(const StudySpec& study, int threads) {
     entry["eps"] = eps;
     try {
       log::info("study: meshing ", eps.size(), " eps level(s) once for ", runs.size(), " runs");
-      domains = mesh_domain_levels(spec, load_surface(spec), {.threads = threads});
+      nlohmann::json input_warnings;
+      domains =
+          mesh_domain_levels(spec, load_surface(spec, {}, &input_warnings), {.threads = threads});
+      for (Domain& d : domains) d.report["input_warnings"] = input_warnings;
     } catch (const Error& e) {
       // Each run meshes alone and reports its own failure.
       log::warn("study: shared meshing failed (", e.what(), "); each run meshes alone");

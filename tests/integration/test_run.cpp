@@ -372,6 +372,41 @@ TEST(Run, DirichletByNormalConstrainsTheSelectedSidesEdges) {
   EXPECT_LT(j["l2_error"].get<double>(), 1e-10);
 }
 
+// `check`'s warnings reach run's report.json (meshing.input_warnings) as they reach mesh's: the
+// knife disc's rim is 64 near folds (face normals turning by 179.2°), the box has none. P1 on the
+// dense fill is exact for a linear u whatever its tets on the rim.
+TEST(Run, TheInputsWarningsAreInTheMeshingReport) {
+  const auto dir = test::scratch_dir("run_input_warnings");
+  std::string log;
+  ASSERT_EQ(
+      test::run_command(cli() + " generate knife_disc -q -o " + (dir / "knife.obj").string(), &log),
+      0)
+      << log;
+  const std::string rest = R"("meshing": {"method": "dense"},
+    "physics": {"type": "poisson"},
+    "discretization": {"degree": 1},
+    "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x + 2*y - z"}],
+    "exact": "x + 2*y - z"})";
+  const auto knife = write_case(dir, R"({"geometry": {"surface": "knife.obj"}, )" + rest);
+  ASSERT_EQ(run_case(knife, dir / "knife", &log), 0) << log;
+  const auto j = report(dir / "knife");
+  const auto& w = j["meshing"]["input_warnings"];
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0]["kind"], "near_fold");
+  EXPECT_EQ(w[0]["count"], 64);
+  EXPECT_LT(j["l2_error"].get<double>(), 1e-10);
+  ASSERT_EQ(test::run_command(cli() + " check -q --json " + (dir / "knife.obj").string(), &log), 0)
+      << log;
+  EXPECT_EQ(nlohmann::json::parse(log)["warnings"], w);
+  const auto box = write_case(dir, R"({"geometry": {"builtin_surface": {"shape": "box",
+    "lo": [0, 0, 0], "hi": [1, 1, 1], "divisions": 2}, "features": "none"}, )" +
+                                       rest);
+  ASSERT_EQ(run_case(box, dir / "box", &log), 0) << log;
+  const auto b = report(dir / "box")["meshing"];
+  ASSERT_TRUE(b.contains("input_warnings"));
+  EXPECT_TRUE(b["input_warnings"].empty());
+}
+
 // On a given mesh, nx, ny, nz in a Neumann value are the mesh's outward normal at the face
 // quadrature point: u = x² − yz + z is in P2, so the run is exact with the flux ∇u · n on the
 // five free sides of the unit cube.
