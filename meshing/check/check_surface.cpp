@@ -494,7 +494,9 @@ CheckReport check_surface(const SurfaceMesh& mesh, const CheckOptions& options,
     r.warnings.push_back(
         make_warning("needle", std::move(needles), max_ids, "face",
                      "needle faces (a corner angle below " + format_g(options.needle_angle_deg) +
-                         " deg: where the coarse surface keeps one, the tet on it is as flat)",
+                         " deg: where the coarse surface keeps one, the tet on it is as flat; "
+                         "`curvefem check IN --merge-short-edges L -o OUT` merges the edges "
+                         "shorter than L)",
                      "corner angle", /*worst_is_largest=*/false));
   if (!folds.empty())
     r.warnings.push_back(make_warning("near_fold", std::move(folds), max_ids, "edge",

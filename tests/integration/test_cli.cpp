@@ -284,6 +284,67 @@ TEST(Cli, ShellKeepsItsDistortionBoundAndRefusesATangentPillar) {
   EXPECT_LT(bounded["prisms"].get<int>(), 300);  // 1920 before coarsening
 }
 
+// `check --merge-short-edges L -o OUT`: the sliver sphere's 40 slivers are edges of a level-3
+// icosphere split at 1e-4 of their length; merged, the icosphere comes back (1,280 faces, no
+// needle), with the vertex map beside it. Without --merge-short-edges, -o is refused; a result
+// that is not acceptable (here an open input) is not written.
+TEST(Cli, CheckMergesShortEdgesAndWritesTheRepairedSurfaceWithItsVertexMap) {
+  const auto dir = test::scratch_dir("cli_check_merge");
+  std::string out;
+  ASSERT_TRUE(generate("sliver_sphere_001", dir / "slivers.obj"));
+  const SurfaceMesh input = io::read_surface(dir / "slivers.obj");
+  ASSERT_EQ(input.num_faces(), 1280 + 80);
+  const auto merged = dir / "merged.obj";
+  ASSERT_EQ(test::run_command(cli() + " check -q --json " + (dir / "slivers.obj").string() +
+                                  " --merge-short-edges 1e-4 -o " + merged.string(),
+                              &out),
+            0)
+      << out;
+  const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+  EXPECT_EQ(j["acceptable"], true);
+  EXPECT_TRUE(j["warnings"].empty());
+  EXPECT_EQ(j["faces"], 1280);
+  const auto& m = j["merge_short_edges"];
+  EXPECT_EQ(m["candidates"], 40);
+  EXPECT_EQ(m["merged"], 40);
+  EXPECT_EQ(m["left"], 0);
+  EXPECT_EQ(m["written"], true);
+  EXPECT_LT(m["max_moved"].get<double>(), 1e-4 * 2.0);
+  const SurfaceMesh repaired = io::read_surface(merged);
+  EXPECT_EQ(repaired.num_faces(), 1280);
+  EXPECT_EQ(repaired.num_vertices(), input.num_vertices() - 40);
+  const auto map = read_json(dir / "merged_vertex_map.json");
+  ASSERT_EQ(map["vertex_map"].size(), std::size_t(input.num_vertices()));
+  ASSERT_EQ(map["face_origin"].size(), 1280u);
+  ASSERT_EQ(map["pairs"].size(), 40u);
+  for (const auto& p : map["pairs"]) {  // each merged vertex sits where its kept end is mapped
+    const int removed = p["removed"], kept = p["kept"];
+    EXPECT_EQ(map["vertex_map"][removed], map["vertex_map"][kept]);
+    EXPECT_EQ(repaired.V.row(map["vertex_map"][kept].get<int>()), input.V.row(kept));
+    EXPECT_NEAR((input.V.row(removed) - input.V.row(kept)).norm(), p["length"].get<double>(),
+                1e-15);
+  }
+
+  EXPECT_EQ(test::run_command(cli() + " check -q " + (dir / "slivers.obj").string() + " -o " +
+                                  (dir / "alone.obj").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "alone.obj"));
+
+  SurfaceMesh open = input;
+  open.F = input.F.bottomRows(input.num_faces() - 1);
+  io::write_surface(dir / "open.obj", open, io::SurfaceFormat::obj);
+  EXPECT_EQ(test::run_command(cli() + " check -q " + (dir / "open.obj").string() +
+                                  " --merge-short-edges 1e-4 -o " + (dir / "bad.obj").string(),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("is not acceptable and is not written"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.obj"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad_vertex_map.json"));
+}
+
 TEST(Cli, AKnifeEdgeMeshesWithItsPillarsHeldToHalfTheirOwnCosine) {
   // knife_disc's rim is a 0.5° wedge: no pillar makes 0.01 with both sides (its pinch pillars
   // start at 0.0074). Under the absolute bound the coarsening kept 1,030 coarse faces (478

@@ -1,12 +1,18 @@
 // `curvefem check INPUT [--json]`: validity of a triangle surface for meshing (DESIGN.md §3).
 // Prints a summary block and one line per defect (or one JSON object with --json) on stdout.
 // Exit 0 when the surface is acceptable, 2 when it is not or cannot be read as triangles.
+// With `--merge-short-edges L -o OUT`, the edges shorter than L × the bbox's longest edge are
+// merged (check/merge_short_edges.hpp), the result is checked and reported instead, and written
+// to OUT with OUT's stem + `_vertex_map.json` beside it only if it is acceptable.
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "meshing/check/check_surface.hpp"
+#include "meshing/check/merge_short_edges.hpp"
+#include "meshing/core/atomic_file.hpp"
+#include "meshing/core/error.hpp"
 #include "meshing/io/surface_io.hpp"
 #include "pipeline/report_json.hpp"
 #include "tools/curvefem/cli_common.hpp"
@@ -19,6 +25,8 @@ struct CheckArgs {
   std::string input;
   bool json = false;
   bool skip_self_intersections = false;
+  double merge_short_edges = 0;  // relative to the bbox's longest edge; 0: no repair
+  std::string output;
   GlobalOptions global;
 };
 
@@ -82,20 +90,82 @@ void register_check(CLI::App& app) {
   sub->add_flag("--json", args->json, "print the report as one JSON object on stdout");
   sub->add_flag("--no-self-intersections", args->skip_self_intersections,
                 "skip the self-intersection test (reported as not checked)");
+  sub->add_option("--merge-short-edges", args->merge_short_edges,
+                  "repair: merge every edge shorter than L x the bbox's longest edge into one of "
+                  "its ends (where the surface stays a closed manifold), check the result and "
+                  "write it to -o with a vertex map; the curved mesh then maps to that surface")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("-o,--output", args->output,
+                  "with --merge-short-edges: the repaired surface, and STEM_vertex_map.json "
+                  "beside it (written only if it is acceptable)");
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
-    const SurfaceMesh mesh = io::read_surface(args->input);
+    if ((args->merge_short_edges > 0) != !args->output.empty())
+      throw InputError("check: --merge-short-edges and -o go together");
+    SurfaceMesh mesh = io::read_surface(args->input);
+    nlohmann::json merge_json;
+    std::string reported = args->input;
+    std::filesystem::path map_path;
+    if (args->merge_short_edges > 0) {
+      check::MergeShortEdgesOptions merge;
+      merge.max_length = args->merge_short_edges * bbox_longest_edge(mesh.V);
+      check::MergeShortEdgesResult merged = check::merge_short_edges(mesh, merge);
+      const std::filesystem::path out(args->output);
+      map_path = out.parent_path() / (out.stem().string() + "_vertex_map.json");
+      nlohmann::json pairs = nlohmann::json::array();
+      for (const check::MergedEdge& e : merged.merged)
+        pairs.push_back({{"removed", e.removed}, {"kept", e.kept}, {"length", e.length}});
+      merge_json = {{"max_length_rel", args->merge_short_edges},
+                    {"max_length", merge.max_length},
+                    {"candidates", merged.candidates},
+                    {"merged", merged.merged.size()},
+                    {"left", merged.refused},
+                    {"max_moved", merged.max_moved},
+                    {"output", args->output},
+                    {"vertex_map_file", map_path.string()},
+                    {"pairs", pairs}};
+      merge_json["vertex_map"] = merged.vertex_map;
+      merge_json["face_origin"] = merged.face_origin;
+      mesh = std::move(merged.mesh);
+      reported = args->output;
+    }
     check::CheckOptions options;
     options.self_intersections = !args->skip_self_intersections;
     const check::CheckReport report = check::check_surface(mesh, options, progress->callback());
     progress.reset();  // finish the progress line on stderr before the report on stdout
+    if (!merge_json.is_null() && report.acceptable) {
+      io::write_surface(args->output, mesh, io::surface_format_from_extension(args->output));
+      nlohmann::json file = merge_json;
+      file["input"] = args->input;
+      write_text_file_atomic(map_path, file.dump(1) + "\n");
+    }
     if (args->json) {
       nlohmann::json j = pipeline::check_report_json(report);
-      j["input"] = args->input;
+      j["input"] = reported;
+      if (!merge_json.is_null()) {
+        merge_json.erase("vertex_map");
+        merge_json.erase("face_origin");
+        merge_json["written"] = report.acceptable;
+        j["merge_short_edges"] = merge_json;
+      }
       std::printf("%s\n", j.dump(2).c_str());
-    } else
-      print_human(args->input, report);
+    } else {
+      if (!merge_json.is_null()) {
+        const std::string written =
+            report.acceptable
+                ? "is written to " + args->output + " (vertex map " + map_path.string() + ")"
+                : std::string("is not acceptable and is not written");
+        std::printf(
+            "merged %d of %d edges shorter than %.4g (%.4g x the bbox's longest edge; %d left: "
+            "merging them would break the manifold or turn a face by > 30 deg), longest "
+            "merged %.4g; the repaired surface %s:\n",
+            merge_json["merged"].get<int>(), merge_json["candidates"].get<int>(),
+            merge_json["max_length"].get<double>(), args->merge_short_edges,
+            merge_json["left"].get<int>(), merge_json["max_moved"].get<double>(), written.c_str());
+      }
+      print_human(reported, report);
+    }
     std::fflush(stdout);
     return report.acceptable ? 0 : 2;
   });
