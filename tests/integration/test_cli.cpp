@@ -287,8 +287,8 @@ TEST(Cli, ShellKeepsItsDistortionBoundAndRefusesATangentPillar) {
 // `check --merge-short-edges L -o OUT`: the sliver sphere's 40 slivers are edges of a level-3
 // icosphere split at 1e-4 of their length; merged, the icosphere comes back (1,280 faces, no
 // needle), with the vertex map beside it. Without --merge-short-edges, -o is refused; a result
-// that is not acceptable (here an open input) is not written.
-TEST(Cli, CheckMergesShortEdgesAndWritesTheRepairedSurfaceWithItsVertexMap) {
+// that is not acceptable (here an open input) is not written. `mesh` meshes the repaired surface.
+TEST(Cli, MergingShortEdgesWritesTheRepairedSurfaceWithItsVertexMapAndMeshesIt) {
   const auto dir = test::scratch_dir("cli_check_merge");
   std::string out;
   ASSERT_TRUE(generate("sliver_sphere_001", dir / "slivers.obj"));
@@ -343,6 +343,27 @@ TEST(Cli, CheckMergesShortEdgesAndWritesTheRepairedSurfaceWithItsVertexMap) {
   EXPECT_NE(out.find("is not acceptable and is not written"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.obj"));
   EXPECT_FALSE(std::filesystem::exists(dir / "bad_vertex_map.json"));
+
+  // `mesh --merge-short-edges`: the same repair, the repaired surface saved in the mesh folder as
+  // the input the map refers to (so `validate` and geometry.mesh_dir read it).
+  const auto mdir = dir / "meshed";
+  ASSERT_EQ(
+      test::run_command(cli() + " mesh -q " + (dir / "slivers.obj").string() +
+                            " --order 3 --threads 1 --merge-short-edges 1e-4 -o " + mdir.string(),
+                        &out),
+      0)
+      << out;
+  const auto r = read_json(mdir / "report.json");
+  EXPECT_EQ(r["valid"], true);
+  EXPECT_EQ(r["input_repair"]["merged"], 40);
+  EXPECT_EQ(r["input_repair"]["original"], std::filesystem::absolute(dir / "slivers.obj").string());
+  EXPECT_EQ(r["input"], std::filesystem::absolute(mdir / "input_merged.obj").string());
+  EXPECT_TRUE(r["input_warnings"].empty());
+  EXPECT_EQ(r["input_faces"], 1280);
+  EXPECT_EQ(io::read_surface(mdir / "input_merged.obj").F, repaired.F);
+  EXPECT_EQ(read_json(mdir / "input_merged_vertex_map.json")["vertex_map"], map["vertex_map"]);
+  EXPECT_EQ(read_json(mdir / "boundary_map.json")["input"], r["input"]);
+  EXPECT_EQ(test::run_command(cli() + " validate -q " + mdir.string(), &out), 0) << out;
 }
 
 TEST(Cli, AKnifeEdgeMeshesWithItsPillarsHeldToHalfTheirOwnCosine) {

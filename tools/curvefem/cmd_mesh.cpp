@@ -12,10 +12,12 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "mapping/boundary_inverse.hpp"
 #include "meshing/check/check_surface.hpp"
+#include "meshing/check/merge_short_edges.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -84,6 +86,7 @@ struct MeshArgs {
   bool optimize_no_mean_flips = !meshing::curved::CurvedEditOptions{}.mean_flips;
   double optimize_node_energy = meshing::curved::OptimizeOptions{}.node_energy;
   double padding = 0.25;
+  double merge_short_edges = 0;  // relative to the bbox's longest edge; 0: the input as it is
   GlobalOptions global;
 };
 
@@ -336,17 +339,49 @@ void register_mesh(CLI::App& app) {
   sub->add_option("--padding", args->padding,
                   "exterior box padding, relative to the longest bbox edge (default 0.25)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--merge-short-edges", args->merge_short_edges,
+                  "mesh the input with its edges shorter than L x the bbox's longest edge merged "
+                  "(as `curvefem check --merge-short-edges`): the map is then to that surface, "
+                  "saved as input_merged.obj with its vertex map")
+      ->check(CLI::PositiveNumber);
   add_global_options(*sub, args->global);
   add_command(sub, [args]() {
     auto progress = apply_global_options(args->global);
     Stopwatch total;
-    const SurfaceMesh input = io::read_surface(args->input);
-    const check::CheckReport report = check::check_surface(input, {}, progress->callback());
+    SurfaceMesh input = io::read_surface(args->input);
+    check::CheckReport report = check::check_surface(input, {}, progress->callback());
     if (!report.acceptable)
       throw InputError(
           args->input + ": not a valid meshing input: " +
           (report.defects.empty() ? std::string("empty surface") : report.defects.front().message) +
           " (curvefem check " + args->input + " gives the full diagnosis)");
+    // --merge-short-edges: the surface meshed (and mapped to) is the repaired one.
+    std::optional<check::MergeShortEdgesResult> merged;
+    nlohmann::ordered_json input_repair = nullptr;
+    if (args->merge_short_edges > 0) {
+      merged = check::merge_short_edges(
+          input, {.max_length = args->merge_short_edges * bbox_longest_edge(input.V)});
+      check::CheckReport again = check::check_surface(merged->mesh, {}, progress->callback());
+      if (!again.acceptable)
+        throw InputError(
+            args->input + ": --merge-short-edges " + std::to_string(args->merge_short_edges) +
+            ": the repaired surface is not a valid meshing input: " +
+            (again.defects.empty() ? std::string("empty surface") : again.defects.front().message));
+      log::info("mesh: merged ", merged->merged.size(), " edges shorter than ",
+                args->merge_short_edges, " x the bbox (longest ", merged->max_moved, ", ",
+                merged->refused, " left); meshing the repaired surface");
+      input_repair = {{"original", std::filesystem::absolute(args->input).string()},
+                      {"merge_short_edges_rel", args->merge_short_edges},
+                      {"candidates", merged->candidates},
+                      {"merged", merged->merged.size()},
+                      {"left", merged->refused},
+                      {"max_moved", merged->max_moved},
+                      {"what",
+                       "the curved mesh maps to the repaired surface (input); an original "
+                       "vertex merged away is max_moved from its vertex there at most"}};
+      input = merged->mesh;
+      report = std::move(again);
+    }
     for (const check::Defect& w : report.warnings)
       log::warn(args->input, ": ", w.kind, ": ", w.message);
     cv::CurvedMeshOptions options;
@@ -433,10 +468,26 @@ void register_mesh(CLI::App& app) {
     const std::vector<cv::CurvedMesh> results =
         cv::build_curved_mesh_levels(input, options, levels, level_stats, progress->callback());
     const bool several = levels.size() > 1;
-    const std::string input_abs = std::filesystem::absolute(args->input).string();
-    const std::string input_checksum = pipeline::file_checksum(args->input);
-
     StagedOutputDir out(args->output);
+    std::string input_abs = std::filesystem::absolute(args->input).string();
+    std::string input_checksum = pipeline::file_checksum(args->input);
+    if (merged) {  // the repaired surface is the input the saved map refers to
+      io::write_surface(out.path("input_merged.obj"), input, io::SurfaceFormat::obj);
+      input_checksum = pipeline::file_checksum(out.path("input_merged.obj"));
+      input_abs = std::filesystem::absolute(out.final_path("input_merged.obj")).string();
+      nlohmann::json pairs = nlohmann::json::array();
+      for (const check::MergedEdge& e : merged->merged)
+        pairs.push_back({{"removed", e.removed}, {"kept", e.kept}, {"length", e.length}});
+      const nlohmann::json map = {{"input", input_repair["original"]},
+                                  {"output", input_abs},
+                                  {"pairs", pairs},
+                                  {"vertex_map", merged->vertex_map},
+                                  {"face_origin", merged->face_origin}};
+      write_text_file_atomic(out.path("input_merged_vertex_map.json"), map.dump(1) + "\n");
+      input_repair["surface"] = input_abs;
+      input_repair["vertex_map"] =
+          std::filesystem::absolute(out.final_path("input_merged_vertex_map.json")).string();
+    }
     bool all_ok = true;
     std::vector<std::string> defects;  // printed to stderr at the end
     nlohmann::ordered_json level_list = nlohmann::ordered_json::array();
@@ -483,6 +534,7 @@ void register_mesh(CLI::App& app) {
       stages["write"] = write.seconds();
       nlohmann::ordered_json j = {
           {"input", input_abs},
+          {"input_repair", input_repair},
           {"input_warnings",
            nlohmann::ordered_json::parse(pipeline::defects_json(report.warnings).dump())},
           {"features", feature_source},
