@@ -1,6 +1,8 @@
 #include "pipeline/input_floors.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -38,6 +40,11 @@ InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const
     return it == corner_at.end() ? -1 : it->second;
   };
 
+  auto note_edge = [&](int u, int v) {
+    const double l = (input.V.row(u) - input.V.row(v)).norm();
+    if (out.shortest_edge_at_kept == 0 || l < out.shortest_edge_at_kept)
+      out.shortest_edge_at_kept = l;
+  };
   // Kept items as sets of volume corner nodes.
   std::vector<std::vector<int>> kept;
   auto volume_node = [&](int boundary_node) {
@@ -52,6 +59,7 @@ InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const
     if (c[0] < 0 || !faces.count(c)) continue;
     ++out.needle_faces_kept;
     if (out.kept_needle_faces.size() < 10) out.kept_needle_faces.push_back(f);
+    for (int k = 0; k < 3; ++k) note_edge(input.F(f, k), input.F(f, (k + 1) % 3));
     kept.push_back({volume_node(c[0]), volume_node(c[1]), volume_node(c[2])});
   }
   for (const check::FoldEdge& e : folds) {
@@ -59,9 +67,12 @@ InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const
     if (a < 0 || c < 0 || !edges.count({std::min(a, c), std::max(a, c)})) continue;
     ++out.near_fold_edges_kept;
     if (out.kept_fold_edges.size() < 10) out.kept_fold_edges.push_back({e.lo, e.hi});
+    note_edge(e.lo, e.hi);
     kept.push_back({volume_node(a), volume_node(c)});
   }
   if (kept.empty()) return out;
+  if (const double box = bbox_longest_edge(input.V); box > 0)
+    out.shortest_edge_at_kept_rel = out.shortest_edge_at_kept / box;
 
   // Tets holding every corner node of a kept item.
   std::map<int, std::vector<std::size_t>> items_of_node;
@@ -117,11 +128,30 @@ nlohmann::json input_floors_json(const InputFloors& f, const check::CheckOptions
           {"near_fold_edges_kept", f.near_fold_edges_kept},
           {"kept_fold_edges", kept_edges},
           {"tets_at_kept", f.tets_at_kept},
+          {"shortest_edge_at_kept_rel",
+           f.shortest_edge_at_kept > 0 ? nlohmann::json(f.shortest_edge_at_kept_rel) : nullptr},
           {"max_mips_at_kept", f.tets_at_kept > 0 ? nlohmann::json(f.max_mips_at_kept) : nullptr},
           {"min_scaled_jacobian_at_kept",
            f.tets_at_kept > 0 ? nlohmann::json(f.min_scaled_jacobian_at_kept) : nullptr},
           {"worst_mips_tet_at_kept", f.worst_mips_tet_at_kept},
           {"worst_scaled_jacobian_tet_at_kept", f.worst_scaled_jacobian_tet_at_kept}};
+}
+
+std::string merge_hint(const InputFloors& f, double eps_rel) {
+  if (!(f.worst_mips_tet_at_kept || f.worst_scaled_jacobian_tet_at_kept) ||
+      !(f.shortest_edge_at_kept_rel > 0) || !(f.shortest_edge_at_kept_rel < eps_rel))
+    return {};
+  // Two significant digits, rounded up above the edge (an edge equal to L is not merged).
+  const double l = 1.05 * f.shortest_edge_at_kept_rel;
+  const double unit = std::pow(10.0, std::floor(std::log10(l)) - 1);
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "the mesh's worst tet is on an input needle or fold the boundary kept as it is "
+                "(report.json input_floors), whose shortest edge is %.3g of the bbox: "
+                "`--merge-short-edges %.2g` merges edges up to that length first (the map is then "
+                "to the repaired surface)",
+                f.shortest_edge_at_kept_rel, std::ceil(l / unit) * unit);
+  return buf;
 }
 
 }  // namespace curvefem::pipeline

@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "meshing/check/check_surface.hpp"
@@ -32,6 +33,10 @@ struct InputFloors {
   /// The mesh's tet of largest curved MIPS (and, separately, of smallest scaled Jacobian) is one
   /// of tets_at_kept.
   bool worst_mips_tet_at_kept = false, worst_scaled_jacobian_tet_at_kept = false;
+  /// The shortest input edge of a kept needle face or kept fold edge (0: none kept), and it over
+  /// the bbox's longest edge: below ε, `curvefem mesh --merge-short-edges` can remove the floor
+  /// (check/merge_short_edges.hpp; CGAL's femur: 1e-4, hand: 3e-3).
+  double shortest_edge_at_kept = 0, shortest_edge_at_kept_rel = 0;
   std::vector<int> kept_needle_faces;               ///< input face ids (up to 10)
   std::vector<std::array<int, 2>> kept_fold_edges;  ///< input vertex pairs (up to 10)
 };
@@ -46,5 +51,10 @@ InputFloors input_floors(const SurfaceMesh& input, const BoundaryMap& map, const
 
 nlohmann::json input_floors_json(const InputFloors& floors,
                                  const check::CheckOptions& options = {});
+
+/// Where the mesh's worst tet is on a kept needle or fold whose shortest edge is below `eps_rel`
+/// (relative to the bbox): a one-line hint naming `--merge-short-edges` with a length just above
+/// that edge; empty otherwise.
+std::string merge_hint(const InputFloors& floors, double eps_rel);
 
 }  // namespace curvefem::pipeline

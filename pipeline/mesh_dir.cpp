@@ -7,6 +7,7 @@
 
 #include "meshing/check/check_surface.hpp"
 #include "meshing/core/error.hpp"
+#include "meshing/core/log.hpp"
 #include "meshing/curved/curved_validate.hpp"
 #include "meshing/io/boundary_map_io.hpp"
 #include "meshing/io/msh_io.hpp"
@@ -138,8 +139,11 @@ void validate_domain(Domain& d, double eps_rel) {
   d.report["validation"] = j;
   d.report["max_distance_rel"] = v.max_distance_rel;
   d.report["min_jacobian_certified"] = v.certified();
-  d.report["input_floors"] = input_floors_json(
-      input_floors(d.input, *d.curved_map, d.mesh, v.cell_mips, v.cell_scaled_jacobian));
+  const InputFloors floors =
+      input_floors(d.input, *d.curved_map, d.mesh, v.cell_mips, v.cell_scaled_jacobian);
+  d.report["input_floors"] = input_floors_json(floors);
+  if (const std::string hint = merge_hint(floors, eps_rel); !hint.empty())
+    log::warn("meshing: ", hint);
   d.cell_quality = curved_validation_cell_fields(v);
 }
 

@@ -4,6 +4,9 @@
 // boundary's copy of a corner moved off its input point, none is kept.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+
 #include "pipeline/input_floors.hpp"
 
 namespace curvefem::pipeline {
@@ -50,6 +53,17 @@ TEST(InputFloors, TheNeedleAndTheFoldsKeptAsBoundaryAreFoundWithTheTetOnThem) {
   const auto j = input_floors_json(f);
   EXPECT_EQ(j["needle_faces_kept"], 1);
   EXPECT_EQ(j["kept_fold_edges"], nlohmann::json::parse("[[0, 3], [1, 3]]"));
+  // The needle's two long sides (|(1, 0.01, 0)|) are its shortest; the bbox is 2 long. The hint
+  // names a merge length just above it where that is below the distance bound, and nothing where
+  // it is not.
+  EXPECT_DOUBLE_EQ(f.shortest_edge_at_kept, std::sqrt(1.0001));
+  EXPECT_DOUBLE_EQ(j["shortest_edge_at_kept_rel"].get<double>(), std::sqrt(1.0001) / 2);
+  EXPECT_EQ(merge_hint(f, 0.01), "");
+  const std::string hint = merge_hint(f, 1.0);
+  EXPECT_NE(hint.find("`--merge-short-edges 0.53`"), std::string::npos) << hint;
+  InputFloors elsewhere = f;  // the worst tet is not on them: no hint
+  elsewhere.worst_mips_tet_at_kept = elsewhere.worst_scaled_jacobian_tet_at_kept = false;
+  EXPECT_EQ(merge_hint(elsewhere, 1.0), "");
 }
 
 TEST(InputFloors, NothingIsKeptWhereTheBoundaryMovedOffTheInputPoints) {
@@ -64,6 +78,7 @@ TEST(InputFloors, NothingIsKeptWhereTheBoundaryMovedOffTheInputPoints) {
   EXPECT_EQ(f.tets_at_kept, 0);
   EXPECT_FALSE(f.worst_mips_tet_at_kept);
   EXPECT_TRUE(input_floors_json(f)["max_mips_at_kept"].is_null());
+  EXPECT_TRUE(input_floors_json(f)["shortest_edge_at_kept_rel"].is_null());
 }
 
 TEST(InputFloors, ASmoothInputHasNothingToFlag) {

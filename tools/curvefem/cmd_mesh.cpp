@@ -532,6 +532,10 @@ void register_mesh(CLI::App& app) {
       stages["validate"] = check.seconds;
       stages["map roundtrip"] = roundtrip_seconds;
       stages["write"] = write.seconds();
+      const pipeline::InputFloors floors = pipeline::input_floors(
+          input, result.map, result.mesh, check.cell_mips, check.cell_scaled_jacobian);
+      if (const std::string hint = pipeline::merge_hint(floors, eps); !hint.empty())
+        log::warn(prefix, "mesh: ", hint);
       nlohmann::ordered_json j = {
           {"input", input_abs},
           {"input_repair", input_repair},
@@ -579,11 +583,7 @@ void register_mesh(CLI::App& app) {
            "shell_section_verified"},
           {"validation", curved_validation_json(check, eps)},
           {"input_floors",
-           nlohmann::ordered_json::parse(
-               pipeline::input_floors_json(pipeline::input_floors(input, result.map, result.mesh,
-                                                                  check.cell_mips,
-                                                                  check.cell_scaled_jacobian))
-                   .dump())},
+           nlohmann::ordered_json::parse(pipeline::input_floors_json(floors).dump())},
           {"valid", ok},
           {"threads", args->global.threads},
           {"deterministic", !args->nondeterministic},
