@@ -556,6 +556,9 @@ CaseSpec read_case_json(const nlohmann::json& given, const std::filesystem::path
       c.thickness_per_edge =
           r.number(*v, "/meshing/thickness_per_edge", "meshing.thickness_per_edge");
     }
+    if (const json* v = r.get(*m, "merge_short_edges")) {
+      c.merge_short_edges = r.number(*v, "/meshing/merge_short_edges", "meshing.merge_short_edges");
+    }
     if (const json* v = r.get(*m, "eps_samples")) {
       c.eps_samples = r.integer(*v, "/meshing/eps_samples", "meshing.eps_samples");
       if (c.eps_samples == 1)

@@ -77,6 +77,9 @@ struct CaseSpec {
   std::vector<double> eps_levels;
   double thickness = 0.02;          ///< curved: shell half-thickness cap (relative)
   double thickness_per_edge = 1.0;  ///< curved: initial cap × each vertex's mean edge (0: off)
+  /// curved | dense: the input's edges shorter than this × its bbox merged before meshing
+  /// (check/merge_short_edges.hpp; 0: the input as it is).
+  double merge_short_edges = 0;
   bool feature_chains = true;     ///< curved: coarsen along feature chains (snapped reference copy)
   bool curved_coarsening = true;  ///< curved: distance bound on the curved patch (order >= 2)
   std::string eps_field;  ///< curved: spatially varying ε, an expression of x, y, z ("" off)

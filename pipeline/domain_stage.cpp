@@ -7,6 +7,7 @@
 #include "mapping/boundary_inverse.hpp"
 #include "mapping/selection.hpp"
 #include "meshing/check/check_surface.hpp"
+#include "meshing/check/merge_short_edges.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/core/primitives.hpp"
@@ -228,7 +229,8 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
 
 int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
 
-SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann::json* warnings) {
+SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann::json* warnings,
+                         nlohmann::json* repair) {
   if (!spec.mesh_dir.empty()) return {};  // the input is the saved mesh's (mesh_domain)
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "load_surface");
@@ -245,7 +247,7 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann
   const std::string where = (spec.builtin_surface == BuiltinSurface::none)
                                 ? "/geometry/surface"
                                 : "/geometry/builtin_surface";
-  const check::CheckReport report = check::check_surface(input, {});
+  check::CheckReport report = check::check_surface(input, {});
   if (!report.acceptable)
     throw InputError(where + ": not a valid meshing input: " +
                          (report.defects.empty() ? std::string("empty surface")
@@ -254,6 +256,34 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann
                                                : " (curvefem check " + spec.surface.string() +
                                                      " gives the full diagnosis)"),
                      {.file = spec.case_file.string()});
+  if (spec.merge_short_edges > 0) {  // the repaired surface is meshed and mapped to
+    check::MergeShortEdgesResult merged = check::merge_short_edges(
+        input, {.max_length = spec.merge_short_edges * bbox_longest_edge(input.V)});
+    check::CheckReport again = check::check_surface(merged.mesh, {});
+    if (!again.acceptable)
+      throw InputError(
+          "/meshing/merge_short_edges: the repaired surface is not a valid meshing "
+          "input: " +
+              (again.defects.empty() ? std::string("empty surface")
+                                     : again.defects.front().message),
+          {.file = spec.case_file.string()});
+    log::info("load surface: merged ", merged.merged.size(), " edges shorter than ",
+              spec.merge_short_edges, " x the bbox (longest ", merged.max_moved, ", ",
+              merged.refused, " left)");
+    if (repair)
+      *repair = {{"merge_short_edges_rel", spec.merge_short_edges},
+                 {"candidates", merged.candidates},
+                 {"merged", merged.merged.size()},
+                 {"left", merged.refused},
+                 {"max_moved", merged.max_moved},
+                 {"input_vertices", input.num_vertices()},
+                 {"input_faces", input.num_faces()},
+                 {"what",
+                  "the mesh maps to the repaired surface (surface.vtu, input.msh); an "
+                  "input vertex merged away is max_moved from its vertex there at most"}};
+    input = std::move(merged.mesh);
+    report = std::move(again);
+  }
   for (const check::Defect& w : report.warnings) log::warn(where, ": ", w.kind, ": ", w.message);
   if (warnings) *warnings = defects_json(report.warnings);
   for (const LoadCase& load : spec.loads())

@@ -477,13 +477,13 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
       write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
       if (domain.curved_map && domain.fibers && !domain.outer_box) {
         // The mesh, φ and the fibers, so that geometry.mesh_dir can reuse this folder. A
-        // built-in input is saved beside them (input.msh with its tags, recorded relative to the
-        // folder).
+        // built-in or repaired (meshing.merge_short_edges) input is saved beside them (input.msh
+        // with its tags, recorded relative to the folder).
         std::string input, checksum;
         if (!spec.mesh_dir.empty()) {  // the input and checksum the reused folder was checked by
           input = domain.report.at("reused").at("input").get<std::string>();
           checksum = domain.report.at("reused").at("input_checksum").get<std::string>();
-        } else if (!spec.surface.empty()) {
+        } else if (!spec.surface.empty() && !(spec.merge_short_edges > 0)) {
           input = std::filesystem::absolute(spec.surface).string();
           checksum = file_checksum(spec.surface);
         } else {

@@ -68,7 +68,9 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   auto r = std::make_shared<RunResults>();
   SurfaceMesh input;
   nlohmann::json input_warnings;  // curvefem check's, in the meshing section (as mesh's report)
-  if (spec.dense_surface() && !settings.domain) input = load_surface(spec, ctx, &input_warnings);
+  nlohmann::json input_repair;    // meshing.merge_short_edges
+  if (spec.dense_surface() && !settings.domain)
+    input = load_surface(spec, ctx, &input_warnings, &input_repair);
   CaseSpec run = spec;
   const std::vector<LoadCase> loads = spec.loads();
   std::shared_ptr<fem::FactorizationCache> cache;
@@ -83,6 +85,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   } else if (spec.eps_levels.empty()) {
     r->domain = mesh_domain(spec, std::move(input), ctx);
     if (!input_warnings.is_null()) r->domain.report["input_warnings"] = input_warnings;
+    if (!input_repair.is_null()) r->domain.report["input_repair"] = input_repair;
     // Adaptive p (CaseSpec::target_error): the same mesh, degree raised until the estimate meets
     // the target or p = 4; the outputs and report are those of the last degree.
     estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, iterations);
@@ -94,8 +97,10 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
     // (the change estimates the coarser level's error, so the level kept is expected to be
     // better). The outputs and report are those of the last level solved.
     std::vector<Domain> domains = mesh_domain_levels(spec, std::move(input), ctx);
-    if (!input_warnings.is_null())
-      for (Domain& d : domains) d.report["input_warnings"] = input_warnings;
+    for (Domain& d : domains) {
+      if (!input_warnings.is_null()) d.report["input_warnings"] = input_warnings;
+      if (!input_repair.is_null()) d.report["input_repair"] = input_repair;
+    }
     nlohmann::json rows = nlohmann::json::array();
     std::optional<LevelValues> previous;
     bool reached = false;

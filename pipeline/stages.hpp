@@ -62,8 +62,10 @@ struct StageContext {
 /// defect when `curvefem check` would reject it), and every boundary condition's selection checked
 /// to select something on it. `warnings`, when given, receives `curvefem check`'s warnings as
 /// report.json's `input_warnings` (a list; pipeline::defects_json), each also logged.
+/// With meshing.merge_short_edges, the surface returned is the repaired one (checked again; its
+/// warnings are those reported) and `repair`, when given, receives report.json's `input_repair`.
 SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx = {},
-                         nlohmann::json* warnings = nullptr);
+                         nlohmann::json* warnings = nullptr, nlohmann::json* repair = nullptr);
 
 /// The input feature edges of a case (geometry.features: auto | angle | file | none).
 std::vector<std::array<int, 2>> case_feature_edges(const CaseSpec& spec, const SurfaceMesh& input);

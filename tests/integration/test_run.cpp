@@ -407,6 +407,46 @@ TEST(Run, TheInputsWarningsAreInTheMeshingReport) {
   EXPECT_TRUE(b["input_warnings"].empty());
 }
 
+// meshing.merge_short_edges: the sliver sphere's 40 slivers (edges split at 1e-4 of their length)
+// merged before meshing, so φ maps to the level-3 icosphere: surface.vtu has its 642 vertices, the
+// folder saves it as input.msh, and geometry.mesh_dir reuses the folder. Only with a surface, and
+// within [0, 0.5].
+TEST(Run, MergeShortEdgesMeshesTheRepairedSurfaceAndSavesIt) {
+  const auto dir = test::scratch_dir("run_merge_short_edges");
+  std::string log;
+  ASSERT_EQ(
+      test::run_command(
+          cli() + " generate sliver_sphere_001 -q -o " + (dir / "slivers.obj").string(), &log),
+      0)
+      << log;
+  const std::string physics = R"("physics": {"type": "poisson"},
+    "discretization": {"degree": 1},
+    "boundary_conditions": [{"type": "dirichlet", "select": {"all": true}, "value": "x - 2*z"}],
+    "exact": "x - 2*z"})";
+  const auto file = write_case(dir, R"({"geometry": {"surface": "slivers.obj"},
+    "meshing": {"order": 2, "merge_short_edges": 1e-4}, )" +
+                                        physics);
+  ASSERT_EQ(run_case(file, dir / "out", &log), 0) << log;
+  const auto j = report(dir / "out");
+  EXPECT_EQ(j["meshing"]["input_repair"]["merged"], 40);
+  EXPECT_EQ(j["meshing"]["input_repair"]["input_faces"], 1360);
+  EXPECT_TRUE(j["meshing"]["input_warnings"].empty());
+  EXPECT_EQ(j["mesh_valid"], true);
+  EXPECT_EQ(j["surface_vertices"], 642);
+  EXPECT_LT(j["l2_error"].get<double>(), 1e-10);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "input.msh"));
+  const auto reuse = write_case(dir, R"({"geometry": {"mesh_dir": "out"}, )" + physics);
+  ASSERT_EQ(run_case(reuse, dir / "again", &log), 0) << log;
+  EXPECT_EQ(report(dir / "again")["surface_vertices"], 642);
+  for (const std::string bad :
+       {R"({"geometry": {"builtin": {"shape": "cube", "divisions": 2}},
+            "meshing": {"merge_short_edges": 1e-4}, )",
+        R"({"geometry": {"surface": "slivers.obj"}, "meshing": {"merge_short_edges": 0.9}, )"}) {
+    EXPECT_EQ(run_case(write_case(dir, bad + physics), dir / "bad", &log), 2) << bad << log;
+    EXPECT_NE(log.find("merge_short_edges"), std::string::npos) << log;
+  }
+}
+
 // On a given mesh, nx, ny, nz in a Neumann value are the mesh's outward normal at the face
 // quadrature point: u = x² − yz + z is in P2, so the run is exact with the flux ∇u · n on the
 // five free sides of the unit cube.
