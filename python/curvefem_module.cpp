@@ -16,6 +16,7 @@
 
 #include "fem/solvers/linear_solver.hpp"
 #include "meshing/check/check_surface.hpp"
+#include "meshing/check/merge_short_edges.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
 #include "meshing/io/surface_io.hpp"
@@ -120,6 +121,26 @@ PYBIND11_MODULE(_curvefem, m) {
         return check_report_json(check::check_surface(s, {})).dump();
       },
       py::arg("path"), "The `curvefem check` report of a surface file, as JSON text.");
+
+  m.def(
+      "merge_short_edges",
+      [](const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, double length) {
+        if (V.cols() != 3 || F.cols() != 3)
+          throw InputError("merge_short_edges: vertices and faces must have 3 columns");
+        if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows()))
+          throw InputError("merge_short_edges: a face index is out of range");
+        SurfaceMesh s;
+        s.V = V;
+        s.F = F;
+        const check::MergeShortEdgesResult r =
+            check::merge_short_edges(s, {.max_length = length * bbox_longest_edge(V)});
+        std::vector<std::tuple<int, int, double>> pairs;
+        for (const check::MergedEdge& e : r.merged) pairs.emplace_back(e.removed, e.kept, e.length);
+        return std::make_tuple(r.mesh.V, r.mesh.F, r.vertex_map, r.face_origin, pairs, r.candidates,
+                               r.refused, r.max_moved);
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("length"),
+      "check::merge_short_edges (the Python function of that name wraps it).");
 
   py::class_<SurfaceMesh, std::shared_ptr<SurfaceMesh>>(m, "Surface")
       .def_property_readonly("vertices", [](const SurfaceMesh& s) { return s.V; })

@@ -52,8 +52,8 @@ from ._curvefem import (  # noqa: F401  (re-exported)
 __all__ = [
     "Case", "Domain", "Discretization", "Error", "InputError", "IoError", "MeshingError",
     "RunResult", "SolverError", "Surface", "case", "check", "compute_errors", "discretize",
-    "load_mesh", "load_surface", "mesh", "read_case", "resolved", "run", "schema", "set_log_level",
-    "solve", "study", "transfer_to_input",
+    "load_mesh", "load_surface", "merge_short_edges", "mesh", "read_case", "resolved", "run",
+    "schema", "set_log_level", "solve", "study", "transfer_to_input",
 ]
 
 # A library should not chatter: warnings and errors only, until set_log_level says otherwise.
@@ -213,6 +213,22 @@ def check(path):
     "warnings" lists needle faces and near folds, which do not make the surface unacceptable but
     bound the elements of a mesh whose boundary keeps them)."""
     return _json.loads(_curvefem.check_surface(_os.fspath(path)))
+
+
+def merge_short_edges(vertices, faces, length):
+    """The repair of `curvefem check --merge-short-edges`: every edge shorter than `length` x the
+    longest bounding-box edge is collapsed onto one of its ends (which keeps its position) where
+    the surface stays a closed 2-manifold and no face turns by more than 30 degrees. Returns a dict:
+    "vertices", "faces" (the repaired surface), "vertex_map" (per input vertex its repaired
+    vertex), "face_origin" (per repaired face its input face), "merged" ([(removed, kept,
+    length)]), "candidates", "left" (edges still shorter), "max_moved". The result is not checked
+    for self-intersections here: write it and pass it to `check` before meshing it. A case's
+    meshing.merge_short_edges does the same before `run` meshes."""
+    v, f, vmap, origin, pairs, candidates, left, moved = _curvefem.merge_short_edges(
+        _np.asarray(vertices, dtype=float), _np.asarray(faces, dtype=_np.int32), float(length))
+    return {"vertices": v, "faces": f, "vertex_map": _np.asarray(vmap),
+            "face_origin": _np.asarray(origin), "merged": pairs, "candidates": candidates,
+            "left": left, "max_moved": moved}
 
 
 def deform(vertices, faces, targets=None, grow=1.0, box=2.0, iterations=50, tolerance=1e-5,

@@ -177,6 +177,26 @@ def test_check_warns_of_the_folds_of_a_flat_tetrahedron(tmp_path):
     assert report["warnings"][0]["ids"] == [1, 2, 0, 1, 0, 2]
 
 
+def test_merge_short_edges_merges_a_needle_pair_back():
+    # A unit octahedron with vertex 6 put on edge 0-2 at 1e-5 of its length: faces 0-6-4 and
+    # 6-0-5 are needles. Merged, the octahedron comes back (8 faces), 6 sits where 0 is mapped.
+    v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    f = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]]
+    mid = v[0] + 1e-5 * (v[2] - v[0])
+    split = [[0, 6, 4], [6, 2, 4]] + f[1:4] + [[2, 6, 5], [6, 0, 5]] + f[5:]
+    r = curvefem.merge_short_edges(np.vstack([v, mid]), split, 1e-4)
+    assert r["candidates"] == 1 and len(r["merged"]) == 1 and r["left"] == 0
+    assert r["faces"].shape == (8, 3) and r["vertices"].shape == (6, 3)
+    assert r["vertex_map"][6] == r["vertex_map"][0]
+    removed, kept, length = r["merged"][0]
+    assert {removed, kept} == {0, 6}
+    assert abs(length - 1e-5 * np.sqrt(2)) < 1e-15 and r["max_moved"] == length
+    for i, face in enumerate(r["faces"]):
+        assert list(face) == [r["vertex_map"][k] for k in split[r["face_origin"][i]]]
+    with pytest.raises(curvefem.InputError):
+        curvefem.merge_short_edges(v, [[0, 1, 9]], 1e-4)
+
+
 def test_resolved_case_fills_the_defaults():
     r = curvefem.resolved(sphere_case())
     assert r["meshing"]["order"] == 2 and r["meshing"]["eps"] == 0.02
