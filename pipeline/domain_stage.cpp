@@ -230,7 +230,7 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
 int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
 
 SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann::json* warnings,
-                         nlohmann::json* repair) {
+                         InputRepair* repair) {
   if (!spec.mesh_dir.empty()) return {};  // the input is the saved mesh's (mesh_domain)
   std::optional<ScopedTimer> t;
   if (ctx.timings) t.emplace(*ctx.timings, "load_surface");
@@ -270,17 +270,23 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann
     log::info("load surface: merged ", merged.merged.size(), " edges shorter than ",
               spec.merge_short_edges, " x the bbox (longest ", merged.max_moved, ", ",
               merged.refused, " left)");
-    if (repair)
-      *repair = {{"merge_short_edges_rel", spec.merge_short_edges},
-                 {"candidates", merged.candidates},
-                 {"merged", merged.merged.size()},
-                 {"left", merged.refused},
-                 {"max_moved", merged.max_moved},
-                 {"input_vertices", input.num_vertices()},
-                 {"input_faces", input.num_faces()},
-                 {"what",
-                  "the mesh maps to the repaired surface (surface.vtu, input.msh); an "
-                  "input vertex merged away is max_moved from its vertex there at most"}};
+    if (repair) {
+      repair->original = input;
+      repair->vertex_map = merged.vertex_map;
+      repair->face_origin = merged.face_origin;
+      repair->report = {
+          {"merge_short_edges_rel", spec.merge_short_edges},
+          {"candidates", merged.candidates},
+          {"merged", merged.merged.size()},
+          {"left", merged.refused},
+          {"max_moved", merged.max_moved},
+          {"input_vertices", input.num_vertices()},
+          {"input_faces", input.num_faces()},
+          {"what",
+           "the mesh maps to the repaired surface (surface.vtu, input.msh); an input vertex "
+           "merged away is max_moved from its vertex there at most; surface_input.vtu: the "
+           "solution on the input as read, each merged-away vertex with its vertex's values"}};
+    }
     input = std::move(merged.mesh);
     report = std::move(again);
   }

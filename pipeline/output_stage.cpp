@@ -474,6 +474,36 @@ void write_outputs(const CaseSpec& spec, const Domain& domain, const Discretizat
         io::write_vtu(out.path("surface.vtu"), surface, all_surface);
         if (!several) parts.push_back({"surface.vtu", 1, 0.0, "surface"});
       }
+      if (domain.on_input() && domain.repair) {
+        // meshing.merge_short_edges: the same fields on the input as read, each merged-away
+        // vertex with its repaired vertex's values, each face merged away NaN.
+        const InputRepair& rep = *domain.repair;
+        LagrangeMesh original;
+        original.kind = CellKind::triangle;
+        original.order = 1;
+        original.nodes = rep.original.V;
+        original.cells = rep.original.F;
+        if (rep.original.has_tags()) original.cell_tags = rep.original.tags;
+        std::vector<int> face_of(std::size_t(rep.original.num_faces()), -1);
+        for (std::size_t i = 0; i < rep.face_origin.size(); ++i)
+          face_of[std::size_t(rep.face_origin[i])] = int(i);
+        auto gather = [](const Field& f, const std::vector<int>& from) {
+          Field g{f.name, f.components, {}};
+          g.values.reserve(from.size() * std::size_t(f.components));
+          for (int i : from)
+            for (int c = 0; c < f.components; ++c)
+              g.values.push_back(
+                  i < 0 ? std::nan("")
+                        : f.values[std::size_t(i) * std::size_t(f.components) + std::size_t(c)]);
+          return g;
+        };
+        MeshFields on_original;
+        for (const Field& f : all_surface.point_data)
+          on_original.point_data.push_back(gather(f, rep.vertex_map));
+        for (const Field& f : all_surface.cell_data)
+          on_original.cell_data.push_back(gather(f, face_of));
+        io::write_vtu(out.path("surface_input.vtu"), original, on_original);
+      }
       write_text_file_atomic(out.path("resolved_case.json"), spec.resolved.dump(2) + "\n");
       if (domain.curved_map && domain.fibers && !domain.outer_box) {
         // The mesh, φ and the fibers, so that geometry.mesh_dir can reuse this folder. A

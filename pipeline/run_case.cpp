@@ -68,9 +68,14 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   auto r = std::make_shared<RunResults>();
   SurfaceMesh input;
   nlohmann::json input_warnings;  // curvefem check's, in the meshing section (as mesh's report)
-  nlohmann::json input_repair;    // meshing.merge_short_edges
+  auto input_repair = std::make_shared<InputRepair>();  // meshing.merge_short_edges
   if (spec.dense_surface() && !settings.domain)
-    input = load_surface(spec, ctx, &input_warnings, &input_repair);
+    input = load_surface(spec, ctx, &input_warnings, input_repair.get());
+  auto note_repair = [&](Domain& d) {
+    if (input_repair->report.is_null()) return;
+    d.report["input_repair"] = input_repair->report;
+    d.repair = input_repair;
+  };
   CaseSpec run = spec;
   const std::vector<LoadCase> loads = spec.loads();
   std::shared_ptr<fem::FactorizationCache> cache;
@@ -85,7 +90,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   } else if (spec.eps_levels.empty()) {
     r->domain = mesh_domain(spec, std::move(input), ctx);
     if (!input_warnings.is_null()) r->domain.report["input_warnings"] = input_warnings;
-    if (!input_repair.is_null()) r->domain.report["input_repair"] = input_repair;
+    note_repair(r->domain);
     // Adaptive p (CaseSpec::target_error): the same mesh, degree raised until the estimate meets
     // the target or p = 4; the outputs and report are those of the last degree.
     estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, iterations);
@@ -99,7 +104,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
     std::vector<Domain> domains = mesh_domain_levels(spec, std::move(input), ctx);
     for (Domain& d : domains) {
       if (!input_warnings.is_null()) d.report["input_warnings"] = input_warnings;
-      if (!input_repair.is_null()) d.report["input_repair"] = input_repair;
+      note_repair(d);
     }
     nlohmann::json rows = nlohmann::json::array();
     std::optional<LevelValues> previous;

@@ -62,10 +62,19 @@ struct StageContext {
 /// defect when `curvefem check` would reject it), and every boundary condition's selection checked
 /// to select something on it. `warnings`, when given, receives `curvefem check`'s warnings as
 /// report.json's `input_warnings` (a list; pipeline::defects_json), each also logged.
+/// meshing.merge_short_edges: the input as read, and how the repaired surface (the one meshed,
+/// Domain::input) relates to it (check/merge_short_edges.hpp).
+struct InputRepair {
+  SurfaceMesh original;
+  std::vector<int> vertex_map;   ///< per original vertex: its vertex of the repaired surface
+  std::vector<int> face_origin;  ///< per repaired face: its original face
+  nlohmann::json report;         ///< report.json's meshing.input_repair
+};
+
 /// With meshing.merge_short_edges, the surface returned is the repaired one (checked again; its
-/// warnings are those reported) and `repair`, when given, receives report.json's `input_repair`.
+/// warnings are those reported) and `repair`, when given, receives the original and the maps.
 SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx = {},
-                         nlohmann::json* warnings = nullptr, nlohmann::json* repair = nullptr);
+                         nlohmann::json* warnings = nullptr, InputRepair* repair = nullptr);
 
 /// The input feature edges of a case (geometry.features: auto | angle | file | none).
 std::vector<std::array<int, 2>> case_feature_edges(const CaseSpec& spec, const SurfaceMesh& input);
@@ -89,7 +98,10 @@ struct Domain {
   std::optional<BoundaryMap> curved_map;  ///< curved: φ
   /// curved: the fibers of the coarse shell the boundary was curved in (φ⁻¹ = P_T on them).
   std::shared_ptr<const ShellFibers> fibers;
-  BoundaryMap identity_map;           ///< dense: φ = identity
+  BoundaryMap identity_map;  ///< dense: φ = identity
+  /// meshing.merge_short_edges: the input before the repair; surface_input.vtu shows the
+  /// solution on its vertices (each merged-away vertex takes its repaired vertex's values).
+  std::shared_ptr<const InputRepair> repair;
   std::optional<OuterBox> outer_box;  ///< exterior runs
   /// Per tet, from the independent validation (curved): certificate, scaled Jacobian, MIPS, ...
   std::vector<Field> cell_quality;

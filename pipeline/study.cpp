@@ -99,12 +99,15 @@ SharedMeshing mesh_shared(const StudySpec& study, int threads) {
     entry["eps"] = eps;
     try {
       log::info("study: meshing ", eps.size(), " eps level(s) once for ", runs.size(), " runs");
-      nlohmann::json input_warnings, input_repair;
-      domains = mesh_domain_levels(spec, load_surface(spec, {}, &input_warnings, &input_repair),
-                                   {.threads = threads});
+      nlohmann::json input_warnings;
+      auto input_repair = std::make_shared<InputRepair>();
+      domains = mesh_domain_levels(
+          spec, load_surface(spec, {}, &input_warnings, input_repair.get()), {.threads = threads});
       for (Domain& d : domains) {
         d.report["input_warnings"] = input_warnings;
-        if (!input_repair.is_null()) d.report["input_repair"] = input_repair;
+        if (input_repair->report.is_null()) continue;
+        d.report["input_repair"] = input_repair->report;
+        d.repair = input_repair;
       }
     } catch (const Error& e) {
       // Each run meshes alone and reports its own failure.

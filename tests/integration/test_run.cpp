@@ -435,6 +435,28 @@ TEST(Run, MergeShortEdgesMeshesTheRepairedSurfaceAndSavesIt) {
   EXPECT_EQ(j["surface_vertices"], 642);
   EXPECT_LT(j["l2_error"].get<double>(), 1e-10);
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "input.msh"));
+  // surface_input.vtu: the input as read (682 vertices, 1,360 faces), each vertex with the values
+  // of its vertex in surface.vtu (itself, or the end it was merged into, within 2e-5).
+  const auto repaired = io::read_vtu(dir / "out" / "surface.vtu");
+  const auto original = io::read_vtu(dir / "out" / "surface_input.vtu");
+  ASSERT_EQ(original.mesh.nodes.rows(), 682);
+  EXPECT_EQ(original.mesh.cells.rows(), 1360);
+  ASSERT_EQ(original.fields.point_data.size(), repaired.fields.point_data.size());
+  const Field& u0 = original.fields.point_data[0];
+  const Field& u1 = repaired.fields.point_data[0];
+  EXPECT_EQ(u0.name, u1.name);
+  int same_point = 0;
+  for (Eigen::Index v = 0; v < original.mesh.nodes.rows(); ++v) {
+    Eigen::Index nearest = 0;
+    const double d = (repaired.mesh.nodes.rowwise() - original.mesh.nodes.row(v))
+                         .rowwise()
+                         .squaredNorm()
+                         .minCoeff(&nearest);
+    same_point += d == 0;
+    ASSERT_LT(d, 2e-5 * 2e-5) << v;
+    EXPECT_EQ(u0.values[std::size_t(v)], u1.values[std::size_t(nearest)]) << v;
+  }
+  EXPECT_EQ(same_point, 642);
   const auto reuse = write_case(dir, R"({"geometry": {"mesh_dir": "out"}, )" + physics);
   ASSERT_EQ(run_case(reuse, dir / "again", &log), 0) << log;
   EXPECT_EQ(report(dir / "again")["surface_vertices"], 642);
