@@ -229,6 +229,26 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
 
 int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
 
+nlohmann::json original_distance_json(const Eigen::MatrixXd& V, const std::vector<int>& vertex_map,
+                                      const BoundaryMap& map, double eps_rel) {
+  double worst = 0;
+  int at = -1;
+  for (int v = 0; v < int(V.rows()) && v < int(vertex_map.size()); ++v) {
+    const int w = vertex_map[std::size_t(v)];
+    if (w < 0 || w >= map.vertex_face.size() || map.vertex_face(w) < 0) continue;
+    const double d = (V.row(v).transpose() - map.image(w)).norm();
+    if (d > worst || at < 0) worst = d, at = v;
+  }
+  const double box = bbox_longest_edge(V);
+  const double rel = box > 0 ? worst / box : 0.0;
+  return {{"max_distance_rel", rel},
+          {"vertex", at},
+          {"within_eps", rel <= eps_rel},
+          {"what",
+           "|v - phi(its repaired vertex)| over the input as read (merged-away vertices "
+           "from their replacement's image)"}};
+}
+
 SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann::json* warnings,
                          InputRepair* repair) {
   if (!spec.mesh_dir.empty()) return {};  // the input is the saved mesh's (mesh_domain)

@@ -71,9 +71,12 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   auto input_repair = std::make_shared<InputRepair>();  // meshing.merge_short_edges
   if (spec.dense_surface() && !settings.domain)
     input = load_surface(spec, ctx, &input_warnings, input_repair.get());
-  auto note_repair = [&](Domain& d) {
+  auto note_repair = [&](Domain& d, double eps) {
     if (input_repair->report.is_null()) return;
     d.report["input_repair"] = input_repair->report;
+    if (d.curved_map)
+      d.report["input_repair"]["original_distance"] = original_distance_json(
+          input_repair->original.V, input_repair->vertex_map, *d.curved_map, eps);
     d.repair = input_repair;
   };
   CaseSpec run = spec;
@@ -90,7 +93,7 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
   } else if (spec.eps_levels.empty()) {
     r->domain = mesh_domain(spec, std::move(input), ctx);
     if (!input_warnings.is_null()) r->domain.report["input_warnings"] = input_warnings;
-    note_repair(r->domain);
+    note_repair(r->domain, spec.eps);
     // Adaptive p (CaseSpec::target_error): the same mesh, degree raised until the estimate meets
     // the target or p = 4; the outputs and report are those of the last degree.
     estimate = solve_adaptive_p(spec, run, *r, loads, ctx, cache, iterations);
@@ -102,9 +105,10 @@ RunOutcome run_case(const CaseSpec& spec, const RunSettings& settings, const Pro
     // (the change estimates the coarser level's error, so the level kept is expected to be
     // better). The outputs and report are those of the last level solved.
     std::vector<Domain> domains = mesh_domain_levels(spec, std::move(input), ctx);
-    for (Domain& d : domains) {
+    for (std::size_t i = 0; i < domains.size(); ++i) {
+      Domain& d = domains[i];
       if (!input_warnings.is_null()) d.report["input_warnings"] = input_warnings;
-      note_repair(d);
+      note_repair(d, spec.eps_levels[i]);
     }
     nlohmann::json rows = nlohmann::json::array();
     std::optional<LevelValues> previous;

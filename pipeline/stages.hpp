@@ -71,6 +71,13 @@ struct InputRepair {
   nlohmann::json report;         ///< report.json's meshing.input_repair
 };
 
+/// The distance bound on the input as read: max over its vertices v of |v - φ(vertex_map[v])|
+/// (φ of the repaired surface; a merged-away vertex is measured from its replacement's image),
+/// over the bbox's longest edge: {"max_distance_rel", "vertex", "within_eps"}.
+nlohmann::json original_distance_json(const Eigen::MatrixXd& original_V,
+                                      const std::vector<int>& vertex_map, const BoundaryMap& map,
+                                      double eps_rel);
+
 /// With meshing.merge_short_edges, the surface returned is the repaired one (checked again; its
 /// warnings are those reported) and `repair`, when given, receives the original and the maps.
 SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx = {},

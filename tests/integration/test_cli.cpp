@@ -356,6 +356,9 @@ TEST(Cli, MergingShortEdgesWritesTheRepairedSurfaceWithItsVertexMapAndMeshesIt) 
   const auto r = read_json(mdir / "report.json");
   EXPECT_EQ(r["valid"], true);
   EXPECT_EQ(r["input_repair"]["merged"], 40);
+  EXPECT_EQ(r["input_repair"]["original_distance"]["within_eps"], true);
+  EXPECT_GE(r["input_repair"]["original_distance"]["max_distance_rel"].get<double>(),
+            r["max_distance_rel"].get<double>());
   EXPECT_EQ(r["input_repair"]["original"], std::filesystem::absolute(dir / "slivers.obj").string());
   EXPECT_EQ(r["input"], std::filesystem::absolute(mdir / "input_merged.obj").string());
   EXPECT_TRUE(r["input_warnings"].empty());

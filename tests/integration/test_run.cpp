@@ -430,6 +430,13 @@ TEST(Run, MergeShortEdgesMeshesTheRepairedSurfaceAndSavesIt) {
   const auto j = report(dir / "out");
   EXPECT_EQ(j["meshing"]["input_repair"]["merged"], 40);
   EXPECT_EQ(j["meshing"]["input_repair"]["input_faces"], 1360);
+  // The distance bound measured on the input as read (merged-away vertices from their
+  // replacement's image): within ε = 0.01 here, and never below the repaired surface's own.
+  const auto& od = j["meshing"]["input_repair"]["original_distance"];
+  EXPECT_EQ(od["within_eps"], true);
+  EXPECT_GE(od["max_distance_rel"].get<double>(), j["meshing"]["max_distance_rel"].get<double>());
+  EXPECT_LE(od["max_distance_rel"].get<double>(),
+            j["meshing"]["max_distance_rel"].get<double>() + 2e-5 / 2);
   EXPECT_TRUE(j["meshing"]["input_warnings"].empty());
   EXPECT_EQ(j["mesh_valid"], true);
   EXPECT_EQ(j["surface_vertices"], 642);

@@ -357,6 +357,7 @@ void register_mesh(CLI::App& app) {
           " (curvefem check " + args->input + " gives the full diagnosis)");
     // --merge-short-edges: the surface meshed (and mapped to) is the repaired one.
     std::optional<check::MergeShortEdgesResult> merged;
+    Eigen::MatrixXd original_V;  // --merge-short-edges: the input's vertices as read
     nlohmann::ordered_json input_repair = nullptr;
     if (args->merge_short_edges > 0) {
       merged = check::merge_short_edges(
@@ -379,6 +380,7 @@ void register_mesh(CLI::App& app) {
                       {"what",
                        "the curved mesh maps to the repaired surface (input); an original "
                        "vertex merged away is max_moved from its vertex there at most"}};
+      original_V = input.V;
       input = merged->mesh;
       report = std::move(again);
     }
@@ -538,7 +540,14 @@ void register_mesh(CLI::App& app) {
         log::warn(prefix, "mesh: ", hint);
       nlohmann::ordered_json j = {
           {"input", input_abs},
-          {"input_repair", input_repair},
+          {"input_repair",
+           !merged ? input_repair : [&] {
+             nlohmann::ordered_json r = input_repair;
+             r["original_distance"] = nlohmann::ordered_json::parse(
+                 pipeline::original_distance_json(original_V, merged->vertex_map, result.map, eps)
+                     .dump());
+             return r;
+           }()},
           {"input_warnings",
            nlohmann::ordered_json::parse(pipeline::defects_json(report.warnings).dump())},
           {"features", feature_source},

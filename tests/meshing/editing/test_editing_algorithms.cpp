@@ -89,7 +89,7 @@ TEST(EditingAlgorithms, QSlimSimplifiesABoxExactly) {
     o.target_faces = 40;
     o.threads = threads;
     const ed::RemeshResult r = ed::remesh(box, o);
-    EXPECT_LE(r.mesh.num_faces(), 40);
+    EXPECT_LE(r.mesh.num_faces(), 40) << threads << " threads";
     const ed::SurfaceQuality q = ed::measure_quality(r.mesh, box);
     EXPECT_LT(q.max_deviation, 1e-9) << threads << " threads";
     EXPECT_LT(q.max_deviation_from_reference, 1e-9) << threads << " threads";
