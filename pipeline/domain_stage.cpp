@@ -229,6 +229,26 @@ void mesh_dense(const CaseSpec& spec, const StageContext& ctx, Domain& d) {
 
 int OuterBox::side(const Eigen::Vector3d& x) const { return mapping::box_side_of(x, lo, hi, tol); }
 
+MergedInput merge_input(const SurfaceMesh& input, double length_rel, const std::string& where,
+                        const std::string& file, const ProgressFn& progress) {
+  MergedInput out;
+  const double length = length_rel * bbox_longest_edge(input.V);
+  out.merge = check::merge_short_edges(input, {.max_length = length});
+  out.check = check::check_surface(out.merge.mesh, {}, progress);
+  if (!out.check.acceptable)
+    throw InputError(where +
+                         ": the surface with its short edges merged is not a valid meshing "
+                         "input: " +
+                         (out.check.defects.empty() ? std::string("empty surface")
+                                                    : out.check.defects.front().message),
+                     {.file = file});
+  out.summary = merge_summary_json(out.merge, length_rel, length);
+  log::info("merged ", out.merge.merged.size(), " edges shorter than ", length_rel,
+            " x the bbox (longest ", out.merge.max_moved, ", ", out.merge.refused,
+            " left); the repaired surface is meshed");
+  return out;
+}
+
 nlohmann::json original_distance_json(const Eigen::MatrixXd& V, const std::vector<int>& vertex_map,
                                       const BoundaryMap& map, double eps_rel) {
   double worst = 0;
@@ -277,38 +297,22 @@ SurfaceMesh load_surface(const CaseSpec& spec, const StageContext& ctx, nlohmann
                                                      " gives the full diagnosis)"),
                      {.file = spec.case_file.string()});
   if (spec.merge_short_edges > 0) {  // the repaired surface is meshed and mapped to
-    check::MergeShortEdgesResult merged = check::merge_short_edges(
-        input, {.max_length = spec.merge_short_edges * bbox_longest_edge(input.V)});
-    check::CheckReport again = check::check_surface(merged.mesh, {});
-    if (!again.acceptable)
-      throw InputError(
-          "/meshing/merge_short_edges: the repaired surface is not a valid meshing "
-          "input: " +
-              (again.defects.empty() ? std::string("empty surface")
-                                     : again.defects.front().message),
-          {.file = spec.case_file.string()});
-    log::info("load surface: merged ", merged.merged.size(), " edges shorter than ",
-              spec.merge_short_edges, " x the bbox (longest ", merged.max_moved, ", ",
-              merged.refused, " left)");
+    MergedInput merged = merge_input(input, spec.merge_short_edges, "/meshing/merge_short_edges",
+                                     spec.case_file.string());
     if (repair) {
       repair->original = input;
-      repair->vertex_map = merged.vertex_map;
-      repair->face_origin = merged.face_origin;
-      repair->report = {
-          {"merge_short_edges_rel", spec.merge_short_edges},
-          {"candidates", merged.candidates},
-          {"merged", merged.merged.size()},
-          {"left", merged.refused},
-          {"max_moved", merged.max_moved},
-          {"input_vertices", input.num_vertices()},
-          {"input_faces", input.num_faces()},
-          {"what",
-           "the mesh maps to the repaired surface (surface.vtu, input.msh); an input vertex "
-           "merged away is max_moved from its vertex there at most; surface_input.vtu: the "
-           "solution on the input as read, each merged-away vertex with its vertex's values"}};
+      repair->vertex_map = merged.merge.vertex_map;
+      repair->face_origin = merged.merge.face_origin;
+      repair->report = merged.summary;
+      repair->report["input_vertices"] = input.num_vertices();
+      repair->report["input_faces"] = input.num_faces();
+      repair->report["what"] =
+          "the mesh maps to the repaired surface (surface.vtu, input.msh); an input vertex "
+          "merged away is max_moved from its vertex there at most; surface_input.vtu: the "
+          "solution on the input as read, each merged-away vertex with its vertex's values";
     }
-    input = std::move(merged.mesh);
-    report = std::move(again);
+    input = std::move(merged.merge.mesh);
+    report = std::move(merged.check);
   }
   for (const check::Defect& w : report.warnings) log::warn(where, ": ", w.kind, ": ", w.message);
   if (warnings) *warnings = defects_json(report.warnings);

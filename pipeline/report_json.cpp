@@ -16,6 +16,23 @@ nlohmann::json defects_json(const std::vector<check::Defect>& defects) {
   return a;
 }
 
+nlohmann::json merge_summary_json(const check::MergeShortEdgesResult& r, double length_rel,
+                                  double max_length) {
+  return {{"merge_short_edges_rel", length_rel},
+          {"max_length", max_length},
+          {"candidates", r.candidates},
+          {"merged", r.merged.size()},
+          {"left", r.refused},
+          {"max_moved", r.max_moved}};
+}
+
+nlohmann::json merge_map_json(const check::MergeShortEdgesResult& r) {
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const check::MergedEdge& e : r.merged)
+    pairs.push_back({{"removed", e.removed}, {"kept", e.kept}, {"length", e.length}});
+  return {{"pairs", pairs}, {"vertex_map", r.vertex_map}, {"face_origin", r.face_origin}};
+}
+
 nlohmann::json check_report_json(const check::CheckReport& r) {
   nlohmann::json j;
   j["vertices"] = r.vertices;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "meshing/check/check_surface.hpp"
+#include "meshing/check/merge_short_edges.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/timer.hpp"
 #include "meshing/curved/curved_mesher.hpp"
@@ -18,6 +19,14 @@ nlohmann::json defects_json(const std::vector<check::Defect>& defects);
 
 /// Every field of a CheckReport, defects and warnings as defects_json arrays.
 nlohmann::json check_report_json(const check::CheckReport& report);
+
+/// A repair by check::merge_short_edges (`--merge-short-edges`, meshing.merge_short_edges):
+/// merge_short_edges_rel (the length asked, × the bbox), max_length, candidates, merged, left,
+/// max_moved.
+nlohmann::json merge_summary_json(const check::MergeShortEdgesResult& r, double length_rel,
+                                  double max_length);
+/// Its vertex map file: pairs [{removed, kept, length}], vertex_map, face_origin.
+nlohmann::json merge_map_json(const check::MergeShortEdgesResult& r);
 
 /// {"stage": seconds, ...} in stage order.
 nlohmann::json timings_json(const Timings& timings);

@@ -33,6 +33,8 @@
 #include "fem/solvers/linear_solver.hpp"
 #include "fem/space/function_space.hpp"
 #include "mapping/boundary_inverse.hpp"
+#include "meshing/check/check_surface.hpp"
+#include "meshing/check/merge_short_edges.hpp"
 #include "meshing/core/boundary_map.hpp"
 #include "meshing/core/lagrange_mesh.hpp"
 #include "meshing/core/progress.hpp"
@@ -70,6 +72,17 @@ struct InputRepair {
   std::vector<int> face_origin;  ///< per repaired face: its original face
   nlohmann::json report;         ///< report.json's meshing.input_repair
 };
+
+/// check::merge_short_edges of `input` at length_rel × its bbox, and the full check of the
+/// result: InputError (`where`: the key or option, `file`) naming the first defect where the
+/// repaired surface is not acceptable; the repair's summary logged.
+struct MergedInput {
+  check::MergeShortEdgesResult merge;
+  check::CheckReport check;
+  nlohmann::json summary;  ///< merge_summary_json
+};
+MergedInput merge_input(const SurfaceMesh& input, double length_rel, const std::string& where,
+                        const std::string& file = {}, const ProgressFn& progress = {});
 
 /// The distance bound on the input as read: max over its vertices v of |v - φ(vertex_map[v])|
 /// (φ of the repaired surface; a merged-away vertex is measured from its replacement's image),

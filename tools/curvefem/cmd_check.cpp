@@ -108,25 +108,14 @@ void register_check(CLI::App& app) {
     std::string reported = args->input;
     std::filesystem::path map_path;
     if (args->merge_short_edges > 0) {
-      check::MergeShortEdgesOptions merge;
-      merge.max_length = args->merge_short_edges * bbox_longest_edge(mesh.V);
-      check::MergeShortEdgesResult merged = check::merge_short_edges(mesh, merge);
+      const double length = args->merge_short_edges * bbox_longest_edge(mesh.V);
+      check::MergeShortEdgesResult merged = check::merge_short_edges(mesh, {.max_length = length});
       const std::filesystem::path out(args->output);
       map_path = out.parent_path() / (out.stem().string() + "_vertex_map.json");
-      nlohmann::json pairs = nlohmann::json::array();
-      for (const check::MergedEdge& e : merged.merged)
-        pairs.push_back({{"removed", e.removed}, {"kept", e.kept}, {"length", e.length}});
-      merge_json = {{"max_length_rel", args->merge_short_edges},
-                    {"max_length", merge.max_length},
-                    {"candidates", merged.candidates},
-                    {"merged", merged.merged.size()},
-                    {"left", merged.refused},
-                    {"max_moved", merged.max_moved},
-                    {"output", args->output},
-                    {"vertex_map_file", map_path.string()},
-                    {"pairs", pairs}};
-      merge_json["vertex_map"] = merged.vertex_map;
-      merge_json["face_origin"] = merged.face_origin;
+      merge_json = pipeline::merge_summary_json(merged, args->merge_short_edges, length);
+      merge_json["output"] = args->output;
+      merge_json["vertex_map_file"] = map_path.string();
+      merge_json.update(pipeline::merge_map_json(merged));
       mesh = std::move(merged.mesh);
       reported = args->output;
     }

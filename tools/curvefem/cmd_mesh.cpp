@@ -17,7 +17,6 @@
 
 #include "mapping/boundary_inverse.hpp"
 #include "meshing/check/check_surface.hpp"
-#include "meshing/check/merge_short_edges.hpp"
 #include "meshing/core/atomic_file.hpp"
 #include "meshing/core/error.hpp"
 #include "meshing/core/log.hpp"
@@ -356,33 +355,20 @@ void register_mesh(CLI::App& app) {
           (report.defects.empty() ? std::string("empty surface") : report.defects.front().message) +
           " (curvefem check " + args->input + " gives the full diagnosis)");
     // --merge-short-edges: the surface meshed (and mapped to) is the repaired one.
-    std::optional<check::MergeShortEdgesResult> merged;
+    std::optional<pipeline::MergedInput> merged;
     Eigen::MatrixXd original_V;  // --merge-short-edges: the input's vertices as read
     nlohmann::ordered_json input_repair = nullptr;
     if (args->merge_short_edges > 0) {
-      merged = check::merge_short_edges(
-          input, {.max_length = args->merge_short_edges * bbox_longest_edge(input.V)});
-      check::CheckReport again = check::check_surface(merged->mesh, {}, progress->callback());
-      if (!again.acceptable)
-        throw InputError(
-            args->input + ": --merge-short-edges " + std::to_string(args->merge_short_edges) +
-            ": the repaired surface is not a valid meshing input: " +
-            (again.defects.empty() ? std::string("empty surface") : again.defects.front().message));
-      log::info("mesh: merged ", merged->merged.size(), " edges shorter than ",
-                args->merge_short_edges, " x the bbox (longest ", merged->max_moved, ", ",
-                merged->refused, " left); meshing the repaired surface");
-      input_repair = {{"original", std::filesystem::absolute(args->input).string()},
-                      {"merge_short_edges_rel", args->merge_short_edges},
-                      {"candidates", merged->candidates},
-                      {"merged", merged->merged.size()},
-                      {"left", merged->refused},
-                      {"max_moved", merged->max_moved},
-                      {"what",
-                       "the curved mesh maps to the repaired surface (input); an original "
-                       "vertex merged away is max_moved from its vertex there at most"}};
+      merged = pipeline::merge_input(input, args->merge_short_edges, "--merge-short-edges",
+                                     args->input, progress->callback());
+      input_repair = nlohmann::ordered_json::parse(merged->summary.dump());
+      input_repair["original"] = std::filesystem::absolute(args->input).string();
+      input_repair["what"] =
+          "the curved mesh maps to the repaired surface (input); an original vertex merged away "
+          "is max_moved from its vertex there at most";
       original_V = input.V;
-      input = merged->mesh;
-      report = std::move(again);
+      input = merged->merge.mesh;
+      report = std::move(merged->check);
     }
     for (const check::Defect& w : report.warnings)
       log::warn(args->input, ": ", w.kind, ": ", w.message);
@@ -477,14 +463,9 @@ void register_mesh(CLI::App& app) {
       io::write_surface(out.path("input_merged.obj"), input, io::SurfaceFormat::obj);
       input_checksum = pipeline::file_checksum(out.path("input_merged.obj"));
       input_abs = std::filesystem::absolute(out.final_path("input_merged.obj")).string();
-      nlohmann::json pairs = nlohmann::json::array();
-      for (const check::MergedEdge& e : merged->merged)
-        pairs.push_back({{"removed", e.removed}, {"kept", e.kept}, {"length", e.length}});
-      const nlohmann::json map = {{"input", input_repair["original"]},
-                                  {"output", input_abs},
-                                  {"pairs", pairs},
-                                  {"vertex_map", merged->vertex_map},
-                                  {"face_origin", merged->face_origin}};
+      nlohmann::json map = pipeline::merge_map_json(merged->merge);
+      map["input"] = input_repair["original"];
+      map["output"] = input_abs;
       write_text_file_atomic(out.path("input_merged_vertex_map.json"), map.dump(1) + "\n");
       input_repair["surface"] = input_abs;
       input_repair["vertex_map"] =
@@ -544,7 +525,7 @@ void register_mesh(CLI::App& app) {
            !merged ? input_repair : [&] {
              nlohmann::ordered_json r = input_repair;
              r["original_distance"] = nlohmann::ordered_json::parse(
-                 pipeline::original_distance_json(original_V, merged->vertex_map, result.map, eps)
+                 pipeline::original_distance_json(original_V, merged->merge.vertex_map, result.map, eps)
                      .dump());
              return r;
            }()},
