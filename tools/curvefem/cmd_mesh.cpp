@@ -367,7 +367,7 @@ void register_mesh(CLI::App& app) {
           "the curved mesh maps to the repaired surface (input); an original vertex merged away "
           "is max_moved from its vertex there at most";
       original_V = input.V;
-      input = merged->merge.mesh;
+      input = std::move(merged->merge.mesh);  // the maps and pairs stay for the saved files
       report = std::move(merged->check);
     }
     for (const check::Defect& w : report.warnings)
